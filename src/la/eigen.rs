@@ -1,0 +1,215 @@
+//! Generalized symmetric eigenproblems `K x = lambda M x` with SLEPc: Krylov-Schur,
+//! shift-and-invert, MUMPS Cholesky inside the spectral transform.
+
+use std::marker::PhantomData;
+
+use petsc_sys as ffi;
+
+use super::error::{call, LaError, Result};
+use super::matrix::SparseMatrix;
+use super::solver::{configure_mumps_pc, mumps_report, Factorization, FactorizationReport};
+use super::vector::Vector;
+use super::{cconst, cstr, report_destroy, Petsc};
+
+/// What to compute, and how.
+#[derive(Debug, Clone)]
+pub struct EigenOptions {
+    /// Number of eigenvalues nearest `shift` (ignored when `max_eigenvalue` is set).
+    pub count: usize,
+    /// Every eigenvalue in (`shift`, `max_eigenvalue`] by spectrum slicing (Sylvester inertia
+    /// from the MUMPS factorization), instead of a fixed count.
+    pub max_eigenvalue: Option<f64>,
+    /// Shift sigma of shift-and-invert; below the lowest eigenvalue, eigenvalues come out in
+    /// ascending order. Negative for free-free bodies (K singular).
+    pub shift: f64,
+    /// Krylov subspace size; None picks max(count + 30, 1.2 count) (TOOLCHAIN.md: about
+    /// 1.2 x nev was fastest for 250 modes; the orthogonalization is what a large ncv costs).
+    pub ncv: Option<usize>,
+    /// Relative tolerance of the eigensolver.
+    pub tolerance: f64,
+    /// Options prefix: `-{prefix}eps_...`, `-{prefix}st_mat_mumps_icntl_...`.
+    pub prefix: String,
+}
+
+impl Default for EigenOptions {
+    fn default() -> Self {
+        EigenOptions {
+            count: 10,
+            max_eigenvalue: None,
+            shift: 0.0,
+            ncv: None,
+            tolerance: 1e-10,
+            prefix: String::new(),
+        }
+    }
+}
+
+/// Eigenpairs in ascending order of eigenvalue; vectors M-normalized.
+pub struct SymmetricEigenSolution<'p> {
+    pub values: Vec<f64>,
+    pub vectors: Vec<Vector<'p>>,
+    /// SLEPc's backward error ||K x - lambda M x|| / ((||K|| + |lambda| ||M||) ||x||).
+    pub backward_errors: Vec<f64>,
+    pub iterations: usize,
+    /// The shift-and-invert factorization (None with spectrum slicing, which factors several
+    /// shifts).
+    pub factorization: Option<FactorizationReport>,
+}
+
+/// SLEPc EPS configured for a generalized symmetric-definite pencil.
+pub struct GeneralizedEigen<'p> {
+    raw: ffi::EPS,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> GeneralizedEigen<'p> {
+    /// Solves `K x = lambda M x` for symmetric K and symmetric positive definite M (assembled
+    /// with the same nonzero pattern when `same_pattern`).
+    ///
+    /// # Collective
+    pub fn solve(
+        petsc: &'p Petsc,
+        k: &SparseMatrix<'p>,
+        m: &SparseMatrix,
+        same_pattern: bool,
+        opts: &EigenOptions,
+    ) -> Result<SymmetricEigenSolution<'p>> {
+        let mut raw = std::ptr::null_mut();
+        call!(EPSCreate(petsc.comm(), &mut raw))?;
+        let eps = GeneralizedEigen {
+            raw,
+            _petsc: PhantomData,
+        };
+        let prefix = cstr(&opts.prefix);
+        call!(EPSSetOptionsPrefix(eps.raw, prefix.as_ptr()))?;
+        call!(EPSSetOperators(eps.raw, k.raw, m.raw))?;
+        call!(EPSSetProblemType(eps.raw, ffi::EPS_GHEP))?;
+        call!(EPSSetType(eps.raw, cconst(ffi::EPSKRYLOVSCHUR)))?;
+        // M is positive definite once constrained DOFs are eliminated: purification would
+        // cost one more solve per converged mode for nothing.
+        call!(EPSSetPurify(eps.raw, ffi::PETSC_FALSE))?;
+        call!(EPSSetTolerances(
+            eps.raw,
+            opts.tolerance,
+            ffi::PETSC_DEFAULT as ffi::PetscInt
+        ))?;
+        let mut st = std::ptr::null_mut();
+        call!(EPSGetST(eps.raw, &mut st))?;
+        call!(STSetType(st, cconst(ffi::STSINVERT)))?;
+        if same_pattern {
+            call!(STSetMatStructure(st, ffi::SAME_NONZERO_PATTERN))?;
+        }
+        let mut ksp = std::ptr::null_mut();
+        call!(STGetKSP(st, &mut ksp))?;
+        call!(KSPSetType(ksp, cconst(ffi::KSPPREONLY)))?;
+        call!(KSPSetErrorIfNotConverged(ksp, ffi::PETSC_TRUE))?;
+        let mut pc = std::ptr::null_mut();
+        call!(KSPGetPC(ksp, &mut pc))?;
+        let format = k.format();
+        configure_mumps_pc(pc, format, Factorization::Cholesky)?;
+        let slicing = opts.max_eigenvalue.is_some();
+        if let Some(upper) = opts.max_eigenvalue {
+            if upper <= opts.shift {
+                return Err(LaError::Invalid(format!(
+                    "eigenvalue interval ({}, {upper}] is empty",
+                    opts.shift
+                )));
+            }
+            call!(EPSSetInterval(eps.raw, opts.shift, upper))?;
+            call!(EPSSetWhichEigenpairs(eps.raw, ffi::EPS_ALL))?;
+        } else {
+            let nev = opts.count.max(1);
+            let ncv = opts
+                .ncv
+                .unwrap_or_else(|| (nev + 30).max((1.2 * nev as f64).ceil() as usize));
+            call!(EPSSetDimensions(
+                eps.raw,
+                nev as ffi::PetscInt,
+                ncv.max(nev + 1) as ffi::PetscInt,
+                ffi::PETSC_DEFAULT as ffi::PetscInt
+            ))?;
+            call!(EPSSetTarget(eps.raw, opts.shift))?;
+            call!(EPSSetWhichEigenpairs(eps.raw, ffi::EPS_TARGET_MAGNITUDE))?;
+        }
+        call!(EPSSetFromOptions(eps.raw))?;
+        call!(EPSSolve(eps.raw))?;
+
+        let mut reason = 0;
+        call!(EPSGetConvergedReason(eps.raw, &mut reason))?;
+        let mut nconv = 0;
+        call!(EPSGetConverged(eps.raw, &mut nconv))?;
+        let mut its = 0;
+        call!(EPSGetIterationNumber(eps.raw, &mut its))?;
+        let wanted = if slicing {
+            nconv as usize
+        } else {
+            opts.count.max(1)
+        };
+        if reason < 0 || (nconv as usize) < wanted {
+            return Err(LaError::NotConverged {
+                solver: "SLEPc EPS (real modes)",
+                detail: format!(
+                    "{nconv} of {wanted} eigenpairs converged in {its} iterations (reason {reason}); \
+                     raise -{p}eps_max_it, enlarge -{p}eps_ncv, or loosen -{p}eps_tol",
+                    p = opts.prefix
+                ),
+            });
+        }
+        let factorization = if slicing {
+            None
+        } else {
+            let mut factor = std::ptr::null_mut();
+            call!(PCFactorGetMatrix(pc, &mut factor))?;
+            Some(mumps_report(factor, &format!("{}st_", opts.prefix))?)
+        };
+
+        let mut pairs = Vec::with_capacity(wanted);
+        for i in 0..wanted {
+            let x = k.new_vector()?;
+            let (mut kr, mut ki) = (0.0, 0.0);
+            call!(EPSGetEigenpair(
+                eps.raw,
+                i as ffi::PetscInt,
+                &mut kr,
+                &mut ki,
+                x.raw,
+                std::ptr::null_mut()
+            ))?;
+            let mut err = 0.0;
+            call!(EPSComputeError(
+                eps.raw,
+                i as ffi::PetscInt,
+                ffi::EPS_ERROR_BACKWARD,
+                &mut err
+            ))?;
+            // M-normalize: phi^T M phi = 1.
+            let mx = x.duplicate()?;
+            m.mult(&x, &mx)?;
+            let norm = mx.dot(&x)?.sqrt();
+            if norm > 0.0 {
+                x.scale(1.0 / norm)?;
+            }
+            pairs.push((kr, x, err));
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut solution = SymmetricEigenSolution {
+            values: Vec::with_capacity(wanted),
+            vectors: Vec::with_capacity(wanted),
+            backward_errors: Vec::with_capacity(wanted),
+            iterations: its as usize,
+            factorization,
+        };
+        for (v, x, e) in pairs {
+            solution.values.push(v);
+            solution.vectors.push(x);
+            solution.backward_errors.push(e);
+        }
+        Ok(solution)
+    }
+}
+
+impl Drop for GeneralizedEigen<'_> {
+    fn drop(&mut self) {
+        report_destroy(call!(EPSDestroy(&mut self.raw)));
+    }
+}

@@ -1,0 +1,145 @@
+//! Errors from PETSc/SLEPc calls: the raw code, PETSc's own message, the C function and the
+//! Rust call site.
+
+use std::cell::RefCell;
+use std::ffi::CStr;
+use std::fmt;
+use std::os::raw::{c_char, c_int, c_void};
+use std::panic::Location;
+
+use petsc_sys as ffi;
+
+/// A failed PETSc or SLEPc call.
+#[derive(Debug, Clone)]
+pub struct PetscError {
+    /// PETSc's error code, kept raw (never transmuted into an enum).
+    pub code: i32,
+    /// The C function squeal called.
+    pub function: &'static str,
+    /// PETSc's message (the innermost one, with the PETSc routine that raised it).
+    pub message: String,
+    /// Where in squeal the call was made.
+    pub location: &'static Location<'static>,
+}
+
+impl fmt::Display for PetscError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} failed (PETSc error {}): {} [called from {}:{}]",
+            self.function,
+            self.code,
+            self.message,
+            self.location.file(),
+            self.location.line()
+        )
+    }
+}
+
+impl std::error::Error for PetscError {}
+
+/// Errors of the linear-algebra layer.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum LaError {
+    #[error(transparent)]
+    Petsc(#[from] PetscError),
+    /// MUMPS reported a failure in INFOG(1) (PETSc does not always raise it).
+    #[error(
+        "MUMPS {phase} failed with INFOG(1) = {infog1}, INFOG(2) = {infog2} (solver prefix \
+         '{prefix}'); see the MUMPS users' guide, section 'Error diagnostics'. A negative \
+         INFOG(1) of -9 or -8 means the work array was too small: raise ICNTL(14) with \
+         -{prefix}mat_mumps_icntl_14 50"
+    )]
+    Mumps {
+        phase: &'static str,
+        infog1: i32,
+        infog2: i32,
+        prefix: String,
+    },
+    /// An iterative solver stopped before converging.
+    #[error("{solver} did not converge: {detail}")]
+    NotConverged { solver: &'static str, detail: String },
+    /// A caller passed inconsistent arguments.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+pub type Result<T, E = LaError> = std::result::Result<T, E>;
+
+thread_local! {
+    static LAST_MESSAGE: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// PETSc error handler that records the innermost message instead of printing it, so the
+/// Rust error carries it. PETSc calls it once per level of its traceback.
+pub(crate) unsafe extern "C" fn record_error(
+    _comm: ffi::mpi_sys::MPI_Comm,
+    line: c_int,
+    func: *const c_char,
+    file: *const c_char,
+    code: ffi::PetscErrorCode,
+    kind: ffi::PetscErrorType,
+    message: *const c_char,
+    _ctx: *mut c_void,
+) -> ffi::PetscErrorCode {
+    let text = |p: *const c_char| {
+        if p.is_null() {
+            String::new()
+        } else {
+            // SAFETY: PETSc passes NUL-terminated strings or NULL.
+            unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+        }
+    };
+    if kind == ffi::PETSC_ERROR_INITIAL {
+        let msg = format!(
+            "{} (in {} at {}:{})",
+            text(message).trim(),
+            text(func),
+            text(file),
+            line
+        );
+        LAST_MESSAGE.with(|m| *m.borrow_mut() = Some(msg));
+    }
+    code
+}
+
+/// Turns a PETSc return code into a `Result`.
+#[track_caller]
+pub(crate) fn check(code: ffi::PetscErrorCode, function: &'static str) -> Result<()> {
+    if code == 0 {
+        return Ok(());
+    }
+    let recorded = LAST_MESSAGE.with(|m| m.borrow_mut().take());
+    let message = recorded.unwrap_or_else(|| {
+        let mut text: *const c_char = std::ptr::null();
+        // SAFETY: PetscErrorMessage writes a pointer to a static string.
+        unsafe { ffi::PetscErrorMessage(code, &mut text, std::ptr::null_mut()) };
+        if text.is_null() {
+            "unknown error".into()
+        } else {
+            // SAFETY: static NUL-terminated string owned by PETSc.
+            unsafe { CStr::from_ptr(text) }
+                .to_string_lossy()
+                .into_owned()
+        }
+    });
+    Err(PetscError {
+        code,
+        function,
+        message,
+        location: Location::caller(),
+    }
+    .into())
+}
+
+/// Calls a PETSc function and checks its return code, naming the function in the error.
+macro_rules! call {
+    ($f:ident ( $($arg:expr),* $(,)? )) => {
+        $crate::la::error::check(
+            // SAFETY: arguments are valid PETSc handles/pointers owned by the calling wrapper.
+            unsafe { petsc_sys::$f($($arg),*) },
+            stringify!($f),
+        )
+    };
+}
+pub(crate) use call;

@@ -1,0 +1,357 @@
+//! Distributed sparse matrices (PETSc `Mat`): AIJ, and BAIJ/SBAIJ assembled blockwise.
+
+use std::marker::PhantomData;
+use std::path::Path;
+
+use petsc_sys as ffi;
+
+use super::error::{call, LaError, Result};
+use super::vector::Vector;
+use super::{cconst, cstr, report_destroy, Petsc};
+
+/// Storage format. SBAIJ stores the upper triangle only and is what MUMPS Cholesky accepts;
+/// BAIJ is what MUMPS LU orders best (see TOOLCHAIN.md); AIJ takes anything.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatrixFormat {
+    Aij,
+    Baij,
+    Sbaij,
+}
+
+impl MatrixFormat {
+    fn petsc_type(self) -> *const std::os::raw::c_char {
+        match self {
+            MatrixFormat::Aij => cconst(ffi::MATMPIAIJ),
+            MatrixFormat::Baij => cconst(ffi::MATMPIBAIJ),
+            MatrixFormat::Sbaij => cconst(ffi::MATMPISBAIJ),
+        }
+    }
+}
+
+/// Exact preallocation: per local block row, the number of nonzero blocks whose column is
+/// owned by this rank (`diag`) and by other ranks (`off`); `diag_upper`/`off_upper` count only
+/// the blocks on or above the diagonal (used by SBAIJ).
+#[derive(Debug, Clone, Default)]
+pub struct Preallocation {
+    pub diag: Vec<i32>,
+    pub off: Vec<i32>,
+    pub diag_upper: Vec<i32>,
+    pub off_upper: Vec<i32>,
+}
+
+/// Storage figures of an assembled matrix (summed over ranks).
+#[derive(Debug, Clone, Copy)]
+pub struct MatrixInfo {
+    pub nonzeros: f64,
+    pub memory_bytes: f64,
+}
+
+/// A square distributed sparse matrix; each rank owns a contiguous range of rows.
+pub struct SparseMatrix<'p> {
+    pub(crate) raw: ffi::Mat,
+    format: MatrixFormat,
+    block_size: usize,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> SparseMatrix<'p> {
+    /// Creates a square matrix with `local_rows` rows on this rank (a multiple of
+    /// `block_size`) and exact preallocation (per local block row).
+    ///
+    /// # Collective
+    pub fn new(
+        petsc: &'p Petsc,
+        format: MatrixFormat,
+        block_size: usize,
+        local_rows: usize,
+        prealloc: &Preallocation,
+    ) -> Result<Self> {
+        if local_rows % block_size != 0 {
+            return Err(LaError::Invalid(format!(
+                "{local_rows} local rows is not a multiple of block size {block_size}"
+            )));
+        }
+        let nb = local_rows / block_size;
+        for (name, v) in [
+            ("diag", &prealloc.diag),
+            ("off", &prealloc.off),
+            ("diag_upper", &prealloc.diag_upper),
+            ("off_upper", &prealloc.off_upper),
+        ] {
+            if v.len() != nb {
+                return Err(LaError::Invalid(format!(
+                    "preallocation '{name}' has {} entries for {nb} local block rows",
+                    v.len()
+                )));
+            }
+        }
+        let mut raw = std::ptr::null_mut();
+        call!(MatCreate(petsc.comm(), &mut raw))?;
+        let m = SparseMatrix {
+            raw,
+            format,
+            block_size,
+            _petsc: PhantomData,
+        };
+        let n = local_rows as ffi::PetscInt;
+        call!(MatSetSizes(
+            m.raw,
+            n,
+            n,
+            ffi::PETSC_DETERMINE as ffi::PetscInt,
+            ffi::PETSC_DETERMINE as ffi::PetscInt
+        ))?;
+        call!(MatSetType(m.raw, format.petsc_type()))?;
+        call!(MatSetBlockSize(m.raw, block_size as ffi::PetscInt))?;
+        call!(MatXAIJSetPreallocation(
+            m.raw,
+            block_size as ffi::PetscInt,
+            prealloc.diag.as_ptr(),
+            prealloc.off.as_ptr(),
+            prealloc.diag_upper.as_ptr(),
+            prealloc.off_upper.as_ptr()
+        ))?;
+        if format == MatrixFormat::Sbaij {
+            // Element matrices are added whole; SBAIJ keeps the upper triangle.
+            call!(MatSetOption(
+                m.raw,
+                ffi::MAT_IGNORE_LOWER_TRIANGULAR,
+                ffi::PETSC_TRUE
+            ))?;
+        }
+        call!(MatSetOption(
+            m.raw,
+            ffi::MAT_NEW_NONZERO_ALLOCATION_ERR,
+            ffi::PETSC_TRUE
+        ))?;
+        Ok(m)
+    }
+
+    pub fn format(&self) -> MatrixFormat {
+        self.format
+    }
+
+    pub fn block_size(&self) -> usize {
+        self.block_size
+    }
+
+    /// Declares the matrix symmetric (lets SLEPc and MUMPS use it).
+    pub fn set_symmetric(&self, symmetric: bool) -> Result<()> {
+        let flag = if symmetric {
+            ffi::PETSC_TRUE
+        } else {
+            ffi::PETSC_FALSE
+        };
+        call!(MatSetOption(self.raw, ffi::MAT_SYMMETRIC, flag))?;
+        call!(MatSetOption(self.raw, ffi::MAT_SYMMETRY_ETERNAL, flag))
+    }
+
+    /// Adds a dense row-major block of values at global scalar indices; negative indices
+    /// (eliminated DOFs) are skipped by PETSc.
+    pub fn add_values(&mut self, rows: &[i32], cols: &[i32], values: &[f64]) -> Result<()> {
+        debug_assert_eq!(values.len(), rows.len() * cols.len());
+        call!(MatSetValues(
+            self.raw,
+            rows.len() as ffi::PetscInt,
+            rows.as_ptr(),
+            cols.len() as ffi::PetscInt,
+            cols.as_ptr(),
+            values.as_ptr(),
+            ffi::ADD_VALUES
+        ))
+    }
+
+    /// Adds a dense row-major matrix of `block_size` blocks at global block indices; negative
+    /// block indices are skipped.
+    pub fn add_blocked(&mut self, rows: &[i32], cols: &[i32], values: &[f64]) -> Result<()> {
+        debug_assert_eq!(
+            values.len(),
+            rows.len() * cols.len() * self.block_size * self.block_size
+        );
+        call!(MatSetValuesBlocked(
+            self.raw,
+            rows.len() as ffi::PetscInt,
+            rows.as_ptr(),
+            cols.len() as ffi::PetscInt,
+            cols.as_ptr(),
+            values.as_ptr(),
+            ffi::ADD_VALUES
+        ))
+    }
+
+    /// Finishes assembly (communicates entries added for rows of other ranks).
+    ///
+    /// # Collective
+    pub fn assemble(&mut self) -> Result<()> {
+        call!(MatAssemblyBegin(self.raw, ffi::MAT_FINAL_ASSEMBLY))?;
+        call!(MatAssemblyEnd(self.raw, ffi::MAT_FINAL_ASSEMBLY))
+    }
+
+    pub fn global_rows(&self) -> usize {
+        let (mut m, mut n) = (0, 0);
+        call!(MatGetSize(self.raw, &mut m, &mut n)).expect("valid matrix");
+        m as usize
+    }
+
+    /// The global row range this rank owns.
+    pub fn ownership(&self) -> std::ops::Range<usize> {
+        let (mut lo, mut hi) = (0, 0);
+        call!(MatGetOwnershipRange(self.raw, &mut lo, &mut hi)).expect("valid matrix");
+        lo as usize..hi as usize
+    }
+
+    /// A vector with this matrix's row layout.
+    ///
+    /// # Collective
+    pub fn new_vector(&self) -> Result<Vector<'p>> {
+        let mut raw = std::ptr::null_mut();
+        call!(MatCreateVecs(self.raw, &mut raw, std::ptr::null_mut()))?;
+        let v = Vector::from_raw(raw);
+        v.set_all(0.0)?;
+        Ok(v)
+    }
+
+    /// `y = A x`
+    ///
+    /// # Collective
+    pub fn mult(&self, x: &Vector, y: &Vector) -> Result<()> {
+        call!(MatMult(self.raw, x.raw, y.raw))
+    }
+
+    /// `y = A^T x`
+    ///
+    /// # Collective
+    pub fn mult_transpose(&self, x: &Vector, y: &Vector) -> Result<()> {
+        call!(MatMultTranspose(self.raw, x.raw, y.raw))
+    }
+
+    /// # Collective
+    pub fn norm_frobenius(&self) -> Result<f64> {
+        let mut n = 0.0;
+        call!(MatNorm(self.raw, ffi::NORM_FROBENIUS, &mut n))?;
+        Ok(n)
+    }
+
+    /// Stored nonzeros and memory, summed over ranks.
+    ///
+    /// # Collective
+    pub fn info(&self) -> Result<MatrixInfo> {
+        // SAFETY: MatInfo is plain old data.
+        let mut info: ffi::MatInfo = unsafe { std::mem::zeroed() };
+        call!(MatGetInfo(self.raw, ffi::MAT_GLOBAL_SUM, &mut info))?;
+        Ok(MatrixInfo {
+            nonzeros: info.nz_used,
+            memory_bytes: info.memory,
+        })
+    }
+
+    /// Writes the matrix in PETSc's binary format (readable by `MatLoad`, SLEPc's examples
+    /// and PETSc's Python/MATLAB readers).
+    ///
+    /// # Collective
+    pub fn save_binary(&self, petsc: &Petsc, path: &Path) -> Result<()> {
+        let name = cstr(&path.to_string_lossy());
+        let mut viewer = std::ptr::null_mut();
+        call!(PetscViewerBinaryOpen(
+            petsc.comm(),
+            name.as_ptr(),
+            ffi::FILE_MODE_WRITE,
+            &mut viewer
+        ))?;
+        let result = call!(MatView(self.raw, viewer));
+        call!(PetscViewerDestroy(&mut viewer))?;
+        result
+    }
+
+    /// Visits this rank's rows as (global row, columns, values). For SBAIJ only the stored upper
+    /// triangle is visited.
+    pub fn for_each_local_row(&self, mut f: impl FnMut(usize, &[i32], &[f64])) -> Result<()> {
+        let upper = self.format == MatrixFormat::Sbaij;
+        if upper {
+            call!(MatGetRowUpperTriangular(self.raw))?;
+        }
+        let mut result = Ok(());
+        for row in self.ownership() {
+            let mut ncols = 0;
+            let mut cols = std::ptr::null();
+            let mut vals = std::ptr::null();
+            let r = row as ffi::PetscInt;
+            if let Err(e) = call!(MatGetRow(self.raw, r, &mut ncols, &mut cols, &mut vals)) {
+                result = Err(e);
+                break;
+            }
+            let n = ncols as usize;
+            let (c, v) = if n == 0 {
+                (&[][..], &[][..])
+            } else {
+                // SAFETY: PETSc returns `ncols` valid entries until MatRestoreRow.
+                unsafe {
+                    (
+                        std::slice::from_raw_parts(cols, n),
+                        std::slice::from_raw_parts(vals, n),
+                    )
+                }
+            };
+            f(row, c, v);
+            if let Err(e) = call!(MatRestoreRow(self.raw, r, &mut ncols, &mut cols, &mut vals)) {
+                result = Err(e);
+                break;
+            }
+        }
+        if upper {
+            call!(MatRestoreRowUpperTriangular(self.raw))?;
+        }
+        result
+    }
+
+    /// A new matrix of another format with the same values.
+    ///
+    /// # Collective
+    pub fn convert(&self, format: MatrixFormat) -> Result<SparseMatrix<'p>> {
+        let mut raw = std::ptr::null_mut();
+        call!(MatConvert(
+            self.raw,
+            format.petsc_type(),
+            ffi::MAT_INITIAL_MATRIX,
+            &mut raw
+        ))?;
+        Ok(SparseMatrix {
+            raw,
+            format,
+            block_size: self.block_size,
+            _petsc: PhantomData,
+        })
+    }
+
+    /// `self += alpha * x` (x may have a different nonzero pattern).
+    ///
+    /// # Collective
+    pub fn axpy(&mut self, alpha: f64, x: &SparseMatrix) -> Result<()> {
+        call!(MatAXPY(
+            self.raw,
+            alpha,
+            x.raw,
+            ffi::DIFFERENT_NONZERO_PATTERN
+        ))
+    }
+
+    /// Same layout, pattern and values.
+    ///
+    /// # Collective
+    pub fn try_clone(&self) -> Result<SparseMatrix<'p>> {
+        let mut raw = std::ptr::null_mut();
+        call!(MatDuplicate(self.raw, ffi::MAT_COPY_VALUES, &mut raw))?;
+        Ok(SparseMatrix {
+            raw,
+            format: self.format,
+            block_size: self.block_size,
+            _petsc: PhantomData,
+        })
+    }
+}
+
+impl Drop for SparseMatrix<'_> {
+    fn drop(&mut self) {
+        report_destroy(call!(MatDestroy(&mut self.raw)));
+    }
+}

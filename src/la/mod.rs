@@ -1,0 +1,175 @@
+//! The safe PETSc/SLEPc layer: the only module of squeal with `unsafe`.
+//!
+//! Every object borrows the [`Petsc`] init guard, which itself borrows the rsmpi `Universe`, so
+//! PETSc objects are destroyed before PETSc finalizes, and PETSc finalizes before MPI — by
+//! construction, not by convention.
+
+pub mod eigen;
+pub(crate) mod error;
+pub mod matrix;
+pub mod quadratic;
+pub mod solver;
+pub mod vector;
+
+use std::ffi::CString;
+use std::marker::PhantomData;
+use std::os::raw::c_char;
+
+use mpi::environment::Universe;
+use mpi::topology::{Communicator, SimpleCommunicator};
+use petsc_sys as ffi;
+
+pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
+pub use error::{LaError, PetscError, Result};
+use error::call;
+pub use matrix::{MatrixFormat, MatrixInfo, Preallocation, SparseMatrix};
+pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
+pub use solver::{DirectSolver, Factorization, FactorizationReport};
+pub use vector::Vector;
+
+/// PETSc and SLEPc, initialized on top of an rsmpi `Universe`; finalized on drop.
+pub struct Petsc<'u> {
+    world: SimpleCommunicator,
+    rank: i32,
+    size: i32,
+    // PETSc keeps pointers into argv; they must outlive the session.
+    _args: Vec<CString>,
+    _argv: Vec<*mut c_char>,
+    _universe: PhantomData<&'u Universe>,
+}
+
+impl<'u> Petsc<'u> {
+    /// Initializes PETSc and SLEPc on MPI_COMM_WORLD. `options` are PETSc command-line options
+    /// (for example `-eps_ncv 300 -st_mat_mumps_icntl_7 4`), usually those after `--`.
+    ///
+    /// # Collective
+    pub fn initialize(universe: &'u Universe, options: &[String]) -> Result<Self> {
+        let world = universe.world();
+        // PETSc's signal handlers would override Rust's (a broken pipe would end in MPI_Abort).
+        let key = CString::new("-no_signal_handler").unwrap();
+        call!(PetscOptionsSetValue(
+            std::ptr::null_mut(),
+            key.as_ptr(),
+            std::ptr::null()
+        ))?;
+        let mut args: Vec<CString> = vec![CString::new("squeal").unwrap()];
+        for o in options {
+            args.push(CString::new(o.as_str()).map_err(|_| {
+                LaError::Invalid(format!("PETSc option {o:?} contains a NUL byte"))
+            })?);
+        }
+        let mut argv: Vec<*mut c_char> = args.iter().map(|a| a.as_ptr() as *mut c_char).collect();
+        argv.push(std::ptr::null_mut());
+        let mut argc = args.len() as i32;
+        let mut argv_ptr = argv.as_mut_ptr();
+        call!(SlepcInitialize(
+            &mut argc,
+            &mut argv_ptr,
+            std::ptr::null(),
+            std::ptr::null()
+        ))?;
+        call!(PetscPushErrorHandler(
+            Some(error::record_error),
+            std::ptr::null_mut()
+        ))?;
+        Ok(Petsc {
+            rank: world.rank(),
+            size: world.size(),
+            world,
+            _args: args,
+            _argv: argv,
+            _universe: PhantomData,
+        })
+    }
+
+    pub fn rank(&self) -> i32 {
+        self.rank
+    }
+
+    pub fn size(&self) -> i32 {
+        self.size
+    }
+
+    /// The rsmpi communicator PETSc works on.
+    pub fn world(&self) -> &SimpleCommunicator {
+        &self.world
+    }
+
+    pub(crate) fn comm(&self) -> ffi::mpi_sys::MPI_Comm {
+        use mpi::raw::AsRaw;
+        self.world.as_raw()
+    }
+
+    /// Sets a PETSc option in the global database (as if given on the command line).
+    pub fn set_option(&self, key: &str, value: Option<&str>) -> Result<()> {
+        let k = CString::new(key).map_err(|_| LaError::Invalid(format!("bad option {key:?}")))?;
+        let v = value.map(|v| CString::new(v).unwrap());
+        call!(PetscOptionsSetValue(
+            std::ptr::null_mut(),
+            k.as_ptr(),
+            v.as_ref().map_or(std::ptr::null(), |v| v.as_ptr())
+        ))
+    }
+
+    /// Whether an option was given (e.g. to let command-line options override scene values).
+    pub fn has_option(&self, key: &str) -> bool {
+        let k = CString::new(key).unwrap();
+        let mut set: ffi::PetscBool = ffi::PETSC_FALSE;
+        let _ = call!(PetscOptionsHasName(
+            std::ptr::null_mut(),
+            std::ptr::null(),
+            k.as_ptr(),
+            &mut set
+        ));
+        set == ffi::PETSC_TRUE
+    }
+
+    /// Peak resident memory of this process so far, in bytes (PETSc's measurement).
+    pub fn peak_memory(&self) -> f64 {
+        let mut mem = 0.0;
+        let _ = call!(PetscMemoryGetMaximumUsage(&mut mem));
+        if mem <= 0.0 {
+            let _ = call!(PetscMemoryGetCurrentUsage(&mut mem));
+        }
+        mem
+    }
+}
+
+impl Drop for Petsc<'_> {
+    fn drop(&mut self) {
+        if let Err(e) = call!(SlepcFinalize()) {
+            eprintln!("[rank {}] SlepcFinalize failed: {e}", self.rank);
+        }
+    }
+}
+
+/// Reports a failed XDestroy from a `Drop` (which cannot return an error).
+pub(crate) fn report_destroy(result: Result<()>) {
+    if let Err(e) = result {
+        let rank = mpi::topology::SimpleCommunicator::world().rank();
+        eprintln!("[rank {rank}] {e}");
+    }
+}
+
+/// Installs a panic hook that prints the rank and the message, then calls MPI_Abort, so a
+/// panic on one rank never leaves the others waiting in a collective call.
+pub fn install_panic_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let world = SimpleCommunicator::world();
+        eprintln!("squeal: rank {} panicked: {info}", world.rank());
+        default(info);
+        world.abort(70);
+    }));
+}
+
+/// Converts a Rust string into a C string for PETSc; panics only on interior NUL (a bug).
+pub(crate) fn cstr(s: &str) -> CString {
+    CString::new(s).expect("string passed to PETSc contains a NUL byte")
+}
+
+/// PETSc's string constants (`MATMPISBAIJ`, ...) are NUL-terminated byte arrays.
+pub(crate) fn cconst(bytes: &'static [u8]) -> *const c_char {
+    debug_assert_eq!(bytes.last(), Some(&0));
+    bytes.as_ptr() as *const c_char
+}

@@ -1,0 +1,177 @@
+//! Direct solves with MUMPS through PETSc's KSP: one factorization serves many solves.
+
+use std::marker::PhantomData;
+
+use petsc_sys as ffi;
+
+use super::error::{call, LaError, Result};
+use super::matrix::{MatrixFormat, SparseMatrix};
+use super::vector::Vector;
+use super::{cconst, cstr, report_destroy, Petsc};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Factorization {
+    /// LDL^T for symmetric matrices (SBAIJ, or AIJ marked symmetric).
+    Cholesky,
+    /// LU for anything.
+    Lu,
+}
+
+/// What MUMPS reports about a factorization (summed over ranks).
+#[derive(Debug, Clone, Copy)]
+pub struct FactorizationReport {
+    /// Entries in the factors (INFOG(29)).
+    pub factor_entries: f64,
+    /// Ordering used in the analysis (INFOG(7)): 0 AMD, 2 AMF, 3 SCOTCH, 4 PORD, 5 METIS, 6 QAMD.
+    pub ordering: i32,
+    /// Total memory for the factorization over all ranks, in MB (INFOG(22)).
+    pub memory_mb: i32,
+    /// Floating-point operations of the elimination (RINFOG(3)).
+    pub flops: f64,
+    /// Negative pivots (INFOG(12)), the inertia for a symmetric factorization.
+    pub negative_pivots: i32,
+}
+
+impl FactorizationReport {
+    pub fn ordering_name(&self) -> &'static str {
+        match self.ordering {
+            0 => "AMD",
+            1 => "user",
+            2 => "AMF",
+            3 => "SCOTCH",
+            4 => "PORD",
+            5 => "METIS",
+            6 => "QAMD",
+            _ => "unknown",
+        }
+    }
+}
+
+/// Reads MUMPS' INFOG/RINFOG from a factored matrix and fails on a negative INFOG(1).
+pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<FactorizationReport> {
+    let infog = |i: i32| -> Result<i32> {
+        let mut v = 0;
+        call!(MatMumpsGetInfog(factor, i, &mut v))?;
+        Ok(v)
+    };
+    let info1 = infog(1)?;
+    if info1 < 0 {
+        return Err(LaError::Mumps {
+            phase: "factorization",
+            infog1: info1,
+            infog2: infog(2)?,
+            prefix: prefix.to_string(),
+        });
+    }
+    let mut flops = 0.0;
+    call!(MatMumpsGetRinfog(factor, 3, &mut flops))?;
+    let entries = infog(29)?;
+    // INFOG(29) is an int; MUMPS stores -(entries/1e6) when it overflows.
+    let factor_entries = if entries < 0 {
+        -(entries as f64) * 1e6
+    } else {
+        entries as f64
+    };
+    Ok(FactorizationReport {
+        factor_entries,
+        ordering: infog(7)?,
+        memory_mb: infog(22)?,
+        flops,
+        negative_pivots: infog(12)?,
+    })
+}
+
+/// A factored matrix ready for repeated solves (KSPPREONLY + MUMPS).
+pub struct DirectSolver<'p> {
+    raw: ffi::KSP,
+    prefix: String,
+    report: FactorizationReport,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> DirectSolver<'p> {
+    /// Factorizes `a` with MUMPS. `prefix` names the solver's options (for example
+    /// `"static_"` takes `-static_mat_mumps_icntl_7 4` from the command line).
+    ///
+    /// # Collective
+    pub fn factorize(
+        petsc: &'p Petsc,
+        a: &SparseMatrix,
+        kind: Factorization,
+        prefix: &str,
+    ) -> Result<Self> {
+        let mut raw = std::ptr::null_mut();
+        call!(KSPCreate(petsc.comm(), &mut raw))?;
+        let mut solver = DirectSolver {
+            raw,
+            prefix: prefix.to_string(),
+            report: FactorizationReport {
+                factor_entries: 0.0,
+                ordering: -1,
+                memory_mb: 0,
+                flops: 0.0,
+                negative_pivots: 0,
+            },
+            _petsc: PhantomData,
+        };
+        let p = cstr(prefix);
+        call!(KSPSetOptionsPrefix(solver.raw, p.as_ptr()))?;
+        call!(KSPSetOperators(solver.raw, a.raw, a.raw))?;
+        call!(KSPSetType(solver.raw, cconst(ffi::KSPPREONLY)))?;
+        call!(KSPSetErrorIfNotConverged(solver.raw, ffi::PETSC_TRUE))?;
+        let mut pc = std::ptr::null_mut();
+        call!(KSPGetPC(solver.raw, &mut pc))?;
+        configure_mumps_pc(pc, a.format(), kind)?;
+        call!(KSPSetFromOptions(solver.raw))?;
+        call!(KSPSetUp(solver.raw))?;
+        let mut factor = std::ptr::null_mut();
+        call!(PCFactorGetMatrix(pc, &mut factor))?;
+        solver.report = mumps_report(factor, prefix)?;
+        Ok(solver)
+    }
+
+    pub fn report(&self) -> FactorizationReport {
+        self.report
+    }
+
+    /// Solves `A x = b` with the stored factors.
+    ///
+    /// # Collective
+    pub fn solve(&self, b: &Vector, x: &Vector) -> Result<()> {
+        call!(KSPSolve(self.raw, b.raw, x.raw))
+    }
+
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+}
+
+/// Sets a PC to a MUMPS factorization of the right kind, with an ordering that avoids the
+/// PETSc 3.18 trap of handing its own nested-dissection permutation to MUMPS (TOOLCHAIN.md).
+pub(crate) fn configure_mumps_pc(
+    pc: ffi::PC,
+    format: MatrixFormat,
+    kind: Factorization,
+) -> Result<()> {
+    let pctype = match kind {
+        Factorization::Cholesky => cconst(ffi::PCCHOLESKY),
+        Factorization::Lu => cconst(ffi::PCLU),
+    };
+    if kind == Factorization::Lu && format == MatrixFormat::Sbaij {
+        return Err(LaError::Invalid(
+            "LU of an SBAIJ matrix: SBAIJ stores only the upper triangle; use Cholesky".into(),
+        ));
+    }
+    call!(PCSetType(pc, pctype))?;
+    call!(PCFactorSetMatSolverType(pc, cconst(ffi::MATSOLVERMUMPS)))?;
+    call!(PCFactorSetMatOrderingType(
+        pc,
+        cconst(ffi::MATORDERINGEXTERNAL)
+    ))
+}
+
+impl Drop for DirectSolver<'_> {
+    fn drop(&mut self) {
+        report_destroy(call!(KSPDestroy(&mut self.raw)));
+    }
+}

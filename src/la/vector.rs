@@ -1,0 +1,236 @@
+//! Distributed vectors (PETSc `Vec`, type mpi).
+
+use std::marker::PhantomData;
+use std::ops::{Deref, DerefMut};
+
+use petsc_sys as ffi;
+
+use super::error::{call, Result};
+use super::{report_destroy, Petsc};
+
+/// A distributed vector; each rank owns a contiguous range of entries.
+pub struct Vector<'p> {
+    pub(crate) raw: ffi::Vec,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> Vector<'p> {
+    pub(crate) fn from_raw(raw: ffi::Vec) -> Self {
+        Vector {
+            raw,
+            _petsc: PhantomData,
+        }
+    }
+
+    /// A zero vector with `local` entries on this rank.
+    ///
+    /// # Collective
+    pub fn new(petsc: &'p Petsc, local: usize) -> Result<Self> {
+        let mut raw = std::ptr::null_mut();
+        call!(VecCreateMPI(
+            petsc.comm(),
+            local as ffi::PetscInt,
+            ffi::PETSC_DETERMINE as ffi::PetscInt,
+            &mut raw
+        ))?;
+        let v = Vector::from_raw(raw);
+        v.set_all(0.0)?;
+        Ok(v)
+    }
+
+    /// A vector holding `values` as this rank's entries.
+    ///
+    /// # Collective
+    pub fn from_local(petsc: &'p Petsc, values: &[f64]) -> Result<Self> {
+        let v = Vector::new(petsc, values.len())?;
+        v.local_mut()?.copy_from_slice(values);
+        Ok(v)
+    }
+
+    /// Same layout, entries zero.
+    ///
+    /// # Collective
+    pub fn duplicate(&self) -> Result<Vector<'p>> {
+        let mut raw = std::ptr::null_mut();
+        call!(VecDuplicate(self.raw, &mut raw))?;
+        let v = Vector::from_raw(raw);
+        v.set_all(0.0)?;
+        Ok(v)
+    }
+
+    /// Same layout and values.
+    ///
+    /// # Collective
+    pub fn try_clone(&self) -> Result<Vector<'p>> {
+        let v = self.duplicate()?;
+        call!(VecCopy(self.raw, v.raw))?;
+        Ok(v)
+    }
+
+    pub fn global_len(&self) -> usize {
+        let mut n = 0;
+        call!(VecGetSize(self.raw, &mut n)).expect("VecGetSize on a valid vector");
+        n as usize
+    }
+
+    /// The global index range this rank owns.
+    pub fn ownership(&self) -> std::ops::Range<usize> {
+        let (mut lo, mut hi) = (0, 0);
+        call!(VecGetOwnershipRange(self.raw, &mut lo, &mut hi)).expect("valid vector");
+        lo as usize..hi as usize
+    }
+
+    pub fn set_all(&self, value: f64) -> Result<()> {
+        call!(VecSet(self.raw, value))
+    }
+
+    /// `self += alpha * x`
+    pub fn axpy(&self, alpha: f64, x: &Vector) -> Result<()> {
+        call!(VecAXPY(self.raw, alpha, x.raw))
+    }
+
+    pub fn scale(&self, alpha: f64) -> Result<()> {
+        call!(VecScale(self.raw, alpha))
+    }
+
+    pub fn copy_from(&self, x: &Vector) -> Result<()> {
+        call!(VecCopy(x.raw, self.raw))
+    }
+
+    /// # Collective
+    pub fn dot(&self, x: &Vector) -> Result<f64> {
+        let mut d = 0.0;
+        call!(VecDot(self.raw, x.raw, &mut d))?;
+        Ok(d)
+    }
+
+    /// # Collective
+    pub fn norm2(&self) -> Result<f64> {
+        let mut n = 0.0;
+        call!(VecNorm(self.raw, ffi::NORM_2, &mut n))?;
+        Ok(n)
+    }
+
+    /// # Collective
+    pub fn norm_inf(&self) -> Result<f64> {
+        let mut n = 0.0;
+        call!(VecNorm(self.raw, ffi::NORM_INFINITY, &mut n))?;
+        Ok(n)
+    }
+
+    /// Read access to this rank's entries; the array is restored when the guard drops.
+    pub fn local(&self) -> Result<LocalRead<'_, 'p>> {
+        let mut ptr = std::ptr::null();
+        call!(VecGetArrayRead(self.raw, &mut ptr))?;
+        let mut n = 0;
+        call!(VecGetLocalSize(self.raw, &mut n))?;
+        Ok(LocalRead {
+            vec: self,
+            ptr,
+            len: n as usize,
+        })
+    }
+
+    /// Write access to this rank's entries; the array is restored when the guard drops.
+    pub fn local_mut(&self) -> Result<LocalWrite<'_, 'p>> {
+        let mut ptr = std::ptr::null_mut();
+        call!(VecGetArray(self.raw, &mut ptr))?;
+        let mut n = 0;
+        call!(VecGetLocalSize(self.raw, &mut n))?;
+        Ok(LocalWrite {
+            vec: self,
+            ptr,
+            len: n as usize,
+        })
+    }
+
+    /// All entries on every rank (for small vectors and tests).
+    ///
+    /// # Collective
+    pub fn gather_all(&self) -> Result<Vec<f64>> {
+        let mut scatter = std::ptr::null_mut();
+        let mut seq = std::ptr::null_mut();
+        call!(VecScatterCreateToAll(self.raw, &mut scatter, &mut seq))?;
+        call!(VecScatterBegin(
+            scatter,
+            self.raw,
+            seq,
+            ffi::INSERT_VALUES,
+            ffi::SCATTER_FORWARD
+        ))?;
+        call!(VecScatterEnd(
+            scatter,
+            self.raw,
+            seq,
+            ffi::INSERT_VALUES,
+            ffi::SCATTER_FORWARD
+        ))?;
+        let seqv = Vector::from_raw(seq);
+        let out = seqv.local()?.to_vec();
+        drop(seqv);
+        call!(VecScatterDestroy(&mut scatter))?;
+        Ok(out)
+    }
+}
+
+impl Drop for Vector<'_> {
+    fn drop(&mut self) {
+        report_destroy(call!(VecDestroy(&mut self.raw)));
+    }
+}
+
+pub struct LocalRead<'a, 'p> {
+    vec: &'a Vector<'p>,
+    ptr: *const f64,
+    len: usize,
+}
+
+impl Deref for LocalRead<'_, '_> {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        if self.len == 0 {
+            return &[];
+        }
+        // SAFETY: PETSc guarantees `len` valid entries until VecRestoreArrayRead.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
+    }
+}
+
+impl Drop for LocalRead<'_, '_> {
+    fn drop(&mut self) {
+        report_destroy(call!(VecRestoreArrayRead(self.vec.raw, &mut self.ptr)));
+    }
+}
+
+pub struct LocalWrite<'a, 'p> {
+    vec: &'a Vector<'p>,
+    ptr: *mut f64,
+    len: usize,
+}
+
+impl Deref for LocalWrite<'_, '_> {
+    type Target = [f64];
+    fn deref(&self) -> &[f64] {
+        if self.len == 0 {
+            return &[];
+        }
+        // SAFETY: as for LocalRead; exclusive access is tied to the guard.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
+    }
+}
+
+impl DerefMut for LocalWrite<'_, '_> {
+    fn deref_mut(&mut self) -> &mut [f64] {
+        if self.len == 0 {
+            return &mut [];
+        }
+        // SAFETY: as above.
+        unsafe { std::slice::from_raw_parts_mut(self.ptr, self.len) }
+    }
+}
+
+impl Drop for LocalWrite<'_, '_> {
+    fn drop(&mut self) {
+        report_destroy(call!(VecRestoreArray(self.vec.raw, &mut self.ptr)));
+    }
+}

@@ -1,0 +1,7 @@
+//! squeal: MPI-parallel finite elements for friction-induced instabilities (brake squeal).
+//!
+//! Pure-Rust kernels (`fem`, `mesh`) write into sinks; everything that talks to PETSc/SLEPc goes
+//! through `la`, the only module with `unsafe`.
+#![deny(unsafe_op_in_unsafe_fn)]
+
+pub mod la;
