@@ -25,9 +25,11 @@ fn from_dirs(petsc_dir: &Path) -> Found {
         include_dirs.push(petsc_dir.join(&arch).join("include"));
         lib_dirs.push(petsc_dir.join(&arch).join("lib"));
     }
-    let slepc_dir = env::var("SLEPC_DIR").map(PathBuf::from).unwrap_or_else(|_| {
-        fail("PETSC_DIR is set but SLEPC_DIR is not: set SLEPC_DIR to your SLEPc installation")
-    });
+    let slepc_dir = env::var("SLEPC_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|_| {
+            fail("PETSC_DIR is set but SLEPC_DIR is not: set SLEPC_DIR to your SLEPc installation")
+        });
     include_dirs.push(slepc_dir.join("include"));
     lib_dirs.push(slepc_dir.join("lib"));
     if !arch.is_empty() {
@@ -37,7 +39,9 @@ fn from_dirs(petsc_dir: &Path) -> Found {
     let find = |names: &[&'static str]| {
         for dir in &lib_dirs {
             for name in names {
-                if dir.join(format!("lib{name}.so")).exists() || dir.join(format!("lib{name}.a")).exists() {
+                if dir.join(format!("lib{name}.so")).exists()
+                    || dir.join(format!("lib{name}.a")).exists()
+                {
                     println!("cargo:rustc-link-search=native={}", dir.display());
                     return Some(*name);
                 }
@@ -75,10 +79,7 @@ fn from_pkg_config() -> Found {
 
 fn mpi_include_dirs() -> Vec<PathBuf> {
     for name in ["mpi", "ompi", "mpich"] {
-        if let Ok(lib) = pkg_config::Config::new()
-            .cargo_metadata(false)
-            .probe(name)
-        {
+        if let Ok(lib) = pkg_config::Config::new().cargo_metadata(false).probe(name) {
             return lib.include_paths;
         }
     }

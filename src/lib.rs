@@ -4,4 +4,8 @@
 //! through `la`, the only module with `unsafe`.
 #![deny(unsafe_op_in_unsafe_fn)]
 
+pub mod eigen;
+pub mod fem;
 pub mod la;
+pub mod mesh;
+pub mod parallel;

@@ -58,7 +58,10 @@ pub enum LaError {
     },
     /// An iterative solver stopped before converging.
     #[error("{solver} did not converge: {detail}")]
-    NotConverged { solver: &'static str, detail: String },
+    NotConverged {
+        solver: &'static str,
+        detail: String,
+    },
     /// A caller passed inconsistent arguments.
     #[error("{0}")]
     Invalid(String),

@@ -355,3 +355,21 @@ impl Drop for SparseMatrix<'_> {
         report_destroy(call!(MatDestroy(&mut self.raw)));
     }
 }
+
+impl crate::fem::assembly::MatrixSink for SparseMatrix<'_> {
+    type Error = LaError;
+
+    /// Element matrices at scalar DOFs; in block mode (block size 3, every node fully free or
+    /// fully eliminated) inserted blockwise, which SBAIJ assembles several times faster.
+    fn add(&mut self, dofs: &[i32], values: &[f64]) -> Result<()> {
+        if self.block_size == 3 {
+            let blocks: Vec<i32> = dofs
+                .chunks(3)
+                .map(|d| if d[0] < 0 { -1 } else { d[0] / 3 })
+                .collect();
+            self.add_blocked(&blocks, &blocks, values)
+        } else {
+            self.add_values(dofs, dofs, values)
+        }
+    }
+}

@@ -20,8 +20,8 @@ use mpi::topology::{Communicator, SimpleCommunicator};
 use petsc_sys as ffi;
 
 pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
-pub use error::{LaError, PetscError, Result};
 use error::call;
+pub use error::{LaError, PetscError, Result};
 pub use matrix::{MatrixFormat, MatrixInfo, Preallocation, SparseMatrix};
 pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
 pub use solver::{DirectSolver, Factorization, FactorizationReport};

@@ -1,0 +1,125 @@
+//! Real modes (K phi = omega^2 M phi) with SLEPc shift-and-invert + MUMPS Cholesky.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::fem::system::AssembledSystem;
+use crate::la::{EigenOptions, FactorizationReport, GeneralizedEigen, LaError, Petsc, Vector};
+
+const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
+
+/// What real modes to compute.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RealModeRequest {
+    /// The N lowest modes (ignored when `f_max_hz` is set).
+    #[serde(default = "default_count")]
+    pub count: usize,
+    /// All modes below this frequency (Hz), by spectrum slicing.
+    #[serde(default)]
+    pub f_max_hz: Option<f64>,
+    /// Shift (Hz) of shift-and-invert; negative means sigma = -(2 pi f)^2, below zero, which a
+    /// free-free body (singular K) needs. None: 0 when constrained, -1 Hz when free.
+    #[serde(default)]
+    pub shift_hz: Option<f64>,
+    /// Modes below this frequency (Hz) are reported as rigid-body modes.
+    #[serde(default = "default_rigid_below")]
+    pub rigid_below_hz: f64,
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+}
+
+fn default_count() -> usize {
+    20
+}
+fn default_rigid_below() -> f64 {
+    0.5
+}
+fn default_tolerance() -> f64 {
+    1e-10
+}
+
+impl Default for RealModeRequest {
+    fn default() -> Self {
+        RealModeRequest {
+            count: default_count(),
+            f_max_hz: None,
+            shift_hz: None,
+            rigid_below_hz: default_rigid_below(),
+            tolerance: default_tolerance(),
+        }
+    }
+}
+
+/// Real modes in ascending order, M-normalized.
+pub struct RealModes<'p> {
+    /// omega^2 (rad^2/s^2); slightly negative values are rigid-body modes in round-off.
+    pub eigenvalues: Vec<f64>,
+    pub frequencies_hz: Vec<f64>,
+    pub shapes: Vec<Vector<'p>>,
+    /// ||K phi - omega^2 M phi||_2 with phi^T M phi = 1.
+    pub residual_norms: Vec<f64>,
+    /// SLEPc's backward error ||r|| / ((||K|| + |lambda| ||M||) ||phi||).
+    pub backward_errors: Vec<f64>,
+    pub rigid: Vec<bool>,
+    pub iterations: usize,
+    pub factorization: Option<FactorizationReport>,
+    pub seconds: f64,
+}
+
+/// Frequency in Hz of an eigenvalue omega^2 (negative round-off kept as a negative sign).
+pub fn frequency_hz(eigenvalue: f64) -> f64 {
+    eigenvalue.signum() * eigenvalue.abs().sqrt() / TWO_PI
+}
+
+/// Computes real modes of an assembled system.
+///
+/// # Collective
+pub fn real_modes<'p>(
+    petsc: &'p Petsc,
+    system: &AssembledSystem<'p>,
+    request: &RealModeRequest,
+    prefix: &str,
+) -> Result<RealModes<'p>, LaError> {
+    let start = Instant::now();
+    let free_free = system.dofs.global_dofs() == 3 * system.dofs.node_dofs.len();
+    let shift_hz = request
+        .shift_hz
+        .unwrap_or(if free_free { -1.0 } else { 0.0 });
+    let shift = shift_hz.signum() * (TWO_PI * shift_hz).powi(2);
+    let opts = EigenOptions {
+        count: request.count,
+        max_eigenvalue: request.f_max_hz.map(|f| (TWO_PI * f).powi(2)),
+        shift,
+        ncv: None,
+        tolerance: request.tolerance,
+        prefix: prefix.to_string(),
+    };
+    let sol = GeneralizedEigen::solve(petsc, &system.stiffness, &system.mass, false, &opts)?;
+    let mut residual_norms = Vec::with_capacity(sol.values.len());
+    let kx = system.stiffness.new_vector()?;
+    let mx = system.stiffness.new_vector()?;
+    for (lambda, x) in sol.values.iter().zip(&sol.vectors) {
+        system.stiffness.mult(x, &kx)?;
+        system.mass.mult(x, &mx)?;
+        kx.axpy(-lambda, &mx)?;
+        residual_norms.push(kx.norm2()?);
+    }
+    let frequencies_hz: Vec<f64> = sol.values.iter().map(|&l| frequency_hz(l)).collect();
+    let rigid = frequencies_hz
+        .iter()
+        .map(|f| f.abs() < request.rigid_below_hz)
+        .collect();
+    Ok(RealModes {
+        eigenvalues: sol.values,
+        frequencies_hz,
+        shapes: sol.vectors,
+        residual_norms,
+        backward_errors: sol.backward_errors,
+        rigid,
+        iterations: sol.iterations,
+        factorization: sol.factorization,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}

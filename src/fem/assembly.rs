@@ -1,0 +1,189 @@
+//! Generic assembly of element matrices into a sink (a PETSc matrix, or a dense matrix in
+//! tests), and the exact sparsity/preallocation of the distributed matrices.
+
+use super::dofmap::DofMap;
+use super::element::{ElementKernel, JacobianError};
+use crate::la::Preallocation;
+use crate::mesh::Mesh;
+
+/// Receives element matrices at global DOFs (negative = eliminated, skipped).
+pub trait MatrixSink {
+    type Error;
+    fn add(&mut self, dofs: &[i32], values: &[f64]) -> Result<(), Self::Error>;
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum AssemblyError<E> {
+    #[error("block '{block}': {source}")]
+    Element {
+        block: String,
+        #[source]
+        source: JacobianError,
+    },
+    #[error(transparent)]
+    Sink(E),
+}
+
+/// Dense row-major sink for small problems and tests.
+pub struct DenseSink {
+    pub n: usize,
+    pub values: Vec<f64>,
+}
+
+impl DenseSink {
+    pub fn new(n: usize) -> Self {
+        DenseSink {
+            n,
+            values: vec![0.0; n * n],
+        }
+    }
+}
+
+impl MatrixSink for DenseSink {
+    type Error = std::convert::Infallible;
+    fn add(&mut self, dofs: &[i32], values: &[f64]) -> Result<(), Self::Error> {
+        let m = dofs.len();
+        for (i, &r) in dofs.iter().enumerate() {
+            if r < 0 {
+                continue;
+            }
+            for (j, &c) in dofs.iter().enumerate() {
+                if c >= 0 {
+                    self.values[r as usize * self.n + c as usize] += values[i * m + j];
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Counts of what a rank assembled.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct AssemblyStats {
+    pub elements: usize,
+}
+
+/// Assembles stiffness and mass of the elements this rank owns into the two sinks.
+pub fn assemble<S: MatrixSink>(
+    mesh: &Mesh,
+    dofs: &DofMap,
+    stiffness: &mut S,
+    mass: &mut S,
+) -> Result<AssemblyStats, AssemblyError<S::Error>> {
+    let mut stats = AssemblyStats::default();
+    let mut x = Vec::new();
+    let mut edofs = Vec::new();
+    let mut offset = 0;
+    for block in &mesh.blocks {
+        let mut kernel = ElementKernel::new(block.kind, &mesh.materials[block.material]);
+        let n = kernel.order();
+        let (mut ke, mut me) = (vec![0.0; n * n], vec![0.0; n * n]);
+        for e in 0..block.len() {
+            let nodes = block.element(e);
+            if dofs.element_owner(nodes) != dofs.rank {
+                continue;
+            }
+            mesh.element_coords(nodes, &mut x);
+            let err = |source| AssemblyError::Element {
+                block: block.name.clone(),
+                source: JacobianError {
+                    element: offset + e,
+                    ..source
+                },
+            };
+            kernel.stiffness(e, &x, &mut ke).map_err(err)?;
+            kernel.mass(e, &x, &mut me).map_err(err)?;
+            dofs.element_dofs(nodes, &mut edofs);
+            stiffness.add(&edofs, &ke).map_err(AssemblyError::Sink)?;
+            mass.add(&edofs, &me).map_err(AssemblyError::Sink)?;
+            stats.elements += 1;
+        }
+        offset += block.len();
+    }
+    Ok(stats)
+}
+
+/// Exact preallocation of this rank's rows (per block row in block mode, per row otherwise).
+pub fn preallocation(mesh: &Mesh, dofs: &DofMap) -> Preallocation {
+    let owned = dofs.owned_nodes();
+    let start = owned.start;
+    // Neighbour nodes of each owned node, through the elements it belongs to.
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); owned.len()];
+    for block in &mesh.blocks {
+        for e in 0..block.len() {
+            let nodes = block.element(e);
+            for &n in nodes {
+                if owned.contains(&n) {
+                    neighbours[n - start].extend(nodes.iter().map(|&m| m as u32));
+                }
+            }
+        }
+    }
+    for list in &mut neighbours {
+        list.sort_unstable();
+        list.dedup();
+    }
+    let own_dofs = dofs.owned_dofs();
+    let is_local = |d: i32| own_dofs.contains(&(d as usize));
+    let mut p = Preallocation::default();
+    for (i, list) in neighbours.iter().enumerate() {
+        let node = start + i;
+        let row_dofs = dofs.node_dofs[node];
+        if dofs.block_mode {
+            let row = row_dofs[0];
+            if row < 0 {
+                continue;
+            }
+            let (mut d, mut o, mut du, mut ou) = (0, 0, 0, 0);
+            for &m in list {
+                let col = dofs.node_dofs[m as usize][0];
+                if col < 0 {
+                    continue;
+                }
+                let local = is_local(col);
+                if local {
+                    d += 1
+                } else {
+                    o += 1
+                }
+                if col >= row {
+                    if local {
+                        du += 1
+                    } else {
+                        ou += 1
+                    }
+                }
+            }
+            p.diag.push(d);
+            p.off.push(o);
+            p.diag_upper.push(du);
+            p.off_upper.push(ou);
+        } else {
+            for &row in row_dofs.iter().filter(|&&r| r >= 0) {
+                let (mut d, mut o, mut du, mut ou) = (0, 0, 0, 0);
+                for &m in list {
+                    for &col in dofs.node_dofs[m as usize].iter().filter(|&&c| c >= 0) {
+                        let local = is_local(col);
+                        if local {
+                            d += 1
+                        } else {
+                            o += 1
+                        }
+                        if col >= row {
+                            if local {
+                                du += 1
+                            } else {
+                                ou += 1
+                            }
+                        }
+                    }
+                }
+                p.diag.push(d);
+                p.off.push(o);
+                p.diag_upper.push(du);
+                p.off_upper.push(ou);
+            }
+        }
+    }
+    p
+}

@@ -1,0 +1,33 @@
+//! Small collective helpers on top of rsmpi.
+
+use mpi::collective::SystemOperation;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// True on every rank when `flag` is true on any rank (so all ranks take the same branch).
+///
+/// # Collective
+pub fn any_rank(comm: &SimpleCommunicator, flag: bool) -> bool {
+    let local = flag as i32;
+    let mut global = 0i32;
+    comm.all_reduce_into(&local, &mut global, SystemOperation::max());
+    global != 0
+}
+
+/// Sum over ranks.
+///
+/// # Collective
+pub fn sum(comm: &SimpleCommunicator, value: f64) -> f64 {
+    let mut global = 0.0;
+    comm.all_reduce_into(&value, &mut global, SystemOperation::sum());
+    global
+}
+
+/// Maximum over ranks.
+///
+/// # Collective
+pub fn max(comm: &SimpleCommunicator, value: f64) -> f64 {
+    let mut global = 0.0;
+    comm.all_reduce_into(&value, &mut global, SystemOperation::max());
+    global
+}

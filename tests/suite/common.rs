@@ -1,0 +1,33 @@
+//! Helpers shared by the MPI suite.
+
+use squeal::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
+use squeal::fem::material::Material;
+use squeal::fem::system::{assemble_system, AssembledSystem, Clamp};
+use squeal::la::Petsc;
+use squeal::mesh::Mesh;
+
+pub fn steel() -> Material {
+    Material::isotropic("steel", 2.1e11, 0.3, 7850.0)
+}
+
+pub fn solve_modes<'p>(
+    petsc: &'p Petsc,
+    mesh: &Mesh,
+    clamps: &[Clamp],
+    request: &RealModeRequest,
+) -> Result<(AssembledSystem<'p>, RealModes<'p>), String> {
+    let system = assemble_system(petsc, mesh, clamps).map_err(|e| e.to_string())?;
+    let modes = real_modes(petsc, &system, request, "").map_err(|e| e.to_string())?;
+    Ok((system, modes))
+}
+
+/// Prints on rank 0 only.
+pub fn say(petsc: &Petsc, text: &str) {
+    if petsc.rank() == 0 {
+        println!("    {text}");
+    }
+}
+
+pub fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
