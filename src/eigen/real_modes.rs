@@ -96,7 +96,7 @@ pub fn real_modes<'p>(
         tolerance: request.tolerance,
         prefix: prefix.to_string(),
     };
-    let sol = GeneralizedEigen::solve(petsc, &system.stiffness, &system.mass, false, &opts)?;
+    let sol = GeneralizedEigen::solve(petsc, &system.stiffness, &system.mass, true, &opts)?;
     let mut residual_norms = Vec::with_capacity(sol.values.len());
     let kx = system.stiffness.new_vector()?;
     let mx = system.stiffness.new_vector()?;

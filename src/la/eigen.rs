@@ -63,15 +63,17 @@ pub struct GeneralizedEigen<'p> {
 }
 
 impl<'p> GeneralizedEigen<'p> {
-    /// Solves `K x = lambda M x` for symmetric K and symmetric positive definite M (assembled
-    /// with the same nonzero pattern when `same_pattern`).
+    /// Solves `K x = lambda M x` for symmetric K and symmetric positive definite M.
+    /// `mass_pattern_in_stiffness`: M's nonzero pattern is contained in K's (true for FE
+    /// assembly), which makes forming K - sigma M cheap. Declared as SUBSET: with SBAIJ,
+    /// SAME_NONZERO_PATTERN silently lost the shift here (rigid modes came out at sigma).
     ///
     /// # Collective
     pub fn solve(
         petsc: &'p Petsc,
         k: &SparseMatrix<'p>,
         m: &SparseMatrix,
-        same_pattern: bool,
+        mass_pattern_in_stiffness: bool,
         opts: &EigenOptions,
     ) -> Result<SymmetricEigenSolution<'p>> {
         let mut raw = std::ptr::null_mut();
@@ -96,8 +98,8 @@ impl<'p> GeneralizedEigen<'p> {
         let mut st = std::ptr::null_mut();
         call!(EPSGetST(eps.raw, &mut st))?;
         call!(STSetType(st, cconst(ffi::STSINVERT)))?;
-        if same_pattern {
-            call!(STSetMatStructure(st, ffi::SAME_NONZERO_PATTERN))?;
+        if mass_pattern_in_stiffness {
+            call!(STSetMatStructure(st, ffi::SUBSET_NONZERO_PATTERN))?;
         }
         let mut ksp = std::ptr::null_mut();
         call!(STGetKSP(st, &mut ksp))?;
