@@ -6,6 +6,9 @@
 
 pub mod eigen;
 pub mod fem;
+pub mod io;
 pub mod la;
 pub mod mesh;
 pub mod parallel;
+pub mod pipeline;
+pub mod scene;

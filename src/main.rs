@@ -1,1 +1,166 @@
-fn main() {}
+//! squeal: MPI init (rsmpi first), panic hook -> MPI_Abort, command line, dispatch.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use squeal::la::Petsc;
+use squeal::pipeline::{run, RunSummary};
+use squeal::scene::{Scene, DEFAULT_SCENE};
+
+#[derive(Parser)]
+#[command(
+    name = "squeal",
+    version,
+    about = "Finite-element analysis of brake squeal (MPI, PETSc/SLEPc)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scene (the embedded default scene when none is given).
+    ///
+    /// PETSc/SLEPc options go after `--`, e.g. `squeal run scene.toml -- -eps_ncv 300`.
+    Run {
+        /// Scene file (TOML).
+        scene: Option<PathBuf>,
+        /// Results folder (overrides output.directory of the scene).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
+        /// PETSc/SLEPc options.
+        #[arg(last = true)]
+        petsc_options: Vec<String>,
+    },
+    /// Scene utilities.
+    Scene {
+        /// Print the embedded default scene (a starting point for your own).
+        #[arg(long)]
+        print_default: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Scene { print_default } => {
+            if print_default {
+                print!("{DEFAULT_SCENE}");
+            } else {
+                eprintln!("squeal scene: nothing to do (try --print-default)");
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Run {
+            scene,
+            output,
+            petsc_options,
+        } => run_command(scene, output, petsc_options),
+    }
+}
+
+fn run_command(
+    scene_path: Option<PathBuf>,
+    output: Option<PathBuf>,
+    petsc_options: Vec<String>,
+) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("squeal: MPI was already initialized");
+        return ExitCode::FAILURE;
+    };
+    squeal::la::install_panic_hook();
+    let rank = {
+        use mpi::traits::Communicator;
+        universe.world().rank()
+    };
+    let fail = |message: String| {
+        // Every rank reaches the same error (inputs are read on all ranks, solver failures
+        // are collective); rank 0 says it.
+        if rank == 0 {
+            eprintln!("squeal: error: {message}");
+        }
+        ExitCode::FAILURE
+    };
+    let (scene, text, name, dir) = match &scene_path {
+        Some(p) => {
+            let text = match std::fs::read_to_string(p) {
+                Ok(t) => t,
+                Err(e) => return fail(format!("{}: cannot read the scene: {e}", p.display())),
+            };
+            match Scene::parse(&text, &p.display().to_string()) {
+                Ok(s) => {
+                    let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
+                    (s, text, p.display().to_string(), dir)
+                }
+                Err(e) => return fail(e.to_string()),
+            }
+        }
+        None => match Scene::parse(DEFAULT_SCENE, "default scene") {
+            Ok(s) => (
+                s,
+                DEFAULT_SCENE.to_string(),
+                "default scene".into(),
+                PathBuf::from("."),
+            ),
+            Err(e) => return fail(e.to_string()),
+        },
+    };
+    let petsc = match Petsc::initialize(&universe, &petsc_options) {
+        Ok(p) => p,
+        Err(e) => return fail(e.to_string()),
+    };
+    let output = output.unwrap_or_else(|| scene.output.directory.clone());
+    if rank == 0 {
+        println!(
+            "squeal {}: {name} on {} rank(s)",
+            env!("CARGO_PKG_VERSION"),
+            petsc.size()
+        );
+    }
+    let result = run(&petsc, &scene, &text, &dir, &output, &petsc_options);
+    let code = match result {
+        Ok(summary) => {
+            if rank == 0 {
+                print_summary(&summary);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(e.to_string()),
+    };
+    drop(petsc);
+    code
+}
+
+fn print_summary(s: &RunSummary) {
+    println!("model: {} DOF", s.dofs);
+    if !s.frequencies_hz.is_empty() {
+        println!("real modes:    #   frequency (Hz)   ||K phi - w^2 M phi||   backward error");
+        for (i, f) in s.frequencies_hz.iter().enumerate() {
+            println!(
+                "            {:4}   {:14.4}   {:21.3e}   {:14.3e}{}",
+                i + 1,
+                f,
+                s.residual_norms[i],
+                s.backward_errors[i],
+                if s.rigid[i] { "   rigid-body mode" } else { "" }
+            );
+        }
+        if let (Some(entries), Some(ordering)) = (s.factor_entries, s.ordering) {
+            println!("MUMPS factor: {entries:.3e} entries ({ordering} ordering)");
+        }
+    }
+    println!("timings (s):");
+    for (name, secs) in &s.timings.stages {
+        println!("    {name:18} {secs:9.3}");
+    }
+    println!(
+        "peak memory per rank: {:.1} MiB",
+        s.peak_memory_per_rank / (1024.0 * 1024.0)
+    );
+    println!(
+        "results: {}/results.h5 (+ results.xdmf)",
+        s.output.display()
+    );
+}

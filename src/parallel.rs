@@ -31,3 +31,8 @@ pub fn max(comm: &SimpleCommunicator, value: f64) -> f64 {
     comm.all_reduce_into(&value, &mut global, SystemOperation::max());
     global
 }
+
+/// # Collective
+pub fn barrier(comm: &SimpleCommunicator) {
+    comm.barrier();
+}

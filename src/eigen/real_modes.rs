@@ -4,8 +4,9 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fem::system::AssembledSystem;
-use crate::la::{EigenOptions, FactorizationReport, GeneralizedEigen, LaError, Petsc, Vector};
+use crate::la::{
+    EigenOptions, FactorizationReport, GeneralizedEigen, LaError, Petsc, SparseMatrix, Vector,
+};
 
 const TWO_PI: f64 = 2.0 * std::f64::consts::PI;
 
@@ -73,17 +74,19 @@ pub fn frequency_hz(eigenvalue: f64) -> f64 {
     eigenvalue.signum() * eigenvalue.abs().sqrt() / TWO_PI
 }
 
-/// Computes real modes of an assembled system.
+/// Computes real modes of K phi = omega^2 M phi. `free_free`: K is singular (no constraint),
+/// so the default shift goes below zero. `prefix` prefixes the solver's PETSc options.
 ///
 /// # Collective
 pub fn real_modes<'p>(
     petsc: &'p Petsc,
-    system: &AssembledSystem<'p>,
+    stiffness: &SparseMatrix<'p>,
+    mass: &SparseMatrix<'p>,
+    free_free: bool,
     request: &RealModeRequest,
     prefix: &str,
 ) -> Result<RealModes<'p>, LaError> {
     let start = Instant::now();
-    let free_free = system.dofs.global_dofs() == 3 * system.dofs.node_dofs.len();
     let shift_hz = request
         .shift_hz
         .unwrap_or(if free_free { -1.0 } else { 0.0 });
@@ -96,13 +99,13 @@ pub fn real_modes<'p>(
         tolerance: request.tolerance,
         prefix: prefix.to_string(),
     };
-    let sol = GeneralizedEigen::solve(petsc, &system.stiffness, &system.mass, true, &opts)?;
+    let sol = GeneralizedEigen::solve(petsc, stiffness, mass, true, &opts)?;
     let mut residual_norms = Vec::with_capacity(sol.values.len());
-    let kx = system.stiffness.new_vector()?;
-    let mx = system.stiffness.new_vector()?;
+    let kx = stiffness.new_vector()?;
+    let mx = stiffness.new_vector()?;
     for (lambda, x) in sol.values.iter().zip(&sol.vectors) {
-        system.stiffness.mult(x, &kx)?;
-        system.mass.mult(x, &mx)?;
+        stiffness.mult(x, &kx)?;
+        mass.mult(x, &mx)?;
         kx.axpy(-lambda, &mx)?;
         residual_norms.push(kx.norm2()?);
     }

@@ -43,6 +43,13 @@ pub struct AssembledSystem<'p> {
     pub elements_on_rank: usize,
 }
 
+impl AssembledSystem<'_> {
+    /// No DOF is constrained: K has rigid-body modes.
+    pub fn is_free_free(&self) -> bool {
+        self.dofs.global_dofs() == 3 * self.dofs.node_dofs.len()
+    }
+}
+
 /// The DOF map of a mesh with the given clamps on `ranks` ranks.
 pub fn dof_map(
     mesh: &Mesh,

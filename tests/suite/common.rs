@@ -17,7 +17,15 @@ pub fn solve_modes<'p>(
     request: &RealModeRequest,
 ) -> Result<(AssembledSystem<'p>, RealModes<'p>), String> {
     let system = assemble_system(petsc, mesh, clamps).map_err(|e| e.to_string())?;
-    let modes = real_modes(petsc, &system, request, "").map_err(|e| e.to_string())?;
+    let modes = real_modes(
+        petsc,
+        &system.stiffness,
+        &system.mass,
+        system.is_free_free(),
+        request,
+        "",
+    )
+    .map_err(|e| e.to_string())?;
     Ok((system, modes))
 }
 

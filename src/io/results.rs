@@ -1,0 +1,246 @@
+//! The results file (`results.h5`), written in parallel (MPI-IO): every rank writes the rows of
+//! the nodes it owns; small tables are written by rank 0. Every dataset carries its units.
+//! Readable by h5py without this program.
+
+use std::path::Path;
+
+use hdf5::types::VarLenUnicode;
+use mpi::raw::AsRaw;
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use ndarray::{s, Array1, Array2};
+
+use crate::eigen::real_modes::RealModes;
+use crate::fem::dofmap::DofMap;
+use crate::la::LaError;
+use crate::mesh::Mesh;
+
+#[derive(Debug, thiserror::Error)]
+pub enum ResultsError {
+    #[error("{path}: HDF5: {source}")]
+    Hdf5 { path: String, source: hdf5::Error },
+    #[error(transparent)]
+    La(#[from] LaError),
+}
+
+pub struct ResultsFile {
+    file: hdf5::File,
+    path: String,
+    rank: i32,
+}
+
+impl ResultsFile {
+    /// Creates (truncates) the file on every rank of `comm`.
+    ///
+    /// # Collective
+    pub fn create(comm: &SimpleCommunicator, path: &Path) -> Result<Self, ResultsError> {
+        let p = path.to_string_lossy().to_string();
+        let file = hdf5::File::with_options()
+            .with_fapl(|fapl| fapl.mpio(comm.as_raw(), None))
+            .create(path)
+            .map_err(|source| ResultsError::Hdf5 {
+                path: p.clone(),
+                source,
+            })?;
+        Ok(ResultsFile {
+            file,
+            path: p,
+            rank: comm.rank(),
+        })
+    }
+
+    fn err(&self) -> impl Fn(hdf5::Error) -> ResultsError + '_ {
+        move |source| ResultsError::Hdf5 {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn group(&self, path: &str) -> Result<hdf5::Group, ResultsError> {
+        let mut g = self.file.group("/").map_err(self.err())?;
+        for part in path.split('/').filter(|p| !p.is_empty()) {
+            g = match g.group(part) {
+                Ok(x) => x,
+                Err(_) => g.create_group(part).map_err(self.err())?,
+            };
+        }
+        Ok(g)
+    }
+
+    /// A string attribute on a group (created collectively).
+    ///
+    /// # Collective
+    pub fn set_text(&self, group: &str, name: &str, value: &str) -> Result<(), ResultsError> {
+        let g = self.group(group)?;
+        let v: VarLenUnicode = value.replace('\0', " ").parse().unwrap();
+        let attr = g
+            .new_attr::<VarLenUnicode>()
+            .create(name)
+            .map_err(self.err())?;
+        attr.write_scalar(&v).map_err(self.err())
+    }
+
+    /// A numeric attribute on a group.
+    ///
+    /// # Collective
+    pub fn set_number(&self, group: &str, name: &str, value: f64) -> Result<(), ResultsError> {
+        let g = self.group(group)?;
+        let attr = g.new_attr::<f64>().create(name).map_err(self.err())?;
+        attr.write_scalar(&value).map_err(self.err())
+    }
+
+    fn dataset<T: hdf5::H5Type>(
+        &self,
+        path: &str,
+        shape: &[usize],
+        units: &str,
+    ) -> Result<hdf5::Dataset, ResultsError> {
+        let (dir, name) = path.rsplit_once('/').unwrap_or(("", path));
+        let g = self.group(dir)?;
+        let ds = g
+            .new_dataset::<T>()
+            .shape(shape)
+            .create(name)
+            .map_err(self.err())?;
+        let v: VarLenUnicode = units.parse().unwrap();
+        ds.new_attr::<VarLenUnicode>()
+            .create("units")
+            .map_err(self.err())?
+            .write_scalar(&v)
+            .map_err(self.err())?;
+        Ok(ds)
+    }
+
+    /// A 1D table written by rank 0 (every rank passes the same values).
+    ///
+    /// # Collective
+    pub fn write_table(&self, path: &str, values: &[f64], units: &str) -> Result<(), ResultsError> {
+        let ds = self.dataset::<f64>(path, &[values.len()], units)?;
+        if self.rank == 0 && !values.is_empty() {
+            ds.write(&Array1::from(values.to_vec()))
+                .map_err(self.err())?;
+        }
+        Ok(())
+    }
+
+    /// Node coordinates and the connectivity of every element block.
+    ///
+    /// # Collective
+    pub fn write_mesh(&self, mesh: &Mesh) -> Result<(), ResultsError> {
+        let n = mesh.node_count();
+        let coords = self.dataset::<f64>("model/coordinates", &[n, 3], "m")?;
+        if self.rank == 0 {
+            let a = Array2::from_shape_vec((n, 3), mesh.coords.iter().flatten().copied().collect())
+                .unwrap();
+            coords.write(&a).map_err(self.err())?;
+        }
+        for block in &mesh.blocks {
+            let nn = block.kind.nodes();
+            let path = format!("model/blocks/{}/connectivity", block.name);
+            let ds = self.dataset::<u64>(&path, &[block.len(), nn], "1")?;
+            if self.rank == 0 && !block.is_empty() {
+                let a = Array2::from_shape_vec(
+                    (block.len(), nn),
+                    block.connectivity.iter().map(|&v| v as u64).collect(),
+                )
+                .unwrap();
+                ds.write(&a).map_err(self.err())?;
+            }
+            self.set_text(
+                &format!("model/blocks/{}", block.name),
+                "element_type",
+                block.kind.name(),
+            )?;
+            self.set_text(
+                &format!("model/blocks/{}", block.name),
+                "material",
+                &mesh.materials[block.material].name,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// A nodal vector field (3 per node) from a distributed DOF vector: each rank writes its
+    /// owned nodes.
+    ///
+    /// # Collective
+    pub fn write_nodal(
+        &self,
+        path: &str,
+        dofs: &DofMap,
+        local: &[f64],
+        units: &str,
+    ) -> Result<(), ResultsError> {
+        let n = dofs.node_dofs.len();
+        let ds = self.dataset::<f64>(path, &[n, 3], units)?;
+        let owned = dofs.owned_nodes();
+        if !owned.is_empty() {
+            let field = dofs.to_nodal(local);
+            let a = Array2::from_shape_vec((owned.len(), 3), field.into_iter().flatten().collect())
+                .unwrap();
+            ds.write_slice(&a, s![owned.start..owned.end, ..])
+                .map_err(self.err())?;
+        }
+        Ok(())
+    }
+
+    /// A distributed DOF vector (for models without a mesh): each rank writes its range.
+    ///
+    /// # Collective
+    pub fn write_dof_vector(
+        &self,
+        path: &str,
+        vector: &crate::la::Vector,
+        units: &str,
+    ) -> Result<(), ResultsError> {
+        let ds = self.dataset::<f64>(path, &[vector.global_len()], units)?;
+        let range = vector.ownership();
+        if !range.is_empty() {
+            let local = vector.local()?;
+            ds.write_slice(&Array1::from(local.to_vec()), s![range.start..range.end])
+                .map_err(self.err())?;
+        }
+        Ok(())
+    }
+
+    /// Frequencies, residuals, rigid flags and M-normalized shapes of real modes: nodal
+    /// fields under `shapes/` with a DOF map, raw DOF vectors under `vectors/` without.
+    ///
+    /// # Collective
+    pub fn write_real_modes(
+        &self,
+        modes: &RealModes,
+        dofs: Option<&DofMap>,
+    ) -> Result<(), ResultsError> {
+        self.write_table("modes/real/frequency", &modes.frequencies_hz, "Hz")?;
+        self.write_table("modes/real/eigenvalue", &modes.eigenvalues, "rad^2/s^2")?;
+        self.write_table(
+            "modes/real/residual_norm",
+            &modes.residual_norms,
+            "N (phi M-normalized)",
+        )?;
+        self.write_table("modes/real/backward_error", &modes.backward_errors, "1")?;
+        let rigid: Vec<f64> = modes.rigid.iter().map(|&r| r as i32 as f64).collect();
+        self.write_table("modes/real/rigid_body", &rigid, "1 = rigid-body mode")?;
+        for (i, shape) in modes.shapes.iter().enumerate() {
+            let units = "m / sqrt(kg) (M-normalized)";
+            match dofs {
+                Some(dofs) => {
+                    let local = shape.local()?;
+                    self.write_nodal(
+                        &format!("modes/real/shapes/mode_{:04}", i + 1),
+                        dofs,
+                        &local,
+                        units,
+                    )?;
+                }
+                None => self.write_dof_vector(
+                    &format!("modes/real/vectors/mode_{:04}", i + 1),
+                    shape,
+                    units,
+                )?,
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,245 @@
+//! The TOML scene: what model to build, which analyses to run, where to write. Unknown keys
+//! are rejected; every error names the file and the key.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::eigen::real_modes::RealModeRequest;
+use crate::fem::material::Material;
+use crate::fem::shape::ElementKind;
+use crate::io::user_matrices::MatrixTerm;
+
+/// The scene `squeal run` uses when given none.
+pub const DEFAULT_SCENE: &str = include_str!("../jobs/default.toml");
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    pub model: ModelSource,
+    #[serde(default)]
+    pub real_modes: Option<RealModeRequest>,
+    #[serde(default)]
+    pub output: Output,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "source", rename_all = "lowercase", deny_unknown_fields)]
+pub enum ModelSource {
+    /// A rectangular block [0, size] meshed with `cells`; node sets u0/u1 (x faces),
+    /// v0/v1 (y), w0/w1 (z).
+    Block {
+        element: ElementKind,
+        size: [f64; 3],
+        cells: [usize; 3],
+        material: Material,
+        #[serde(default)]
+        clamp: Vec<String>,
+    },
+    /// An annular plate around the z axis; node sets inner, outer, bottom, top.
+    Annulus {
+        element: ElementKind,
+        inner_radius: f64,
+        outer_radius: f64,
+        thickness: f64,
+        cells: [usize; 3],
+        material: Material,
+        #[serde(default)]
+        clamp: Vec<String>,
+    },
+    /// Assembled matrices from another code, each a sum of Matrix Market files.
+    Matrices {
+        stiffness: Vec<MatrixTerm>,
+        mass: Vec<MatrixTerm>,
+    },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    #[serde(default = "default_directory")]
+    pub directory: PathBuf,
+    /// Export the assembled K and M: any of "mtx" (Matrix Market), "petsc" (PETSc binary).
+    #[serde(default)]
+    pub export_matrices: Vec<String>,
+}
+
+fn default_directory() -> PathBuf {
+    PathBuf::from("results")
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            directory: default_directory(),
+            export_matrices: Vec::new(),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{file}: cannot read: {source}")]
+    Read {
+        file: String,
+        source: std::io::Error,
+    },
+    #[error("{file}: {message}")]
+    Invalid { file: String, message: String },
+}
+
+impl Scene {
+    /// Parses and validates a scene; `file` names it in errors.
+    pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Invalid {
+            file: file.into(),
+            message: e.to_string(),
+        })?;
+        scene.validate().map_err(|message| SceneError::Invalid {
+            file: file.into(),
+            message,
+        })?;
+        Ok(scene)
+    }
+
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            file: file.clone(),
+            source,
+        })?;
+        Scene::parse(&text, &file)
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "key '{key}' = {v}: must be a positive finite length (m)"
+                ))
+            }
+        };
+        let cells_ok = |cells: &[usize; 3]| {
+            if cells.iter().all(|&c| c > 0) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "key 'model.cells' = {cells:?}: every entry must be at least 1"
+                ))
+            }
+        };
+        match &self.model {
+            ModelSource::Block {
+                size,
+                cells,
+                material,
+                ..
+            } => {
+                for (i, s) in size.iter().enumerate() {
+                    positive(&format!("model.size[{i}]"), *s)?;
+                }
+                cells_ok(cells)?;
+                material
+                    .validate()
+                    .map_err(|e| format!("key 'model.material': {e}"))?;
+            }
+            ModelSource::Annulus {
+                inner_radius,
+                outer_radius,
+                thickness,
+                cells,
+                material,
+                ..
+            } => {
+                positive("model.inner_radius", *inner_radius)?;
+                positive("model.outer_radius", *outer_radius)?;
+                positive("model.thickness", *thickness)?;
+                if outer_radius <= inner_radius {
+                    return Err(format!(
+                        "key 'model.outer_radius' = {outer_radius}: must exceed model.inner_radius = {inner_radius}"
+                    ));
+                }
+                cells_ok(cells)?;
+                if cells[1] < 3 {
+                    return Err("key 'model.cells[1]' (circumferential): at least 3".into());
+                }
+                material
+                    .validate()
+                    .map_err(|e| format!("key 'model.material': {e}"))?;
+            }
+            ModelSource::Matrices { stiffness, mass } => {
+                if stiffness.is_empty() || mass.is_empty() {
+                    return Err("keys 'model.stiffness' and 'model.mass' each need at least one { file, coefficient } term".into());
+                }
+                for t in stiffness.iter().chain(mass) {
+                    if !t.coefficient.is_finite() {
+                        return Err(format!(
+                            "matrix term '{}': coefficient must be finite",
+                            t.file.display()
+                        ));
+                    }
+                }
+            }
+        }
+        if let Some(r) = &self.real_modes {
+            if r.count == 0 && r.f_max_hz.is_none() {
+                return Err(
+                    "key 'real_modes.count' must be at least 1 (or set real_modes.f_max_hz)".into(),
+                );
+            }
+            if let Some(f) = r.f_max_hz {
+                if !(f.is_finite() && f > 0.0) {
+                    return Err(format!("key 'real_modes.f_max_hz' = {f}: must be positive"));
+                }
+            }
+            if !(r.tolerance > 0.0 && r.tolerance < 1.0) {
+                return Err(format!(
+                    "key 'real_modes.tolerance' = {}: must be in (0, 1)",
+                    r.tolerance
+                ));
+            }
+        }
+        for e in &self.output.export_matrices {
+            if e != "mtx" && e != "petsc" {
+                return Err(format!(
+                    "key 'output.export_matrices': '{e}' is not one of \"mtx\", \"petsc\""
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_scene_parses() {
+        let s = Scene::parse(DEFAULT_SCENE, "default").unwrap();
+        assert!(s.real_modes.is_some());
+    }
+
+    #[test]
+    fn unknown_key_is_named() {
+        let text = DEFAULT_SCENE.replace("count = 30", "count = 30\nmodes = 4");
+        let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
+        assert!(e.contains("x.toml") && e.contains("modes"), "{e}");
+    }
+
+    #[test]
+    fn negative_thickness_is_named() {
+        let text = DEFAULT_SCENE.replace("thickness = 0.028", "thickness = -0.028");
+        let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
+        assert!(e.contains("model.thickness"), "{e}");
+    }
+
+    #[test]
+    fn nan_modulus_is_named() {
+        let text = DEFAULT_SCENE.replace("e = 1.1e11", "e = nan");
+        let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
+        assert!(e.contains("model.material") && e.contains("NaN"), "{e}");
+    }
+}
