@@ -123,7 +123,11 @@ pub fn run(
     let mut mesh = None;
     let mut system: Option<AssembledSystem> = None;
     let mut user: Option<(SparseMatrix, SparseMatrix)> = None;
-    if let Some((m, clamps)) = timings.time("mesh", || build_mesh(&scene.model)) {
+    let generated = match &scene.model {
+        ModelSource::Matrices { .. } => None,
+        model => timings.time("mesh", || build_mesh(model)),
+    };
+    if let Some((m, clamps)) = generated {
         let s = timings.time("assembly", || assemble_system(petsc, &m, &clamps))?;
         mesh = Some(m);
         system = Some(s);

@@ -51,7 +51,8 @@ impl Triplets {
     }
 }
 
-/// Reads a Matrix Market coordinate file (real or integer; general or symmetric).
+/// Reads a Matrix Market coordinate file (real or integer; general or symmetric), gzipped
+/// when its name ends in `.gz`.
 pub fn read(path: &Path) -> Result<Triplets, MatrixMarketError> {
     let io = |source| MatrixMarketError::Io {
         path: path.to_path_buf(),
@@ -63,7 +64,13 @@ pub fn read(path: &Path) -> Result<Triplets, MatrixMarketError> {
         message,
     };
     let file = std::fs::File::open(path).map_err(io)?;
-    let mut lines = BufReader::new(file).lines().enumerate();
+    // Matrices are often shipped compressed: read `.gz` transparently.
+    let reader: Box<dyn std::io::Read> = if path.extension().is_some_and(|e| e == "gz") {
+        Box::new(flate2::read::GzDecoder::new(file))
+    } else {
+        Box::new(file)
+    };
+    let mut lines = BufReader::new(reader).lines().enumerate();
     let (_, header) = lines.next().ok_or_else(|| parse(1, "empty file".into()))?;
     let header = header.map_err(io)?.to_lowercase();
     let words: Vec<&str> = header.split_whitespace().collect();
@@ -174,6 +181,12 @@ pub fn write(
     let mut count = 0u64;
     matrix.for_each_local_row(|row, cols, vals| {
         for (&c, &v) in cols.iter().zip(vals) {
+            // SBAIJ stores its diagonal blocks whole, so MatGetRow also returns a few entries
+            // left of the diagonal: keep the upper triangle, written transposed as the lower
+            // triangle that Matrix Market expects.
+            if symmetric && (c as usize) < row {
+                continue;
+            }
             let (i, j) = if symmetric {
                 (c as usize, row)
             } else {

@@ -118,6 +118,12 @@ impl<'p> GeneralizedEigen<'p> {
                 )));
             }
             call!(EPSSetInterval(eps.raw, opts.shift, upper))?;
+            // Slicing counts eigenvalues by Sylvester inertia; MUMPS must compute it for the
+            // global matrix (ICNTL(13) = 1), which PETSc does not set for us in parallel.
+            let key = format!("-{}st_mat_mumps_icntl_13", opts.prefix);
+            if !petsc.has_option(&key) {
+                petsc.set_option(&key, Some("1"))?;
+            }
             call!(EPSSetWhichEigenpairs(eps.raw, ffi::EPS_ALL))?;
         } else {
             let nev = opts.count.max(1);

@@ -1,0 +1,362 @@
+//! Parallel consistency and the solver routes of the la layer:
+//!
+//! - the same real modes on 1 and 2 ranks to round-off (DESIGN.md §4);
+//! - the quadratic route (SLEPc PEP, real arithmetic) against the closed form of uncoupled
+//!   damped oscillators, m s^2 + c s + k = 0: s = (-c +- sqrt(c^2 - 4 m k)) / (2 m), which
+//!   come as conjugate pairs;
+//! - the matrices model source on real data (brake M0, Graebner et al., ZAMM 2016): the modes
+//!   below 3 kHz by spectrum slicing (Sylvester inertia) equal the 20 lowest by count;
+//! - Matrix Market export then import gives the same operator.
+
+use std::path::{Path, PathBuf};
+
+use squeal::eigen::real_modes::{real_modes, RealModeRequest};
+use squeal::fem::shape::ElementKind;
+use squeal::fem::system::{assemble_system, Clamp};
+use squeal::io::matrix_market;
+use squeal::io::user_matrices::{load_sum, MatrixTerm};
+use squeal::la::{
+    solve_quadratic, MatrixFormat, Petsc, Preallocation, QuadraticOptions, SparseMatrix,
+};
+use squeal::mesh::structured::block;
+
+use super::common::{rel, say, solve_modes, steel};
+
+pub fn tests() -> Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> {
+    vec![
+        ("same_modes_one_and_two_ranks", same_modes_one_and_two_ranks),
+        (
+            "quadratic_damped_oscillators_conjugate_pairs",
+            quadratic_damped_oscillators_conjugate_pairs,
+        ),
+        (
+            "brake_m0_modes_by_slicing_equal_modes_by_count",
+            brake_m0_modes_by_slicing_equal_modes_by_count,
+        ),
+        (
+            "matrix_market_export_import_roundtrip",
+            matrix_market_export_import_roundtrip,
+        ),
+    ]
+}
+
+fn suite_dir() -> PathBuf {
+    std::env::var_os("SQUEAL_SUITE_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
+}
+
+fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/brake-m0")
+}
+
+/// Modes of a rectangular cantilever (no doublets, so shapes are unique up to sign) on this
+/// run's ranks, gathered in global DOF order; the 1-rank run stores them, the 2-rank run
+/// compares against them.
+fn same_modes_one_and_two_ranks(petsc: &Petsc) -> Result<(), String> {
+    let mesh = block([1.0, 0.12, 0.07], [12, 3, 2], ElementKind::Hex20, steel());
+    let request = RealModeRequest {
+        count: 8,
+        tolerance: 1e-12,
+        ..Default::default()
+    };
+    let (_, modes) = solve_modes(petsc, &mesh, &[Clamp::all("u0")], &request)?;
+    let mut lines = Vec::new();
+    for (f, shape) in modes.frequencies_hz.iter().zip(&modes.shapes) {
+        let mut v = shape.gather_all().map_err(|e| e.to_string())?;
+        // Fix the sign: largest entry positive.
+        let imax = (0..v.len())
+            .max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs()))
+            .unwrap();
+        if v[imax] < 0.0 {
+            v.iter_mut().for_each(|x| *x = -*x);
+        }
+        lines.push((*f, v));
+    }
+    let dir = suite_dir();
+    let file = dir.join("modes-1-rank.txt");
+    if petsc.size() == 1 {
+        if petsc.rank() == 0 {
+            std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+            let text: String = lines
+                .iter()
+                .map(|(f, v)| {
+                    format!(
+                        "{f:e} {}\n",
+                        v.iter()
+                            .map(|x| format!("{x:e}"))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    )
+                })
+                .collect();
+            std::fs::write(&file, text).map_err(|e| e.to_string())?;
+        }
+        say(
+            petsc,
+            &format!("stored the 1-rank modes in {}", file.display()),
+        );
+        return Ok(());
+    }
+    let text = std::fs::read_to_string(&file).map_err(|e| {
+        format!(
+            "{}: {e}: run the suite on 1 rank first (scripts/test does)",
+            file.display()
+        )
+    })?;
+    let (mut df, mut dv) = (0.0f64, 0.0f64);
+    for ((f, v), line) in lines.iter().zip(text.lines()) {
+        let nums: Vec<f64> = line
+            .split_whitespace()
+            .map(|w| w.parse().unwrap())
+            .collect();
+        df = df.max(rel(*f, nums[0]));
+        let vmax = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        for (a, b) in v.iter().zip(&nums[1..]) {
+            dv = dv.max((a - b).abs() / vmax);
+        }
+    }
+    say(
+        petsc,
+        &format!(
+            "{} ranks vs 1: max rel. frequency difference {df:.1e}, max shape difference {dv:.1e}",
+            petsc.size()
+        ),
+    );
+    // Round-off through different MUMPS pivot sequences and Krylov paths: frequencies agree to
+    // ~1e-14; shapes to the eigensolver tolerance over the spectral gap.
+    if df > 1e-11 || dv > 1e-7 {
+        return Err(format!("frequencies differ by {df:e}, shapes by {dv:e}"));
+    }
+    Ok(())
+}
+
+fn diagonal<'p>(
+    petsc: &'p Petsc,
+    local: std::ops::Range<usize>,
+    value: impl Fn(usize) -> f64,
+) -> Result<SparseMatrix<'p>, String> {
+    let n = local.len();
+    let p = Preallocation {
+        diag: vec![1; n],
+        off: vec![0; n],
+        diag_upper: vec![1; n],
+        off_upper: vec![0; n],
+    };
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, n, &p).map_err(|e| e.to_string())?;
+    for i in local {
+        a.add_values(&[i as i32], &[i as i32], &[value(i)])
+            .map_err(|e| e.to_string())?;
+    }
+    a.assemble().map_err(|e| e.to_string())?;
+    Ok(a)
+}
+
+fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), String> {
+    let n = 40;
+    let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let local = rank * n / size..(rank + 1) * n / size;
+    let m = |i: usize| 1.0 + 0.1 * i as f64;
+    let c = |i: usize| 0.05 * (1.0 + i as f64);
+    let k = |i: usize| (10.0 + i as f64).powi(2);
+    let (mm, cc, kk) = (
+        diagonal(petsc, local.clone(), m)?,
+        diagonal(petsc, local.clone(), c)?,
+        diagonal(petsc, local, k)?,
+    );
+    let opts = QuadraticOptions {
+        count: 10,
+        tolerance: 1e-12,
+        ..Default::default()
+    };
+    let sol = solve_quadratic(petsc, &kk, &cc, &mm, &opts).map_err(|e| e.to_string())?;
+    let exact: Vec<(f64, f64)> = (0..n)
+        .flat_map(|i| {
+            let re = -c(i) / (2.0 * m(i));
+            let im = (4.0 * m(i) * k(i) - c(i) * c(i)).sqrt() / (2.0 * m(i));
+            [(re, im), (re, -im)]
+        })
+        .collect();
+    let mut worst = 0.0f64;
+    for &(re, im) in &sol.values {
+        let d = exact
+            .iter()
+            .map(|&(er, ei)| {
+                ((re - er).powi(2) + (im - ei).powi(2)).sqrt() / (er * er + ei * ei).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(d);
+        // The conjugate must be there too.
+        if !sol.values.iter().any(|&(r2, i2)| {
+            (r2 - re).abs() < 1e-9 * im.abs().max(1.0) && (i2 + im).abs() < 1e-9 * im.abs().max(1.0)
+        }) {
+            return Err(format!(
+                "eigenvalue {re} + {im}i has no conjugate in the result"
+            ));
+        }
+    }
+    let smallest = exact
+        .iter()
+        .map(|&(r, i)| (r * r + i * i).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    say(
+        petsc,
+        &format!(
+            "{} eigenvalues, worst rel. error {worst:.1e}, max backward error {:.1e}",
+            sol.values.len(),
+            sol.backward_errors.iter().fold(0.0f64, |a, &b| a.max(b))
+        ),
+    );
+    if worst > 1e-9 {
+        return Err(format!("worst relative eigenvalue error {worst:e}"));
+    }
+    let nearest = sol
+        .values
+        .iter()
+        .map(|&(r, i)| (r * r + i * i).sqrt())
+        .fold(f64::INFINITY, f64::min);
+    if rel(nearest, smallest) > 1e-9 {
+        return Err(format!("smallest |s| found {nearest}, exact {smallest}"));
+    }
+    Ok(())
+}
+
+fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), String> {
+    let term = |f: &str| {
+        vec![MatrixTerm {
+            file: PathBuf::from(f),
+            coefficient: 1.0,
+        }]
+    };
+    let k = load_sum(petsc, &term("K1.mtx.gz"), &data_dir()).map_err(|e| e.to_string())?;
+    let m = load_sum(petsc, &term("M.mtx.gz"), &data_dir()).map_err(|e| e.to_string())?;
+    if k.rows != 4669 || k.asymmetry > 1e-12 || m.asymmetry > 1e-12 {
+        return Err(format!(
+            "M0: {} rows, asymmetry K {:e} M {:e}",
+            k.rows, k.asymmetry, m.asymmetry
+        ));
+    }
+    let by_count = real_modes(
+        petsc,
+        &k.matrix,
+        &m.matrix,
+        false,
+        &RealModeRequest {
+            count: 20,
+            tolerance: 1e-12,
+            ..Default::default()
+        },
+        "count_",
+    )
+    .map_err(|e| e.to_string())?;
+    let f_max = 3000.0;
+    let by_slicing = real_modes(
+        petsc,
+        &k.matrix,
+        &m.matrix,
+        false,
+        &RealModeRequest {
+            f_max_hz: Some(f_max),
+            tolerance: 1e-12,
+            ..Default::default()
+        },
+        "slice_",
+    )
+    .map_err(|e| e.to_string())?;
+    let expected: Vec<f64> = by_count
+        .frequencies_hz
+        .iter()
+        .copied()
+        .filter(|&f| f < f_max)
+        .collect();
+    say(
+        petsc,
+        &format!(
+            "M0: {} modes below {f_max} Hz by slicing, {} by count; first {:.4} Hz",
+            by_slicing.frequencies_hz.len(),
+            expected.len(),
+            expected[0]
+        ),
+    );
+    if by_slicing.frequencies_hz.len() != expected.len() {
+        return Err(format!(
+            "slicing found {:?}, count-based {:?}",
+            by_slicing.frequencies_hz, expected
+        ));
+    }
+    for (a, b) in by_slicing.frequencies_hz.iter().zip(&expected) {
+        if rel(*a, *b) > 1e-9 {
+            return Err(format!("frequency {a} (slicing) vs {b} (count)"));
+        }
+    }
+    let worst = by_count
+        .backward_errors
+        .iter()
+        .fold(0.0f64, |a, &b| a.max(b));
+    if worst > 1e-10 {
+        return Err(format!("backward error {worst:e}"));
+    }
+    Ok(())
+}
+
+fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
+    let mesh = block([0.3, 0.1, 0.05], [6, 2, 2], ElementKind::Hex20, steel());
+    let system = assemble_system(petsc, &mesh, &[Clamp::all("u0")]).map_err(|e| e.to_string())?;
+    let dir = suite_dir().join(format!("roundtrip-{}", petsc.size()));
+    if petsc.rank() == 0 {
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    }
+    squeal::parallel::barrier(petsc.world());
+    let path = dir.join("K.mtx");
+    matrix_market::write(petsc.world(), &system.stiffness, &path).map_err(|e| e.to_string())?;
+    squeal::parallel::barrier(petsc.world());
+    let back = load_sum(
+        petsc,
+        &[MatrixTerm {
+            file: path.clone(),
+            coefficient: 1.0,
+        }],
+        Path::new(""),
+    )
+    .map_err(|e| e.to_string())?;
+    // Compare K x for a deterministic x; layouts may differ, so compare gathered products.
+    let n = system.stiffness.global_rows();
+    let x1 = system.stiffness.new_vector().map_err(|e| e.to_string())?;
+    let x2 = back.matrix.new_vector().map_err(|e| e.to_string())?;
+    for (x, range) in [(&x1, x1.ownership()), (&x2, x2.ownership())] {
+        let mut l = x.local_mut().map_err(|e| e.to_string())?;
+        for (i, v) in range.clone().zip(l.iter_mut()) {
+            *v = ((i * 7919) % 101) as f64 / 101.0 - 0.5;
+        }
+    }
+    let (y1, y2) = (
+        x1.duplicate().map_err(|e| e.to_string())?,
+        x2.duplicate().map_err(|e| e.to_string())?,
+    );
+    system.stiffness.mult(&x1, &y1).map_err(|e| e.to_string())?;
+    back.matrix.mult(&x2, &y2).map_err(|e| e.to_string())?;
+    let (a, b) = (
+        y1.gather_all().map_err(|e| e.to_string())?,
+        y2.gather_all().map_err(|e| e.to_string())?,
+    );
+    let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let diff = a
+        .iter()
+        .zip(&b)
+        .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()))
+        / scale;
+    say(
+        petsc,
+        &format!(
+            "K ({n} DOF) -> {} -> K: max rel. difference of K x {diff:.1e}",
+            path.file_name().unwrap().to_string_lossy()
+        ),
+    );
+    if back.rows != n || back.asymmetry > 1e-15 || diff > 1e-15 {
+        return Err(format!(
+            "rows {} vs {n}, asymmetry {:e}, difference {diff:e}",
+            back.rows, back.asymmetry
+        ));
+    }
+    Ok(())
+}
