@@ -3,6 +3,8 @@
 //! Pure-Rust kernels (`fem`, `mesh`) write into sinks; everything that talks to PETSc/SLEPc goes
 //! through `la`, the only module with `unsafe`.
 #![deny(unsafe_op_in_unsafe_fn)]
+// Index loops over components and nodes mirror the formulas they implement.
+#![allow(clippy::needless_range_loop)]
 
 pub mod eigen;
 pub mod fem;

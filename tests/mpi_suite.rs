@@ -11,14 +11,12 @@ use std::time::Instant;
 use mpi::traits::*;
 use squeal::la::Petsc;
 
-type TestFn = fn(&Petsc) -> Result<(), String>;
-
 fn main() {
     let universe = mpi::initialize().expect("MPI initializes once");
     squeal::la::install_panic_hook();
     let petsc = Petsc::initialize(&universe, &[]).expect("PETSc initializes");
     let filter = std::env::args().nth(1).filter(|a| !a.starts_with('-'));
-    let tests: Vec<(&str, TestFn)> = suite::all();
+    let tests = suite::all();
     let rank = petsc.rank();
     let (mut passed, mut failed) = (0, 0);
     for (name, test) in tests {

@@ -66,7 +66,7 @@ impl<'p> SparseMatrix<'p> {
         local_rows: usize,
         prealloc: &Preallocation,
     ) -> Result<Self> {
-        if local_rows % block_size != 0 {
+        if !local_rows.is_multiple_of(block_size) {
             return Err(LaError::Invalid(format!(
                 "{local_rows} local rows is not a multiple of block size {block_size}"
             )));

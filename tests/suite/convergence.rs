@@ -16,7 +16,7 @@ use squeal::mesh::structured::block;
 
 use super::common::{say, solve_modes, steel};
 
-pub fn tests() -> Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> {
+pub fn tests() -> Vec<super::NamedTest> {
     vec![("free_beam_convergence_rates", free_beam_convergence_rates)]
 }
 

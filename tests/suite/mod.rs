@@ -7,8 +7,11 @@ pub mod real_modes_verification;
 
 use squeal::la::Petsc;
 
-pub fn all() -> Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> {
-    let mut v: Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> = Vec::new();
+/// A test: its name and a function that returns Ok or what went wrong.
+pub type NamedTest = (&'static str, fn(&Petsc) -> Result<(), String>);
+
+pub fn all() -> Vec<NamedTest> {
+    let mut v: Vec<NamedTest> = Vec::new();
     v.extend(real_modes_verification::tests());
     v.extend(convergence::tests());
     v.extend(parallel_and_solvers::tests());

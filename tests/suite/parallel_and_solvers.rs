@@ -22,7 +22,7 @@ use squeal::mesh::structured::block;
 
 use super::common::{rel, say, solve_modes, steel};
 
-pub fn tests() -> Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> {
+pub fn tests() -> Vec<super::NamedTest> {
     vec![
         ("same_modes_one_and_two_ranks", same_modes_one_and_two_ranks),
         (

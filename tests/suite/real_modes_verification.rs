@@ -17,7 +17,7 @@ use squeal::mesh::structured::{annulus, block};
 
 use super::common::{rel, say, solve_modes, steel};
 
-pub fn tests() -> Vec<(&'static str, fn(&Petsc) -> Result<(), String>)> {
+pub fn tests() -> Vec<super::NamedTest> {
     vec![
         ("cantilever_euler_bernoulli", cantilever_euler_bernoulli),
         (
