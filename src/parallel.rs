@@ -36,3 +36,11 @@ pub fn max(comm: &SimpleCommunicator, value: f64) -> f64 {
 pub fn barrier(comm: &SimpleCommunicator) {
     comm.barrier();
 }
+
+/// Peak resident set size of this process (VmHWM from /proc/self/status), in bytes.
+pub fn peak_rss_bytes() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}

@@ -44,12 +44,10 @@ impl Default for EigenOptions {
     }
 }
 
-/// Eigenpairs in ascending order of eigenvalue; vectors M-normalized.
+/// Eigenpairs in ascending order of eigenvalue; vectors M-normalized by SLEPc (GHEP).
 pub struct SymmetricEigenSolution<'p> {
     pub values: Vec<f64>,
     pub vectors: Vec<Vector<'p>>,
-    /// SLEPc's backward error ||K x - lambda M x|| / ((||K|| + |lambda| ||M||) ||x||).
-    pub backward_errors: Vec<f64>,
     pub iterations: usize,
     /// The shift-and-invert factorization (None with spectrum slicing, which factors several
     /// shifts).
@@ -183,35 +181,16 @@ impl<'p> GeneralizedEigen<'p> {
                 x.raw,
                 std::ptr::null_mut()
             ))?;
-            let mut err = 0.0;
-            call!(EPSComputeError(
-                eps.raw,
-                i as ffi::PetscInt,
-                ffi::EPS_ERROR_BACKWARD,
-                &mut err
-            ))?;
-            // M-normalize: phi^T M phi = 1.
-            let mx = x.duplicate()?;
-            m.mult(&x, &mx)?;
-            let norm = mx.dot(&x)?.sqrt();
-            if norm > 0.0 {
-                x.scale(1.0 / norm)?;
-            }
-            pairs.push((kr, x, err));
+            pairs.push((kr, x));
         }
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut solution = SymmetricEigenSolution {
-            values: Vec::with_capacity(wanted),
-            vectors: Vec::with_capacity(wanted),
-            backward_errors: Vec::with_capacity(wanted),
+        let (values, vectors) = pairs.into_iter().unzip();
+        let solution = SymmetricEigenSolution {
+            values,
+            vectors,
             iterations: its as usize,
             factorization,
         };
-        for (v, x, e) in pairs {
-            solution.values.push(v);
-            solution.vectors.push(x);
-            solution.backward_errors.push(e);
-        }
         Ok(solution)
     }
 }

@@ -232,6 +232,13 @@ impl<'p> SparseMatrix<'p> {
         Ok(n)
     }
 
+    /// # Collective
+    pub fn norm_infinity(&self) -> Result<f64> {
+        let mut n = 0.0;
+        call!(MatNorm(self.raw, ffi::NORM_INFINITY, &mut n))?;
+        Ok(n)
+    }
+
     /// Stored nonzeros and memory, summed over ranks.
     ///
     /// # Collective

@@ -124,13 +124,14 @@ impl<'u> Petsc<'u> {
         set == ffi::PETSC_TRUE
     }
 
-    /// Peak resident memory of this process so far, in bytes (PETSc's measurement).
+    /// Peak resident memory of this process so far, in bytes (the kernel's high-water mark,
+    /// else PETSc's current usage).
     pub fn peak_memory(&self) -> f64 {
-        let mut mem = 0.0;
-        let _ = call!(PetscMemoryGetMaximumUsage(&mut mem));
-        if mem <= 0.0 {
-            let _ = call!(PetscMemoryGetCurrentUsage(&mut mem));
+        if let Some(bytes) = crate::parallel::peak_rss_bytes() {
+            return bytes;
         }
+        let mut mem = 0.0;
+        let _ = call!(PetscMemoryGetCurrentUsage(&mut mem));
         mem
     }
 }

@@ -24,7 +24,8 @@ pub struct FactorizationReport {
     pub factor_entries: f64,
     /// Ordering used in the analysis (INFOG(7)): 0 AMD, 2 AMF, 3 SCOTCH, 4 PORD, 5 METIS, 6 QAMD.
     pub ordering: i32,
-    /// Total memory for the factorization over all ranks, in MB (INFOG(22)).
+    /// Memory of the factorization: largest on one rank (INFOG(21)) and total (INFOG(22)), MB.
+    pub memory_max_mb: i32,
     pub memory_mb: i32,
     /// Floating-point operations of the elimination (RINFOG(3)).
     pub flops: f64,
@@ -75,6 +76,7 @@ pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<Factorizati
     Ok(FactorizationReport {
         factor_entries,
         ordering: infog(7)?,
+        memory_max_mb: infog(21)?,
         memory_mb: infog(22)?,
         flops,
         negative_pivots: infog(12)?,
@@ -108,6 +110,7 @@ impl<'p> DirectSolver<'p> {
             report: FactorizationReport {
                 factor_entries: 0.0,
                 ordering: -1,
+                memory_max_mb: 0,
                 memory_mb: 0,
                 flops: 0.0,
                 negative_pivots: 0,
