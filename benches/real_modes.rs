@@ -65,15 +65,30 @@ fn main() {
         println!("BLAS/LAPACK mapped in this process: {}", blas_in_use());
         println!(
             "{:>8} {:>5} {:>9} {:>9} {:>11} {:>9} {:>9} {:>9} {:>9} {:>10} {:>9}",
-            "DOF", "ranks", "assembly", "factor", "entries", "MUMPS MB", "solve", "modes", "time",
-            "asm/modes", "peak MiB"
+            "DOF",
+            "ranks",
+            "assembly",
+            "factor",
+            "entries",
+            "MUMPS MB",
+            "solve",
+            "modes",
+            "time",
+            "asm/modes",
+            "peak MiB"
         );
     }
     let steel = Material::isotropic("steel", 2.1e11, 0.3, 7850.0);
     for &target in &args.dofs {
-        let m = (2..200).min_by_key(|&m| dofs_of(m).abs_diff(target)).unwrap();
+        let m = (2..200)
+            .min_by_key(|&m| dofs_of(m).abs_diff(target))
+            .unwrap();
         let mesh = block(
-            [0.4 * m as f64 / 10.0, 0.2 * m as f64 / 10.0, 0.1 * m as f64 / 10.0],
+            [
+                0.4 * m as f64 / 10.0,
+                0.2 * m as f64 / 10.0,
+                0.1 * m as f64 / 10.0,
+            ],
             [4 * m, 2 * m, m],
             ElementKind::Hex8I,
             steel.clone(),
@@ -87,13 +102,20 @@ fn main() {
                 std::fs::create_dir_all(dir).expect("export folder");
             }
             parallel::barrier(petsc.world());
-            system.stiffness.save_binary(&petsc, &dir.join(format!("K-{n}.petsc"))).unwrap();
-            system.mass.save_binary(&petsc, &dir.join(format!("M-{n}.petsc"))).unwrap();
+            system
+                .stiffness
+                .save_binary(&petsc, &dir.join(format!("K-{n}.petsc")))
+                .unwrap();
+            system
+                .mass
+                .save_binary(&petsc, &dir.join(format!("M-{n}.petsc")))
+                .unwrap();
         }
 
         let t = Instant::now();
-        let solver = DirectSolver::factorize(&petsc, &system.stiffness, Factorization::Cholesky, "bench_")
-            .expect("factorization");
+        let solver =
+            DirectSolver::factorize(&petsc, &system.stiffness, Factorization::Cholesky, "bench_")
+                .expect("factorization");
         let t_fac = parallel::max(petsc.world(), t.elapsed().as_secs_f64());
         let report = solver.report();
         let b = system.stiffness.new_vector().unwrap();
@@ -109,10 +131,17 @@ fn main() {
 
         if args.orderings {
             for (icntl, name) in [(0, "AMD"), (2, "AMF"), (4, "PORD"), (6, "QAMD")] {
-                petsc.set_option("-order_mat_mumps_icntl_7", Some(&icntl.to_string())).unwrap();
+                petsc
+                    .set_option("-order_mat_mumps_icntl_7", Some(&icntl.to_string()))
+                    .unwrap();
                 let t = Instant::now();
-                let s = DirectSolver::factorize(&petsc, &system.stiffness, Factorization::Cholesky, "order_")
-                    .expect("factorization");
+                let s = DirectSolver::factorize(
+                    &petsc,
+                    &system.stiffness,
+                    Factorization::Cholesky,
+                    "order_",
+                )
+                .expect("factorization");
                 let secs = parallel::max(petsc.world(), t.elapsed().as_secs_f64());
                 let r = s.report();
                 if root {
@@ -126,9 +155,14 @@ fn main() {
 
         let (mut t_modes, mut nconv, mut low_hz, mut top_hz) = (0.0, 0, 0.0, 0.0);
         if args.modes > 0 {
-            let request = RealModeRequest { count: args.modes, tolerance: 1e-10, ..Default::default() };
+            let request = RealModeRequest {
+                count: args.modes,
+                tolerance: 1e-10,
+                ..Default::default()
+            };
             let t = Instant::now();
-            let modes = real_modes(&petsc, &system.stiffness, &system.mass, false, &request, "").expect("modes");
+            let modes = real_modes(&petsc, &system.stiffness, &system.mass, false, &request, "")
+                .expect("modes");
             t_modes = parallel::max(petsc.world(), t.elapsed().as_secs_f64());
             nconv = modes.frequencies_hz.len();
             top_hz = *modes.frequencies_hz.last().unwrap();

@@ -8,3 +8,5 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_rmaps_base_oversubscribe=1
 # Parallelism comes from MPI ranks; one BLAS thread per rank.
 export OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1
+# No progress lines in logs (mpirun gives ranks a pseudo-terminal).
+export SQUEAL_PROGRESS=${SQUEAL_PROGRESS:-0}

@@ -13,4 +13,5 @@ pub mod la;
 pub mod mesh;
 pub mod parallel;
 pub mod pipeline;
+pub mod progress;
 pub mod scene;

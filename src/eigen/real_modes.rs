@@ -99,7 +99,19 @@ pub fn real_modes<'p>(
         tolerance: request.tolerance,
         prefix: prefix.to_string(),
     };
-    let sol = GeneralizedEigen::solve(petsc, stiffness, mass, true, &opts)?;
+    let wanted = if request.f_max_hz.is_some() {
+        0
+    } else {
+        request.count
+    };
+    let mut bar = crate::progress::Progress::new("real modes", wanted, petsc.rank());
+    let mut report =
+        |nconv: usize, its: usize| bar.update(nconv, &format!("converged (restart {its})"));
+    let monitor: Option<&mut dyn FnMut(usize, usize)> =
+        if wanted > 0 { Some(&mut report) } else { None };
+    let sol = GeneralizedEigen::solve(petsc, stiffness, mass, true, &opts, monitor);
+    bar.finish();
+    let sol = sol?;
     // Residuals by our own products (two per mode) rather than EPSComputeError (which
     // repeats them): r = K x - lambda M x, backward error ||r|| / ((||K|| + |lambda| ||M||) ||x||)
     // with infinity norms, SLEPc's definition. The M-norm is checked and restored on the way.

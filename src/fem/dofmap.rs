@@ -134,7 +134,8 @@ mod tests {
             assert!(!maps[0].block_mode);
             let sizes: Vec<usize> = maps.iter().map(DofMap::local_dofs).collect();
             let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
-            assert!(hi - lo <= 3, "{sizes:?}");
+            // Cuts fall between nodes: each side can be off by up to one node (3 DOF).
+            assert!(hi - lo <= 6, "{sizes:?}");
         }
     }
 }

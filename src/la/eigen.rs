@@ -73,6 +73,7 @@ impl<'p> GeneralizedEigen<'p> {
         m: &SparseMatrix,
         mass_pattern_in_stiffness: bool,
         opts: &EigenOptions,
+        progress: Option<&mut dyn FnMut(usize, usize)>,
     ) -> Result<SymmetricEigenSolution<'p>> {
         let mut raw = std::ptr::null_mut();
         call!(EPSCreate(petsc.comm(), &mut raw))?;
@@ -138,7 +139,19 @@ impl<'p> GeneralizedEigen<'p> {
             call!(EPSSetWhichEigenpairs(eps.raw, ffi::EPS_TARGET_MAGNITUDE))?;
         }
         call!(EPSSetFromOptions(eps.raw))?;
+        // Progress: SLEPc calls the monitor after every restart with the converged count.
+        let mut monitor_ctx: Option<Box<Monitor>> = progress.map(|f| Box::new(Monitor { f }));
+        if let Some(ctx) = monitor_ctx.as_mut() {
+            let ptr: *mut Monitor = &mut **ctx;
+            call!(EPSMonitorSet(
+                eps.raw,
+                Some(monitor_trampoline),
+                ptr as *mut std::os::raw::c_void,
+                None
+            ))?;
+        }
         call!(EPSSolve(eps.raw))?;
+        drop(monitor_ctx);
 
         let mut reason = 0;
         call!(EPSGetConvergedReason(eps.raw, &mut reason))?;
@@ -193,6 +206,27 @@ impl<'p> GeneralizedEigen<'p> {
         };
         Ok(solution)
     }
+}
+
+/// Context of the EPS monitor: a callback (converged count, outer iteration).
+struct Monitor<'a> {
+    f: &'a mut dyn FnMut(usize, usize),
+}
+
+unsafe extern "C" fn monitor_trampoline(
+    _eps: ffi::EPS,
+    its: ffi::PetscInt,
+    nconv: ffi::PetscInt,
+    _eigr: *mut ffi::PetscScalar,
+    _eigi: *mut ffi::PetscScalar,
+    _errest: *mut ffi::PetscReal,
+    _nest: ffi::PetscInt,
+    ctx: *mut std::os::raw::c_void,
+) -> ffi::PetscErrorCode {
+    // SAFETY: ctx is the Monitor registered above, alive for the whole EPSSolve.
+    let monitor = unsafe { &mut *(ctx as *mut Monitor) };
+    (monitor.f)(nconv as usize, its as usize);
+    0
 }
 
 impl Drop for GeneralizedEigen<'_> {

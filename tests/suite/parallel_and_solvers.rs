@@ -123,9 +123,10 @@ fn same_modes_one_and_two_ranks(petsc: &Petsc) -> Result<(), String> {
             petsc.size()
         ),
     );
-    // Round-off through different MUMPS pivot sequences and Krylov paths: frequencies agree to
-    // ~1e-14; shapes to the eigensolver tolerance over the spectral gap.
-    if df > 1e-11 || dv > 1e-7 {
+    // Round-off through different MUMPS pivot sequences and Krylov paths: measured 3e-12 to
+    // 1.1e-11 in frequency and 2e-12 to 7e-12 in shape (backward errors ~1e-16 amplified by
+    // the conditioning of K); the bounds leave a decade of room, far below any modelling effect.
+    if df > 1e-10 || dv > 1e-8 {
         return Err(format!("frequencies differ by {df:e}, shapes by {dv:e}"));
     }
     Ok(())
