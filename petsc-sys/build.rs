@@ -122,7 +122,12 @@ fn check_configuration(include_dirs: &[PathBuf]) {
         ));
     }
     if defined("PETSC_USE_64BIT_INDICES") {
-        println!("cargo:rustc-cfg=petsc_int64");
+        fail(&format!(
+            "{} is a PETSc with 64-bit indices; squeal is built for 32-bit PetscInt \
+             (Debian: libpetsc-real-dev, not libpetsc64-real-dev; or configure PETSc without \
+             --with-64-bit-indices)",
+            conf.display()
+        ));
     }
     if !defined("PETSC_HAVE_MUMPS") {
         println!(
@@ -138,7 +143,6 @@ fn main() {
     for var in ["PETSC_DIR", "PETSC_ARCH", "SLEPC_DIR"] {
         println!("cargo:rerun-if-env-changed={var}");
     }
-    println!("cargo::rustc-check-cfg=cfg(petsc_int64)");
 
     let found = match env::var("PETSC_DIR") {
         Ok(dir) if !dir.is_empty() => from_dirs(Path::new(&dir)),

@@ -86,14 +86,34 @@ pub fn assemble_system<'p>(
     mesh: &Mesh,
     clamps: &[Clamp],
 ) -> Result<AssembledSystem<'p>, SystemError> {
+    assemble_system_as(petsc, mesh, clamps, None)
+}
+
+/// As [`assemble_system`], with a chosen storage format (block formats need every node fully
+/// free or fully clamped). LU factorizations want AIJ or BAIJ; Cholesky wants SBAIJ.
+///
+/// # Collective
+pub fn assemble_system_as<'p>(
+    petsc: &'p Petsc,
+    mesh: &Mesh,
+    clamps: &[Clamp],
+    format: Option<MatrixFormat>,
+) -> Result<AssembledSystem<'p>, SystemError> {
     let start = Instant::now();
     let dofs = dof_map(mesh, clamps, petsc.size() as usize, petsc.rank() as usize)?;
     let prealloc = preallocation(mesh, &dofs);
-    let (format, bs) = if dofs.block_mode {
-        (MatrixFormat::Sbaij, 3)
+    let format = format.unwrap_or(if dofs.block_mode {
+        MatrixFormat::Sbaij
     } else {
-        (MatrixFormat::Aij, 1)
-    };
+        MatrixFormat::Aij
+    });
+    if format != MatrixFormat::Aij && !dofs.block_mode {
+        return Err(SystemError::Constraint(format!(
+            "{format:?} storage needs every node fully free or fully clamped; use AIJ"
+        )));
+    }
+    // In block mode the preallocation counts 3x3 blocks, also for AIJ (PETSc expands them).
+    let bs = if dofs.block_mode { 3 } else { 1 };
     let mut k = SparseMatrix::new(petsc, format, bs, dofs.local_dofs(), &prealloc)?;
     let mut m = SparseMatrix::new(petsc, format, bs, dofs.local_dofs(), &prealloc)?;
     // A rank-local element failure must not leave the other ranks waiting in assembly.

@@ -1,5 +1,6 @@
 //! Meshes: nodes, element blocks (one element type and material each) and node sets.
 
+pub mod abaqus_inp;
 pub mod structured;
 
 use std::collections::BTreeMap;

@@ -4,6 +4,7 @@ pub mod common;
 pub mod convergence;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
+pub mod static_solve;
 
 use squeal::la::Petsc;
 
@@ -15,5 +16,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(real_modes_verification::tests());
     v.extend(convergence::tests());
     v.extend(parallel_and_solvers::tests());
+    v.extend(static_solve::tests());
     v
 }
