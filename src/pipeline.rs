@@ -25,6 +25,8 @@ pub enum RunError {
     La(#[from] LaError),
     #[error("results: {0}")]
     Results(#[from] ResultsError),
+    #[error("mesh: {0}")]
+    Inp(#[from] crate::mesh::abaqus_inp::InpError),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -62,9 +64,25 @@ pub struct RunSummary {
     pub output: PathBuf,
 }
 
-/// Builds the mesh of a generated model.
-pub fn build_mesh(model: &ModelSource) -> Option<(Mesh, Vec<Clamp>)> {
-    match model {
+/// Builds (generates or imports) the mesh of a model; None for a matrices model. Relative
+/// file names are resolved from `scene_dir`.
+pub fn build_mesh(
+    model: &ModelSource,
+    scene_dir: &Path,
+) -> Result<Option<(Mesh, Vec<Clamp>)>, RunError> {
+    Ok(match model {
+        ModelSource::Abaqus { file } => {
+            let inp = crate::mesh::abaqus_inp::read(&scene_dir.join(file))?;
+            let clamps = inp
+                .clamps
+                .iter()
+                .map(|(set, components)| Clamp {
+                    node_set: set.clone(),
+                    components: *components,
+                })
+                .collect();
+            Some((inp.mesh, clamps))
+        }
         ModelSource::Block {
             element,
             size,
@@ -95,7 +113,7 @@ pub fn build_mesh(model: &ModelSource) -> Option<(Mesh, Vec<Clamp>)> {
             clamp.iter().map(|s| Clamp::all(s)).collect(),
         )),
         ModelSource::Matrices { .. } => None,
-    }
+    })
 }
 
 /// Runs a scene. `scene_dir` resolves relative paths of matrix files; `scene_text` is stored
@@ -125,9 +143,18 @@ pub fn run(
     let mut user: Option<(SparseMatrix, SparseMatrix)> = None;
     let generated = match &scene.model {
         ModelSource::Matrices { .. } => None,
-        model => timings.time("mesh", || build_mesh(model)),
+        model => timings.time("mesh", || build_mesh(model, scene_dir))?,
     };
     if let Some((m, clamps)) = generated {
+        if scene.output.write_inp && petsc.rank() == 0 {
+            let path = output.join("model.inp");
+            let named: Vec<(String, [bool; 3])> = clamps
+                .iter()
+                .map(|c| (c.node_set.clone(), c.components))
+                .collect();
+            crate::mesh::abaqus_inp::write(&path, &m, &named)
+                .map_err(|source| RunError::Io { path, source })?;
+        }
         let s = timings.time("assembly", || assemble_system(petsc, &m, &clamps))?;
         mesh = Some(m);
         system = Some(s);

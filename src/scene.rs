@@ -47,6 +47,8 @@ pub enum ModelSource {
         #[serde(default)]
         clamp: Vec<String>,
     },
+    /// An Abaqus input file (the subset of `mesh::abaqus_inp`); its *BOUNDARY clamps apply.
+    Abaqus { file: PathBuf },
     /// Assembled matrices from another code, each a sum of Matrix Market files.
     Matrices {
         stiffness: Vec<MatrixTerm>,
@@ -62,6 +64,9 @@ pub struct Output {
     /// Export the assembled K and M: any of "mtx" (Matrix Market), "petsc" (PETSc binary).
     #[serde(default)]
     pub export_matrices: Vec<String>,
+    /// Also write the model as an Abaqus input file (`model.inp`), to open it in other tools.
+    #[serde(default)]
+    pub write_inp: bool,
 }
 
 fn default_directory() -> PathBuf {
@@ -73,6 +78,7 @@ impl Default for Output {
         Output {
             directory: default_directory(),
             export_matrices: Vec::new(),
+            write_inp: false,
         }
     }
 }
@@ -168,6 +174,11 @@ impl Scene {
                 material
                     .validate()
                     .map_err(|e| format!("key 'model.material': {e}"))?;
+            }
+            ModelSource::Abaqus { file } => {
+                if file.as_os_str().is_empty() {
+                    return Err("key 'model.file': name the .inp file".into());
+                }
             }
             ModelSource::Matrices { stiffness, mass } => {
                 if stiffness.is_empty() || mass.is_empty() {

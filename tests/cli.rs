@@ -121,3 +121,50 @@ fn missing_node_set_names_the_sets() {
         &["no node set 'hat'", "inner"],
     );
 }
+
+/// The frequencies of a summary printed by `squeal run`.
+fn frequencies(stdout: &str) -> Vec<f64> {
+    stdout
+        .lines()
+        .skip_while(|l| !l.starts_with("real modes:"))
+        .skip(1)
+        .map_while(|l| {
+            let mut w = l.split_whitespace();
+            w.next()?.parse::<usize>().ok()?;
+            w.next()?.parse::<f64>().ok()
+        })
+        .collect()
+}
+
+#[test]
+fn written_inp_reimported_gives_the_same_modes() {
+    let dir = scratch("inp");
+    let scene = default_scene()
+        .replace(
+            "directory = \"results\"",
+            "directory = \"first\"\nwrite_inp = true",
+        )
+        .replace("cells = [8, 120, 4]", "cells = [3, 40, 2]")
+        .replace("count = 30", "count = 8");
+    std::fs::write(dir.join("generated.toml"), &scene).unwrap();
+    let first = mpirun(2, &["run", "generated.toml"], &dir);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let imported = "[model]\nsource = \"abaqus\"\nfile = \"first/model.inp\"\n[real_modes]\ncount = 8\n[output]\ndirectory = \"second\"\n";
+    std::fs::write(dir.join("imported.toml"), imported).unwrap();
+    let second = mpirun(2, &["run", "imported.toml"], &dir);
+    assert!(
+        second.status.success(),
+        "{}",
+        String::from_utf8_lossy(&second.stderr)
+    );
+    let (a, b) = (
+        frequencies(&String::from_utf8_lossy(&first.stdout)),
+        frequencies(&String::from_utf8_lossy(&second.stdout)),
+    );
+    assert_eq!(a.len(), 8, "{a:?}");
+    assert_eq!(a, b, "generated and re-imported models differ");
+}

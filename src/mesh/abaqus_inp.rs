@@ -165,6 +165,9 @@ fn read_lines(
     Ok(())
 }
 
+/// An *ELEMENT block as read: kind, its ELSET, connectivity by Abaqus node ids, element ids.
+type RawBlock = (ElementKind, Option<String>, Vec<i64>, Vec<i64>);
+
 /// Reads an Abaqus input file.
 pub fn read(path: &Path) -> Result<InpModel, InpError> {
     let mut lines = Vec::new();
@@ -172,8 +175,7 @@ pub fn read(path: &Path) -> Result<InpModel, InpError> {
     let mut model = InpModel::default();
     let mut node_index: HashMap<i64, usize> = HashMap::new();
     let mut elem_index: HashMap<i64, usize> = HashMap::new();
-    // (kind, abaqus ELSET of the *ELEMENT line, connectivity by Abaqus node ids, element ids)
-    let mut raw_blocks: Vec<(ElementKind, Option<String>, Vec<i64>, Vec<i64>)> = Vec::new();
+    let mut raw_blocks: Vec<RawBlock> = Vec::new();
     let mut elsets: BTreeMap<String, Vec<i64>> = BTreeMap::new();
     let mut nsets: BTreeMap<String, Vec<i64>> = BTreeMap::new();
     let mut materials: Vec<(String, Option<f64>, Option<Elasticity>)> = Vec::new();
