@@ -124,64 +124,43 @@ pub fn preallocation(mesh: &Mesh, dofs: &DofMap) -> Preallocation {
         list.dedup();
     }
     let own_dofs = dofs.owned_dofs();
-    let is_local = |d: i32| own_dofs.contains(&(d as usize));
     let mut p = Preallocation::default();
+    // One preallocation row: its columns split by owner, and the upper-triangle part.
+    let mut push_row = |row: i32, cols: &mut dyn Iterator<Item = i32>| {
+        let (mut d, mut o, mut du, mut ou) = (0, 0, 0, 0);
+        for col in cols {
+            let local = own_dofs.contains(&(col as usize));
+            let upper = col >= row;
+            match (local, upper) {
+                (true, true) => (d, du) = (d + 1, du + 1),
+                (true, false) => d += 1,
+                (false, true) => (o, ou) = (o + 1, ou + 1),
+                (false, false) => o += 1,
+            }
+        }
+        p.diag.push(d);
+        p.off.push(o);
+        p.diag_upper.push(du);
+        p.off_upper.push(ou);
+    };
     for (i, list) in neighbours.iter().enumerate() {
-        let node = start + i;
-        let row_dofs = dofs.node_dofs[node];
+        let row_dofs = dofs.node_dofs[start + i];
         if dofs.block_mode {
-            let row = row_dofs[0];
-            if row < 0 {
-                continue;
+            // Block rows and columns: a node's first DOF stands for its block.
+            if row_dofs[0] >= 0 {
+                let mut cols = list
+                    .iter()
+                    .map(|&m| dofs.node_dofs[m as usize][0])
+                    .filter(|&c| c >= 0);
+                push_row(row_dofs[0], &mut cols);
             }
-            let (mut d, mut o, mut du, mut ou) = (0, 0, 0, 0);
-            for &m in list {
-                let col = dofs.node_dofs[m as usize][0];
-                if col < 0 {
-                    continue;
-                }
-                let local = is_local(col);
-                if local {
-                    d += 1
-                } else {
-                    o += 1
-                }
-                if col >= row {
-                    if local {
-                        du += 1
-                    } else {
-                        ou += 1
-                    }
-                }
-            }
-            p.diag.push(d);
-            p.off.push(o);
-            p.diag_upper.push(du);
-            p.off_upper.push(ou);
         } else {
             for &row in row_dofs.iter().filter(|&&r| r >= 0) {
-                let (mut d, mut o, mut du, mut ou) = (0, 0, 0, 0);
-                for &m in list {
-                    for &col in dofs.node_dofs[m as usize].iter().filter(|&&c| c >= 0) {
-                        let local = is_local(col);
-                        if local {
-                            d += 1
-                        } else {
-                            o += 1
-                        }
-                        if col >= row {
-                            if local {
-                                du += 1
-                            } else {
-                                ou += 1
-                            }
-                        }
-                    }
-                }
-                p.diag.push(d);
-                p.off.push(o);
-                p.diag_upper.push(du);
-                p.off_upper.push(ou);
+                let mut cols = list
+                    .iter()
+                    .flat_map(|&m| dofs.node_dofs[m as usize])
+                    .filter(|&c| c >= 0);
+                push_row(row, &mut cols);
             }
         }
     }

@@ -51,6 +51,24 @@ fn jacobian(x: &[[f64; 3]], dn: &[[f64; 3]]) -> [[f64; 3]; 3] {
     j
 }
 
+/// Inverse and determinant of the Jacobian, or the error naming the element and point.
+fn checked_jacobian(
+    x: &[[f64; 3]],
+    dn: &[[f64; 3]],
+    element: usize,
+    point: usize,
+) -> Result<([[f64; 3]; 3], f64), JacobianError> {
+    let (inv, det) = inverse3(&jacobian(x, dn));
+    if det <= 0.0 || !det.is_finite() {
+        return Err(JacobianError {
+            element,
+            point,
+            det,
+        });
+    }
+    Ok((inv, det))
+}
+
 /// Physical gradient from a reference gradient: g_i = sum_j dN/dxi_j (J^-1)_ji.
 fn physical(d: &[f64; 3], jinv: &[[f64; 3]; 3]) -> [f64; 3] {
     [0, 1, 2].map(|i| d[0] * jinv[0][i] + d[1] * jinv[1][i] + d[2] * jinv[2][i])
@@ -145,14 +163,7 @@ impl ElementKernel {
         self.grads.resize(nn, [0.0; 3]);
         for (p, w) in self.stiff.rule.weights.iter().enumerate() {
             let dn = &self.stiff.dn[p];
-            let (jinv, det) = inverse3(&jacobian(x, dn));
-            if det <= 0.0 || !det.is_finite() {
-                return Err(JacobianError {
-                    element,
-                    point: p,
-                    det,
-                });
-            }
+            let (jinv, det) = checked_jacobian(x, dn, element, p)?;
             for (g, d) in self.grads.iter_mut().zip(dn) {
                 *g = physical(d, &jinv);
             }
@@ -180,25 +191,11 @@ impl ElementKernel {
         let mut dn0 = [[0.0; 3]; 8];
         let mut n0 = [0.0; 8];
         ElementKind::Hex8.eval([0.0; 3], &mut n0, &mut dn0);
-        let (j0inv, det0) = inverse3(&jacobian(x, &dn0));
-        if det0 <= 0.0 || !det0.is_finite() {
-            return Err(JacobianError {
-                element,
-                point: usize::MAX,
-                det: det0,
-            });
-        }
+        let (j0inv, det0) = checked_jacobian(x, &dn0, element, usize::MAX)?;
         for (p, w) in self.stiff.rule.weights.iter().enumerate() {
             let xi = self.stiff.rule.points[p];
             let dn = &self.stiff.dn[p];
-            let (jinv, det) = inverse3(&jacobian(x, dn));
-            if det <= 0.0 || !det.is_finite() {
-                return Err(JacobianError {
-                    element,
-                    point: p,
-                    det,
-                });
-            }
+            let (jinv, det) = checked_jacobian(x, dn, element, p)?;
             for (g, d) in self.grads.iter_mut().zip(dn) {
                 *g = physical(d, &jinv);
             }
@@ -268,14 +265,7 @@ impl ElementKernel {
         let n3 = 3 * nn;
         m[..n3 * n3].fill(0.0);
         for (p, w) in self.mass.rule.weights.iter().enumerate() {
-            let (_, det) = inverse3(&jacobian(x, &self.mass.dn[p]));
-            if det <= 0.0 || !det.is_finite() {
-                return Err(JacobianError {
-                    element,
-                    point: p,
-                    det,
-                });
-            }
+            let (_, det) = checked_jacobian(x, &self.mass.dn[p], element, p)?;
             let f = self.density * det * w;
             let n = &self.mass.n[p];
             for a in 0..nn {
