@@ -198,6 +198,10 @@ fn malformed_files_name_file_and_line() {
     let e = error_of(&TWO_HEXES.replace("3, 1., 1., 0.", "3, 1., one, 0."));
     assert!(e.contains("bad.inp:7") && e.contains("'one'"), "{e}");
     let e = error_of(&TWO_HEXES.replace("TYPE=C3D8I, ELSET=PAD", "TYPE=S4R, ELSET=PAD"));
+    assert!(
+        e.contains("C3D4"),
+        "the error lists the supported types: {e}"
+    );
     assert!(e.contains("bad.inp:19") && e.contains("S4R"), "{e}");
     let e = error_of(&TWO_HEXES.replace(
         "2, 2, 9, 10, 3, 6, 11, 12, 7",

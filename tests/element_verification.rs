@@ -17,11 +17,12 @@ use squeal::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
 use squeal::mesh::structured::block;
 use squeal::mesh::Mesh;
 
-const ALL: [ElementKind; 4] = [
+const ALL: [ElementKind; 5] = [
     ElementKind::Hex8,
     ElementKind::Hex8I,
     ElementKind::Hex20,
     ElementKind::Tet10,
+    ElementKind::Tet4,
 ];
 
 fn steel() -> Material {
@@ -75,7 +76,11 @@ fn distorted_patch(kind: ElementKind, material: Material) -> Mesh {
         ElementKind::Tet10 => &TET_EDGES,
         _ => &[],
     };
-    let corners = if kind == ElementKind::Tet10 { 4 } else { 8 };
+    let corners = if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
+        4
+    } else {
+        8
+    };
     let conn = mesh.blocks[0].connectivity.clone();
     for el in conn.chunks(kind.nodes()) {
         for (k, [a, b]) in edges.iter().enumerate() {
@@ -152,7 +157,11 @@ fn irons_patch_test_distorted_mesh_every_element_type() {
 /// One element of each type, sheared and stretched (non-affine for hexahedra).
 fn distorted_element(kind: ElementKind) -> Vec<[f64; 3]> {
     let reference = kind.reference_nodes();
-    let corners = if kind == ElementKind::Tet10 { 4 } else { 8 };
+    let corners = if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
+        4
+    } else {
+        8
+    };
     let mut x: Vec<[f64; 3]> = reference
         .iter()
         .enumerate()

@@ -17,6 +17,8 @@ pub enum ElementKind {
     Hex20,
     /// Quadratic tetrahedron.
     Tet10,
+    /// Linear tetrahedron (constant strain; stiff in bending: for imported meshes, C3D4).
+    Tet4,
 }
 
 /// Corner positions of the reference cube, in C3D8 order.
@@ -56,6 +58,7 @@ impl ElementKind {
             ElementKind::Hex8 | ElementKind::Hex8I => 8,
             ElementKind::Hex20 => 20,
             ElementKind::Tet10 => 10,
+            ElementKind::Tet4 => 4,
         }
     }
 
@@ -65,6 +68,7 @@ impl ElementKind {
             ElementKind::Hex8I => "hex8i",
             ElementKind::Hex20 => "hex20",
             ElementKind::Tet10 => "tet10",
+            ElementKind::Tet4 => "tet4",
         }
     }
 
@@ -74,6 +78,7 @@ impl ElementKind {
             ElementKind::Hex8 | ElementKind::Hex8I => hex_rule(2),
             ElementKind::Hex20 => hex_rule(3),
             ElementKind::Tet10 => tet_rule(3),
+            ElementKind::Tet4 => tet_rule(2),
         }
     }
 
@@ -83,6 +88,7 @@ impl ElementKind {
             ElementKind::Hex8 | ElementKind::Hex8I => hex_rule(2),
             ElementKind::Hex20 => hex_rule(3),
             ElementKind::Tet10 => tet_rule(4),
+            ElementKind::Tet4 => tet_rule(3),
         }
     }
 
@@ -102,6 +108,12 @@ impl ElementKind {
                 }
                 v
             }
+            ElementKind::Tet4 => vec![
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
             ElementKind::Tet10 => {
                 let c = [
                     [0.0, 0.0, 0.0],
@@ -168,6 +180,15 @@ impl ElementKind {
                     ];
                 }
             }
+            ElementKind::Tet4 => {
+                n[..4].copy_from_slice(&[1.0 - x - y - z, x, y, z]);
+                dn[..4].copy_from_slice(&[
+                    [-1.0, -1.0, -1.0],
+                    [1.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0],
+                    [0.0, 0.0, 1.0],
+                ]);
+            }
             ElementKind::Tet10 => {
                 let l = [1.0 - x - y - z, x, y, z];
                 let dl = [
@@ -198,7 +219,12 @@ impl ElementKind {
 mod tests {
     use super::*;
 
-    const KINDS: [ElementKind; 3] = [ElementKind::Hex8, ElementKind::Hex20, ElementKind::Tet10];
+    const KINDS: [ElementKind; 4] = [
+        ElementKind::Hex8,
+        ElementKind::Hex20,
+        ElementKind::Tet10,
+        ElementKind::Tet4,
+    ];
 
     #[test]
     fn kronecker_delta_and_partition_of_unity() {

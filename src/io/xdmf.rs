@@ -11,6 +11,7 @@ fn topology_type(kind: ElementKind) -> &'static str {
         ElementKind::Hex8 | ElementKind::Hex8I => "Hexahedron",
         ElementKind::Hex20 => "Hexahedron_20",
         ElementKind::Tet10 => "Tetrahedron_10",
+        ElementKind::Tet4 => "Tetrahedron",
     }
 }
 

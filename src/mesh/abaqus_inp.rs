@@ -1,5 +1,5 @@
 //! Abaqus input files (`.inp`), the subset that describes a solid model: `*NODE`, `*ELEMENT`
-//! (C3D8, C3D8I, C3D20, C3D20R, C3D10), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE`
+//! (C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D4), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE`
 //! (element-face based), `*MATERIAL` with `*ELASTIC` (isotropic or engineering constants) and
 //! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (zero values), `*INCLUDE`, `*CONTACT PAIR` with
 //! `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis steps and output requests are
@@ -93,6 +93,7 @@ fn element_kind(abaqus: &str) -> Option<ElementKind> {
         // Reduced integration is not reproduced: C3D20R is read as a fully integrated Hex20.
         "C3D20" | "C3D20R" => Some(ElementKind::Hex20),
         "C3D10" => Some(ElementKind::Tet10),
+        "C3D4" => Some(ElementKind::Tet4),
         _ => None,
     }
 }
@@ -103,6 +104,7 @@ fn abaqus_type(kind: ElementKind) -> &'static str {
         ElementKind::Hex8I => "C3D8I",
         ElementKind::Hex20 => "C3D20",
         ElementKind::Tet10 => "C3D10",
+        ElementKind::Tet4 => "C3D4",
     }
 }
 
@@ -239,7 +241,7 @@ pub fn read(path: &Path) -> Result<InpModel, InpError> {
                     let ty = need("TYPE")?.to_uppercase();
                     let kind = element_kind(&ty).ok_or_else(|| {
                         syntax(format!(
-                            "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R or C3D10)"
+                            "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10 or C3D4)"
                         ))
                     })?;
                     raw_blocks.push((kind, param("ELSET"), Vec::new(), Vec::new()));

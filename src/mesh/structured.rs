@@ -103,6 +103,11 @@ pub fn structured(
                     connectivity.push(m);
                 }
             }
+            ElementKind::Tet4 => {
+                for t in HEX_TO_TETS {
+                    connectivity.extend(t.map(|c| nodes[c]));
+                }
+            }
             ElementKind::Tet10 => {
                 for t in HEX_TO_TETS {
                     let tn = t.map(|c| nodes[c]);
@@ -129,7 +134,7 @@ pub fn structured(
         materials: vec![material],
         node_sets: Default::default(),
     };
-    if kind == ElementKind::Tet10 {
+    if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);
     }
     let on = |d: usize, v: f64| -> Vec<usize> {
@@ -158,11 +163,12 @@ pub fn structured(
     mesh
 }
 
-/// Swaps nodes 1 and 2 (and the matching mid-edge nodes) of every negatively oriented Tet10.
+/// Swaps nodes 1 and 2 (and the matching mid-edge nodes) of every negatively oriented tet.
 fn orient_tets_positively(mesh: &mut Mesh) {
     let coords = &mesh.coords;
     for block in &mut mesh.blocks {
-        for t in block.connectivity.chunks_mut(10) {
+        let quadratic = block.kind == ElementKind::Tet10;
+        for t in block.connectivity.chunks_mut(block.kind.nodes()) {
             let p = |i: usize| coords[t[i]];
             let (a, b, c, d) = (p(0), p(1), p(2), p(3));
             let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
@@ -173,8 +179,10 @@ fn orient_tets_positively(mesh: &mut Mesh) {
             if det < 0.0 {
                 // Corners 1<->2; edges (0,1)<->(0,2)=4<->6, (1,3)<->(2,3)=8<->9, (1,2) stays.
                 t.swap(1, 2);
-                t.swap(4, 6);
-                t.swap(8, 9);
+                if quadratic {
+                    t.swap(4, 6);
+                    t.swap(8, 9);
+                }
             }
         }
     }

@@ -3,7 +3,7 @@
 //! p = log2((f2 - f4) / (f4 - f8)) for element sizes h/2, h/4, h/8), asserted against the theory for
 //! eigenvalues of degree-k elements: error O(h^2k) in omega^2, hence O(h^2k) in the frequency
 //! (Strang & Fix, "An analysis of the finite element method", 1973, ch. 6): order 2 for the
-//! trilinear Hex8 and Hex8I, order 4 for the quadratic Hex20 and Tet10.
+//! trilinear Hex8 and Hex8I and the linear Tet4, order 4 for the quadratic Hex20 and Tet10.
 //!
 //! Free-free, not clamped: a fully clamped solid end has edge singularities that cap every
 //! element's rate (measured: Hex8I went non-monotone on the cantilever), whereas the free
@@ -28,6 +28,7 @@ fn free_beam_convergence_rates(petsc: &Petsc) -> Result<(), String> {
         (ElementKind::Hex8I, [8, 1, 1], 2.0),
         (ElementKind::Hex20, [4, 1, 1], 4.0),
         (ElementKind::Tet10, [4, 1, 1], 4.0),
+        (ElementKind::Tet4, [8, 1, 1], 2.0),
     ] {
         let mut f = Vec::new();
         for k in [1, 2, 4, 8] {
