@@ -12,6 +12,10 @@ use squeal::mesh::abaqus_inp::{read, write};
 use squeal::mesh::structured::{annulus, block};
 use squeal::mesh::Mesh;
 
+#[path = "support/materials.rs"]
+mod materials;
+use materials::pad_lining;
+
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("squeal-inp-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -34,24 +38,6 @@ fn max_rel_diff(a: &[f64], b: &[f64]) -> f64 {
         / scale
 }
 
-fn lining() -> Material {
-    Material {
-        name: "lining".into(),
-        density: 2500.0,
-        elasticity: Elasticity::Orthotropic {
-            e1: 6e9,
-            e2: 6e9,
-            e3: 2e9,
-            nu12: 0.25,
-            nu13: 0.1,
-            nu23: 0.1,
-            g12: 2.4e9,
-            g13: 1.0e9,
-            g23: 1.0e9,
-        },
-    }
-}
-
 #[test]
 fn generated_model_written_and_read_gives_the_same_k_and_m() {
     let steel = Material::isotropic("steel", 2.1e11, 0.3, 7850.0);
@@ -67,11 +53,23 @@ fn generated_model_written_and_read_gives_the_same_k_and_m() {
         ),
         (
             "hex20",
-            annulus(0.1, 0.15, 0.02, [2, 12, 1], ElementKind::Hex20, lining()),
+            annulus(
+                0.1,
+                0.15,
+                0.02,
+                [2, 12, 1],
+                ElementKind::Hex20,
+                pad_lining(),
+            ),
         ),
         (
             "tet10",
-            block([0.1, 0.1, 0.05], [2, 2, 1], ElementKind::Tet10, lining()),
+            block(
+                [0.1, 0.1, 0.05],
+                [2, 2, 1],
+                ElementKind::Tet10,
+                pad_lining(),
+            ),
         ),
     ] {
         let path = scratch(&format!("{name}.inp"));

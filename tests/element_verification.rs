@@ -12,10 +12,14 @@ use squeal::fem::assembly::{assemble, DenseSink};
 use squeal::fem::dense::{cholesky, cholesky_solve, symmetric_eigenvalues};
 use squeal::fem::dofmap::DofMap;
 use squeal::fem::element::ElementKernel;
-use squeal::fem::material::{Elasticity, Material};
+use squeal::fem::material::Material;
 use squeal::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
 use squeal::mesh::structured::block;
 use squeal::mesh::Mesh;
+
+#[path = "support/materials.rs"]
+mod materials;
+use materials::pad_lining;
 
 const ALL: [ElementKind; 5] = [
     ElementKind::Hex8,
@@ -27,24 +31,6 @@ const ALL: [ElementKind; 5] = [
 
 fn steel() -> Material {
     Material::isotropic("steel", 2.1e11, 0.3, 7850.0)
-}
-
-fn pad_orthotropic() -> Material {
-    Material {
-        name: "lining".into(),
-        density: 2500.0,
-        elasticity: Elasticity::Orthotropic {
-            e1: 6e9,
-            e2: 6e9,
-            e3: 2e9,
-            nu12: 0.25,
-            nu13: 0.1,
-            nu23: 0.1,
-            g12: 2.4e9,
-            g13: 1.0e9,
-            g23: 1.0e9,
-        },
-    }
 }
 
 /// Deterministic pseudo-random numbers in [-1, 1] (no dependency, reproducible).
@@ -146,7 +132,7 @@ fn run_patch_test(kind: ElementKind, material: Material) -> f64 {
 #[test]
 fn irons_patch_test_distorted_mesh_every_element_type() {
     for kind in ALL {
-        for material in [steel(), pad_orthotropic()] {
+        for material in [steel(), pad_lining()] {
             let name = material.name.clone();
             let err = run_patch_test(kind, material);
             assert!(err < 1e-9, "{kind:?} ({name}): patch test error {err:e}");
@@ -218,7 +204,7 @@ fn six_rigid_body_modes_every_element_type() {
 #[test]
 fn element_matrices_symmetric_and_mass_sums_to_rho_volume() {
     for kind in ALL {
-        let mat = pad_orthotropic();
+        let mat = pad_lining();
         let mut kernel = ElementKernel::new(kind, &mat);
         let n = kernel.order();
         let x = distorted_element(kind);
