@@ -162,8 +162,8 @@ fn keywords_of_the_subset_are_read() {
     );
     assert_eq!(m.mesh.node_sets["LEFT"], vec![0, 3, 4, 7]);
     assert_eq!(m.clamps, vec![("LEFT".to_string(), [true, true, true])]);
-    assert_eq!(m.surfaces["DISC_FACE"], vec![(0, 4)]);
-    assert_eq!(m.surfaces["PAD_FACE"], vec![(1, 6)]);
+    assert_eq!(m.mesh.surfaces["DISC_FACE"], vec![(0, 4)]);
+    assert_eq!(m.mesh.surfaces["PAD_FACE"], vec![(1, 6)]);
     assert_eq!(m.contact_pairs.len(), 1);
     assert_eq!(m.contact_pairs[0].friction, Some(0.4));
     let skipped: Vec<&str> = m.skipped.iter().map(|(_, k)| k.as_str()).collect();

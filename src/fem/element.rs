@@ -39,7 +39,7 @@ impl Tabulated {
     }
 }
 
-fn jacobian(x: &[[f64; 3]], dn: &[[f64; 3]]) -> [[f64; 3]; 3] {
+pub(crate) fn jacobian(x: &[[f64; 3]], dn: &[[f64; 3]]) -> [[f64; 3]; 3] {
     let mut j = [[0.0; 3]; 3];
     for (xa, da) in x.iter().zip(dn) {
         for r in 0..3 {

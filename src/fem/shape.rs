@@ -52,7 +52,60 @@ pub const HEX_EDGES: [[usize; 2]; 12] = [
 /// Edges of a tetrahedron as corner pairs, in the order of the C3D10 mid-edge nodes 4..9.
 pub const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
 
+/// Corners of the six faces of a hexahedron (Abaqus faces S1..S6), counter-clockwise seen
+/// from outside.
+pub const HEX_FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
+/// Corners of the four faces of a tetrahedron (Abaqus faces S1..S4), counter-clockwise seen
+/// from outside.
+pub const TET_FACES: [[usize; 3]; 4] = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]];
+
 impl ElementKind {
+    /// Element-local nodes of face `face` (1-based, Abaqus numbering): corners in
+    /// counter-clockwise order seen from outside, then the mid-edge nodes of quadratic
+    /// elements in the order of the face's edges.
+    pub fn face_local_nodes(self, face: u8) -> Vec<usize> {
+        let f = face as usize - 1;
+        let (corners, edges): (Vec<usize>, &[[usize; 2]]) = match self {
+            ElementKind::Hex8 | ElementKind::Hex8I => (HEX_FACES[f].to_vec(), &[]),
+            ElementKind::Hex20 => (HEX_FACES[f].to_vec(), &HEX_EDGES),
+            ElementKind::Tet4 => (TET_FACES[f].to_vec(), &[]),
+            ElementKind::Tet10 => (TET_FACES[f].to_vec(), &TET_EDGES),
+        };
+        let mut out = corners.clone();
+        if !edges.is_empty() {
+            let first_mid = if matches!(self, ElementKind::Hex20) {
+                8
+            } else {
+                4
+            };
+            for i in 0..corners.len() {
+                let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
+                let e = edges
+                    .iter()
+                    .position(|&[p, q]| (p, q) == (a, b) || (p, q) == (b, a))
+                    .expect("face edges are element edges");
+                out.push(first_mid + e);
+            }
+        }
+        out
+    }
+
+    /// Number of faces (6 for hexahedra, 4 for tetrahedra).
+    pub fn faces(self) -> u8 {
+        match self {
+            ElementKind::Tet4 | ElementKind::Tet10 => 4,
+            _ => 6,
+        }
+    }
+
     pub fn nodes(self) -> usize {
         match self {
             ElementKind::Hex8 | ElementKind::Hex8I => 8,

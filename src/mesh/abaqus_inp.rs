@@ -50,8 +50,6 @@ pub struct InpModel {
     pub mesh: Mesh,
     /// Node sets clamped (components 0..3) by `*BOUNDARY`.
     pub clamps: Vec<(String, [bool; 3])>,
-    /// Element-face surfaces: (global element index, face 1..6 in Abaqus numbering).
-    pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
     pub contact_pairs: Vec<ContactPair>,
     /// Keywords skipped (line, keyword), for the log.
     pub skipped: Vec<(usize, String)>,
@@ -675,11 +673,11 @@ pub fn read(path: &Path) -> Result<InpModel, InpError> {
                 faces.push((e, f));
             }
         }
-        model.surfaces.insert(name, faces);
+        model.mesh.surfaces.insert(name, faces);
     }
     for (slave, master, interaction) in pairs_raw {
         for s in [&slave, &master] {
-            if !model.surfaces.contains_key(s) {
+            if !model.mesh.surfaces.contains_key(s) {
                 return Err(model_err(format!(
                     "*CONTACT PAIR names surface '{s}', which is not defined"
                 )));
@@ -711,7 +709,8 @@ fn by_material_len_is_one(ids: &[i64], element_material: &HashMap<i64, usize>) -
     }
 }
 
-/// Writes a mesh (with clamps) as an Abaqus input file; ids are 1-based positions.
+/// Writes a mesh (with clamps and surfaces) as an Abaqus input file; ids are 1-based
+/// positions.
 pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::io::Result<()> {
     let mut s = String::new();
     s += "*HEADING\nwritten by squeal\n*NODE, NSET=ALLNODES\n";
@@ -742,6 +741,12 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         for chunk in nodes.chunks(16) {
             let ids: Vec<String> = chunk.iter().map(|n| (n + 1).to_string()).collect();
             let _ = writeln!(s, "{}", ids.join(", "));
+        }
+    }
+    for (name, faces) in &mesh.surfaces {
+        let _ = writeln!(s, "*SURFACE, TYPE=ELEMENT, NAME={name}");
+        for (e, f) in faces {
+            let _ = writeln!(s, "{}, S{f}", e + 1);
         }
     }
     for m in &mesh.materials {

@@ -1,6 +1,9 @@
-//! Meshes: nodes, element blocks (one element type and material each) and node sets.
+//! Meshes: nodes, element blocks (one element type and material each), node sets and
+//! element-face surfaces.
 
 pub mod abaqus_inp;
+pub mod brake;
+pub mod quality;
 pub mod structured;
 
 use std::collections::BTreeMap;
@@ -40,6 +43,9 @@ pub struct Mesh {
     pub blocks: Vec<ElementBlock>,
     pub materials: Vec<Material>,
     pub node_sets: BTreeMap<String, Vec<usize>>,
+    /// Element-face surfaces: (global element index, face 1..6 in Abaqus numbering; 1..4 for
+    /// tetrahedra). Global element indices run over the blocks in order.
+    pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
 }
 
 impl Mesh {
@@ -55,6 +61,95 @@ impl Mesh {
     pub fn element_coords(&self, nodes: &[usize], out: &mut Vec<[f64; 3]>) {
         out.clear();
         out.extend(nodes.iter().map(|&n| self.coords[n]));
+    }
+
+    /// (block, element within the block) of a global element index.
+    pub fn locate_element(&self, global: usize) -> (usize, usize) {
+        let mut start = 0;
+        for (b, block) in self.blocks.iter().enumerate() {
+            if global < start + block.len() {
+                return (b, global - start);
+            }
+            start += block.len();
+        }
+        panic!("element {global} out of range ({} elements)", start)
+    }
+
+    /// Nodes of face `face` (Abaqus numbering) of the global element `global`: corners first,
+    /// then mid-edge nodes for quadratic elements.
+    pub fn face_nodes(&self, global: usize, face: u8) -> Vec<usize> {
+        let (b, e) = self.locate_element(global);
+        let block = &self.blocks[b];
+        let nodes = block.element(e);
+        block
+            .kind
+            .face_local_nodes(face)
+            .iter()
+            .map(|&i| nodes[i])
+            .collect()
+    }
+
+    /// The surface `name`, or an error listing the surfaces that exist.
+    pub fn surface(&self, name: &str) -> Result<&[(usize, u8)], String> {
+        self.surfaces.get(name).map(Vec::as_slice).ok_or_else(|| {
+            format!(
+                "no surface '{name}' in the mesh (surfaces: {})",
+                self.surfaces.keys().cloned().collect::<Vec<_>>().join(", ")
+            )
+        })
+    }
+
+    /// The nodes of a surface, sorted and unique.
+    pub fn surface_nodes(&self, name: &str) -> Result<Vec<usize>, String> {
+        let mut nodes: Vec<usize> = self
+            .surface(name)?
+            .iter()
+            .flat_map(|&(e, f)| self.face_nodes(e, f))
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        Ok(nodes)
+    }
+
+    /// Appends `other`: its nodes, blocks (materials merged by name), node sets and surfaces
+    /// (names must not clash; they get no prefix).
+    pub fn append(&mut self, other: Mesh) {
+        let node_offset = self.coords.len();
+        let element_offset = self.element_count();
+        self.coords.extend(other.coords);
+        for block in other.blocks {
+            let material = &other.materials[block.material];
+            let index = match self.materials.iter().position(|m| m.name == material.name) {
+                Some(i) => i,
+                None => {
+                    self.materials.push(material.clone());
+                    self.materials.len() - 1
+                }
+            };
+            self.blocks.push(ElementBlock {
+                name: block.name,
+                kind: block.kind,
+                material: index,
+                connectivity: block.connectivity.iter().map(|n| n + node_offset).collect(),
+            });
+        }
+        for (name, nodes) in other.node_sets {
+            let shifted = nodes.iter().map(|n| n + node_offset).collect();
+            assert!(
+                self.node_sets.insert(name.clone(), shifted).is_none(),
+                "node set '{name}' defined twice"
+            );
+        }
+        for (name, faces) in other.surfaces {
+            let shifted = faces
+                .iter()
+                .map(|&(e, f)| (e + element_offset, f))
+                .collect();
+            assert!(
+                self.surfaces.insert(name.clone(), shifted).is_none(),
+                "surface '{name}' defined twice"
+            );
+        }
     }
 
     /// The node set `name`, or an error listing the sets that exist.

@@ -133,6 +133,7 @@ pub fn structured(
         }],
         materials: vec![material],
         node_sets: Default::default(),
+        surfaces: Default::default(),
     };
     if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);

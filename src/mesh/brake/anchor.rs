@@ -1,0 +1,147 @@
+//! The anchor bracket: bolted to the knuckle on the inboard side, two arms reach over the
+//! disc's rim; their abutment faces hold the backplate ears of both pads against the drag.
+//! Revolved about the disc axis.
+//!
+//! ```text
+//!   theta ->  arm |       pads        | arm
+//!   abutment  ->  |[ear]         [ear]|  <-  abutment     (both pad layers, z = +-back)
+//!   mount bar  ===|===================|===   (inboard, below the pads' inner radius)
+//! ```
+
+use super::grid::{Axis, CellFace, Frame, Grid, GridMesh};
+use super::{cells, BrakeGeometry, Selector};
+use crate::fem::material::Material;
+use crate::fem::shape::ElementKind;
+
+/// Angular width of each arm.
+const ARM_DEG: f64 = 6.0;
+/// Thickness of the mount bar (along z) and its radial height.
+const MOUNT_THICKNESS: f64 = 0.0105;
+const MOUNT_HEIGHT: f64 = 0.018;
+/// Clearance of the arm bridge over the disc rim, and its radial thickness.
+const RIM_CLEARANCE: f64 = 0.002;
+const BRIDGE: f64 = 0.010;
+/// Axial clearance of the arms to the disc faces.
+const FACE_CLEARANCE: f64 = 0.002;
+
+const R_MOUNT: usize = 0;
+const R_ABUTMENT: usize = 2;
+const R_BRIDGE: usize = 4;
+const T_CENTRE: usize = 1;
+const Z_MOUNT: usize = 0;
+
+pub fn breaks(g: &BrakeGeometry) -> ([f64; 6], [f64; 4], [f64; 7]) {
+    let half = g.pad_arc_deg.to_radians() / 2.0;
+    let ear = half + g.ear_deg.to_radians();
+    let arm = ear + ARM_DEG.to_radians();
+    // The mount bar stays radially inside the caliper housing.
+    let (caliper_r, _, _) = super::caliper::breaks(g);
+    let mount_top = caliper_r[0] - 0.002;
+    let r = [
+        mount_top - MOUNT_HEIGHT,
+        mount_top,
+        g.pad_inner_radius - g.backplate_margin,
+        g.pad_outer_radius + g.backplate_margin,
+        g.disc_outer_radius + RIM_CLEARANCE,
+        g.disc_outer_radius + RIM_CLEARANCE + BRIDGE,
+    ];
+    let face = g.disc_thickness / 2.0;
+    let bond = face + g.lining_thickness;
+    let back = bond + g.backplate_thickness;
+    let z = [
+        -back - MOUNT_THICKNESS,
+        -back,
+        -bond,
+        -face - FACE_CLEARANCE,
+        face + FACE_CLEARANCE,
+        bond,
+        back,
+    ];
+    (r, [-arm, -ear, ear, arm], z)
+}
+
+fn selector() -> Selector {
+    Box::new(|c: [usize; 3]| -> Option<usize> {
+        let [ri, ti, zi] = c;
+        let on = if ti == T_CENTRE {
+            zi == Z_MOUNT && ri == R_MOUNT
+        } else {
+            match zi {
+                Z_MOUNT => true,
+                1 | 5 => ri >= R_ABUTMENT,
+                _ => ri == R_BRIDGE,
+            }
+        };
+        on.then_some(0)
+    })
+}
+
+pub fn grid(g: &BrakeGeometry, h: f64) -> (Grid, Selector) {
+    let (r, theta, z) = breaks(g);
+    let r_mid = 0.5 * (r[0] + r[5]);
+    let grid = Grid {
+        axes: [
+            Axis::new(
+                &r,
+                &r.windows(2)
+                    .map(|w| cells(w[1] - w[0], h, 1))
+                    .collect::<Vec<_>>(),
+            ),
+            Axis::new(
+                &theta,
+                &theta
+                    .windows(2)
+                    .map(|w| cells(r_mid * (w[1] - w[0]), h, 1))
+                    .collect::<Vec<_>>(),
+            ),
+            Axis::new(
+                &z,
+                &z.windows(2)
+                    .map(|w| cells(w[1] - w[0], h, 1))
+                    .collect::<Vec<_>>(),
+            ),
+        ],
+        frame: Frame::Cylindrical { center: [0.0, 0.0] },
+    };
+    (grid, selector())
+}
+
+/// Surfaces `anchor_abutments` (faces on the backplate ears) and `anchor_mount` (bolt faces on
+/// the knuckle, under the arms); node set `anchor_bolts` (clamped).
+pub fn mesh(g: &BrakeGeometry, material: &Material, h: f64, kind: ElementKind) -> GridMesh {
+    let (grid, select) = grid(g, h);
+    let mut m = grid.mesh(kind, &[("anchor", material.clone())], &select);
+    m.add_surface("anchor_abutments", |c, f| {
+        (c[2] == 1 || c[2] == 5) && c[0] == R_ABUTMENT && f.axis == 1 && (c[1] == 0) == f.positive
+    });
+    m.add_surface("anchor_mount", |c, f| {
+        c[2] == Z_MOUNT
+            && c[1] != T_CENTRE
+            && c[0] <= 1
+            && f == CellFace {
+                axis: 2,
+                positive: false,
+            }
+    });
+    m.add_node_set_of_surface("anchor_bolts", "anchor_mount");
+    m
+}
+
+pub fn volume(g: &BrakeGeometry) -> f64 {
+    let (r, theta, z) = breaks(g);
+    let select = selector();
+    let mut v = 0.0;
+    for ri in 0..5 {
+        for ti in 0..3 {
+            for zi in 0..6 {
+                if select([ri, ti, zi]).is_some() {
+                    v += 0.5
+                        * (theta[ti + 1] - theta[ti])
+                        * (r[ri + 1].powi(2) - r[ri].powi(2))
+                        * (z[zi + 1] - z[zi]);
+                }
+            }
+        }
+    }
+    v
+}
