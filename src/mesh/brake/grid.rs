@@ -347,7 +347,7 @@ impl Grid {
         // Parameter value at a lattice index (midpoints at odd indices when quadratic).
         let value = |d: usize, l: usize| -> f64 {
             let p = &points[d];
-            if l % order == 0 {
+            if l.is_multiple_of(order) {
                 p[l / order]
             } else {
                 0.5 * (p[l / order] + p[l / order + 1])

@@ -390,9 +390,12 @@ pub struct BrakeModel {
 
 type GridOf = fn(&BrakeGeometry, f64) -> (Grid, Selector);
 
-fn grids(spec: &BrakeSpec) -> Vec<Box<dyn Fn(f64) -> (Grid, Selector) + '_>> {
+/// A component's grid at element size h.
+type GridAt<'a> = Box<dyn Fn(f64) -> (Grid, Selector) + 'a>;
+
+fn grids(spec: &BrakeSpec) -> Vec<GridAt<'_>> {
     let g = &spec.geometry;
-    let mut out: Vec<Box<dyn Fn(f64) -> (Grid, Selector) + '_>> = Vec::new();
+    let mut out: Vec<GridAt<'_>> = Vec::new();
     let simple: [(Component, GridOf); 4] = [
         (Component::Disc, disc::grid),
         (Component::Piston, piston::grid),
