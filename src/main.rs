@@ -134,7 +134,28 @@ fn run_command(
 }
 
 fn print_summary(s: &RunSummary) {
+    for note in &s.notes {
+        println!("{note}");
+    }
     println!("model: {} DOF", s.dofs);
+    if !s.quality.is_empty() {
+        println!("mesh quality (sJ: scaled Jacobian, AR: aspect ratio):");
+        for line in squeal::mesh::quality::table(&s.quality).lines() {
+            println!("    {line}");
+        }
+    }
+    if let Some(b) = &s.balance {
+        println!(
+            "partition: rows per rank {:?} (imbalance {:.3}), elements per rank {:?} (imbalance {:.3})",
+            b.rows, b.row_imbalance, b.elements, b.element_imbalance
+        );
+    }
+    if !s.unsupported.is_empty() {
+        println!(
+            "not held against rigid-body motion (no contact yet): {}; their modes at 0 Hz are flagged rigid",
+            s.unsupported.join(", ")
+        );
+    }
     if !s.frequencies_hz.is_empty() {
         println!("real modes:    #   frequency (Hz)   ||K phi - w^2 M phi||   backward error");
         for (i, f) in s.frequencies_hz.iter().enumerate() {
@@ -160,7 +181,7 @@ fn print_summary(s: &RunSummary) {
         s.peak_memory_per_rank / (1024.0 * 1024.0)
     );
     println!(
-        "results: {}/results.h5 (+ results.xdmf)",
+        "results: {}/results.h5 (+ results.xdmf, model.png)",
         s.output.display()
     );
 }

@@ -11,8 +11,10 @@ use crate::io::results::{ResultsError, ResultsFile};
 use crate::io::user_matrices::load_sum;
 use crate::io::xdmf::{self, NodalField};
 use crate::la::{LaError, Petsc, SparseMatrix};
+use crate::mesh::partition;
+use crate::mesh::quality::{self, BlockQuality};
 use crate::mesh::structured::{annulus, block};
-use crate::mesh::Mesh;
+use crate::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
 use crate::scene::{ModelSource, Scene};
 
 #[derive(Debug, thiserror::Error)]
@@ -27,6 +29,10 @@ pub enum RunError {
     Results(#[from] ResultsError),
     #[error("mesh: {0}")]
     Inp(#[from] crate::mesh::abaqus_inp::InpError),
+    #[error("{0}")]
+    Quality(#[from] crate::mesh::quality::QualityError),
+    #[error("model: {0}")]
+    Model(String),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -58,19 +64,50 @@ pub struct RunSummary {
     pub backward_errors: Vec<f64>,
     pub rigid: Vec<bool>,
     pub timings: Timings,
+    /// Model builder's notes (size, substituted constraints).
+    pub notes: Vec<String>,
+    pub quality: Vec<BlockQuality>,
+    pub balance: Option<LoadBalance>,
+    /// Blocks of parts not held against rigid-body motion (their modes sit at 0 Hz).
+    pub unsupported: Vec<String>,
     pub peak_memory_per_rank: f64,
     pub factor_entries: Option<f64>,
     pub ordering: Option<&'static str>,
     pub output: PathBuf,
 }
 
-/// Builds (generates or imports) the mesh of a model; None for a matrices model. Relative
-/// file names are resolved from `scene_dir`.
-pub fn build_mesh(
-    model: &ModelSource,
-    scene_dir: &Path,
-) -> Result<Option<(Mesh, Vec<Clamp>)>, RunError> {
-    Ok(match model {
+/// A finite-element model ready for assembly: mesh, constraints, contact interfaces and
+/// pressure loads (the last two from the brake generator or `*CONTACT PAIR`s).
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub mesh: Mesh,
+    pub clamps: Vec<Clamp>,
+    pub interfaces: Vec<Interface>,
+    pub loads: Vec<PressureLoad>,
+    /// Brake-line pressure (Pa) of the loads.
+    pub pressure: f64,
+    /// What the model builder substituted or assumed, for the log.
+    pub notes: Vec<String>,
+}
+
+impl Model {
+    fn plain(mesh: Mesh, clamps: Vec<Clamp>) -> Self {
+        Model {
+            mesh,
+            clamps,
+            interfaces: Vec::new(),
+            loads: Vec::new(),
+            pressure: 0.0,
+            notes: Vec::new(),
+        }
+    }
+}
+
+/// Builds (generates or imports) the model; None for a matrices model. Relative file names
+/// are resolved from `scene_dir`. Nodes are renumbered by recursive coordinate bisection
+/// (`mesh::partition`), and every element passes the quality check.
+pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model>, RunError> {
+    let mut built = match model {
         ModelSource::Abaqus { file } => {
             let inp = crate::mesh::abaqus_inp::read(&scene_dir.join(file))?;
             let clamps = inp
@@ -81,7 +118,18 @@ pub fn build_mesh(
                     components: *components,
                 })
                 .collect();
-            Some((inp.mesh, clamps))
+            let mut m = Model::plain(inp.mesh, clamps);
+            m.interfaces = inp
+                .contact_pairs
+                .iter()
+                .map(|p| Interface {
+                    name: format!("{}-{}", p.slave, p.master),
+                    master: p.slave.clone(),
+                    slave: p.master.clone(),
+                    kind: InterfaceKind::Sliding,
+                })
+                .collect();
+            m
         }
         ModelSource::Block {
             element,
@@ -89,10 +137,10 @@ pub fn build_mesh(
             cells,
             material,
             clamp,
-        } => Some((
+        } => Model::plain(
             block(*size, *cells, *element, material.clone()),
             clamp.iter().map(|s| Clamp::all(s)).collect(),
-        )),
+        ),
         ModelSource::Annulus {
             element,
             inner_radius,
@@ -101,7 +149,7 @@ pub fn build_mesh(
             cells,
             material,
             clamp,
-        } => Some((
+        } => Model::plain(
             annulus(
                 *inner_radius,
                 *outer_radius,
@@ -111,9 +159,62 @@ pub fn build_mesh(
                 material.clone(),
             ),
             clamp.iter().map(|s| Clamp::all(s)).collect(),
-        )),
-        ModelSource::Matrices { .. } => None,
-    })
+        ),
+        ModelSource::Brake(spec) => {
+            let b = crate::mesh::brake::generate(spec).map_err(RunError::Model)?;
+            let mut notes = b.notes;
+            notes.insert(
+                0,
+                format!(
+                    "brake: {} nodes, {} elements, element size {:.2} mm",
+                    b.mesh.node_count(),
+                    b.mesh.element_count(),
+                    b.element_size * 1e3
+                ),
+            );
+            Model {
+                mesh: b.mesh,
+                clamps: b.clamps,
+                interfaces: b.interfaces,
+                loads: b.loads,
+                pressure: b.pressure,
+                notes,
+            }
+        }
+        ModelSource::Matrices { .. } => return Ok(None),
+    };
+    let order = partition::bisection_order(&built.mesh.coords);
+    partition::renumber(&mut built.mesh, &order);
+    Ok(Some(built))
+}
+
+/// Rows and elements per rank of an assembled system, and their imbalance (max / mean).
+///
+/// # Collective
+fn load_balance(petsc: &Petsc, s: &AssembledSystem) -> LoadBalance {
+    let ranks = petsc.size() as usize;
+    let rows: Vec<usize> = s.dofs.dof_ranges.windows(2).map(|w| w[1] - w[0]).collect();
+    let mut elements = vec![0usize; ranks];
+    elements[petsc.rank() as usize] = s.elements_on_rank;
+    let elements: Vec<usize> = elements
+        .iter()
+        .map(|&e| crate::parallel::sum(petsc.world(), e as f64) as usize)
+        .collect();
+    LoadBalance {
+        row_imbalance: partition::imbalance(&rows),
+        element_imbalance: partition::imbalance(&elements),
+        rows,
+        elements,
+    }
+}
+
+/// How evenly the ranks share the work.
+#[derive(Debug, Clone)]
+pub struct LoadBalance {
+    pub rows: Vec<usize>,
+    pub elements: Vec<usize>,
+    pub row_imbalance: f64,
+    pub element_imbalance: f64,
 }
 
 /// Runs a scene. `scene_dir` resolves relative paths of matrix files; `scene_text` is stored
@@ -138,25 +239,35 @@ pub fn run(
     crate::parallel::barrier(petsc.world());
 
     // Model and operators.
-    let mut mesh = None;
+    let mut model: Option<Model> = None;
     let mut system: Option<AssembledSystem> = None;
     let mut user: Option<(SparseMatrix, SparseMatrix)> = None;
-    let generated = match &scene.model {
+    let mut quality_stats = Vec::new();
+    let mut balance = None;
+    let mut unsupported = Vec::new();
+    let built = match &scene.model {
         ModelSource::Matrices { .. } => None,
-        model => timings.time("mesh", || build_mesh(model, scene_dir))?,
+        source => timings.time("mesh", || build_model(source, scene_dir))?,
     };
-    if let Some((m, clamps)) = generated {
+    if let Some(built) = built {
+        quality_stats = timings.time("mesh quality", || quality::check(&built.mesh))?;
         if scene.output.write_inp && petsc.rank() == 0 {
             let path = output.join("model.inp");
-            let named: Vec<(String, [bool; 3])> = clamps
+            let named: Vec<(String, [bool; 3])> = built
+                .clamps
                 .iter()
                 .map(|c| (c.node_set.clone(), c.components))
                 .collect();
-            crate::mesh::abaqus_inp::write(&path, &m, &named)
+            crate::mesh::abaqus_inp::write(&path, &built.mesh, &named)
                 .map_err(|source| RunError::Io { path, source })?;
         }
-        let s = timings.time("assembly", || assemble_system(petsc, &m, &clamps))?;
-        mesh = Some(m);
+        let s = timings.time("assembly", || {
+            assemble_system(petsc, &built.mesh, &built.clamps)
+        })?;
+        let fixed: Vec<[bool; 3]> = s.dofs.node_dofs.iter().map(|d| d.map(|x| x < 0)).collect();
+        unsupported = partition::unsupported_parts(&built.mesh, &fixed);
+        balance = Some(load_balance(petsc, &s));
+        model = Some(built);
         system = Some(s);
     } else if let ModelSource::Matrices { stiffness, mass } = &scene.model {
         let (k, m) = timings.time("read matrices", || -> Result<_, RunError> {
@@ -174,7 +285,12 @@ pub fn run(
         user = Some((k.matrix, m.matrix));
     }
     let (k, m, free_free) = match (&system, &user) {
-        (Some(s), _) => (&s.stiffness, &s.mass, s.is_free_free()),
+        // Parts not held against rigid motion make K singular: shift below zero.
+        (Some(s), _) => (
+            &s.stiffness,
+            &s.mass,
+            s.is_free_free() || !unsupported.is_empty(),
+        ),
         (None, Some((k, m))) => (k, m, false),
         _ => unreachable!("a scene has a model"),
     };
@@ -210,13 +326,39 @@ pub fn run(
     file.set_text("/", "squeal_version", env!("CARGO_PKG_VERSION"))?;
     file.set_number("/", "ranks", petsc.size() as f64)?;
     file.set_number("/", "dofs", dofs as f64)?;
-    if let Some(mesh) = &mesh {
-        file.write_mesh(mesh)?;
+    let mesh = model.as_ref().map(|m| &m.mesh);
+    if let Some(model) = &model {
+        file.write_mesh(&model.mesh)?;
+        for i in &model.interfaces {
+            let group = format!("model/interfaces/{}", i.name);
+            file.set_text(&group, "master", &i.master)?;
+            file.set_text(&group, "slave", &i.slave)?;
+            file.set_text(&group, "kind", &format!("{:?}", i.kind).to_lowercase())?;
+        }
+        for l in &model.loads {
+            let group = format!("model/loads/{}", l.surface);
+            file.set_number(&group, "hydraulic_area_m2", l.area)?;
+            file.set_number(&group, "pressure_pa", model.pressure)?;
+        }
+        for q in &quality_stats {
+            let group = format!("model/quality/{}", q.block);
+            file.set_number(&group, "elements", q.elements as f64)?;
+            file.set_number(&group, "min_scaled_jacobian", q.min_scaled_jacobian)?;
+            file.set_number(&group, "max_aspect_ratio", q.max_aspect_ratio)?;
+            file.set_number(&group, "mean_aspect_ratio", q.mean_aspect_ratio)?;
+            file.set_number(&group, "max_warping_deg", q.max_warping_deg)?;
+        }
+    }
+    if let Some(b) = &balance {
+        let rows: Vec<f64> = b.rows.iter().map(|&r| r as f64).collect();
+        let elements: Vec<f64> = b.elements.iter().map(|&e| e as f64).collect();
+        file.write_table("partition/rows_per_rank", &rows, "1")?;
+        file.write_table("partition/elements_per_rank", &elements, "1")?;
     }
     if let Some(modes) = &modes {
         file.write_real_modes(modes, system.as_ref().map(|s| &s.dofs))?;
     }
-    if let (Some(mesh), 0) = (&mesh, petsc.rank()) {
+    if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
             .iter()
             .flat_map(|modes| {
@@ -232,6 +374,9 @@ pub fn run(
             .collect();
         let path = output.join("results.xdmf");
         xdmf::write(&path, "results.h5", mesh, &fields)
+            .map_err(|source| RunError::Io { path, source })?;
+        let path = output.join("model.png");
+        crate::io::preview::write_png(&path, mesh, 1200, 900)
             .map_err(|source| RunError::Io { path, source })?;
     }
     timings
@@ -259,6 +404,10 @@ pub fn run(
         factor_entries: modes_ref.and_then(|m| m.factorization.map(|f| f.factor_entries)),
         ordering: modes_ref.and_then(|m| m.factorization.map(|f| f.ordering_name())),
         timings,
+        notes: model.as_ref().map(|m| m.notes.clone()).unwrap_or_default(),
+        quality: quality_stats,
+        balance,
+        unsupported,
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
     })

@@ -9,6 +9,7 @@ use crate::eigen::real_modes::RealModeRequest;
 use crate::fem::material::Material;
 use crate::fem::shape::ElementKind;
 use crate::io::user_matrices::MatrixTerm;
+use crate::mesh::brake::BrakeSpec;
 
 /// The scene `squeal run` uses when given none.
 pub const DEFAULT_SCENE: &str = include_str!("../jobs/default.toml");
@@ -49,6 +50,9 @@ pub enum ModelSource {
     },
     /// An Abaqus input file (the subset of `mesh::abaqus_inp`); its *BOUNDARY clamps apply.
     Abaqus { file: PathBuf },
+    /// The parametric disc brake (`mesh::brake`): components, size, element, geometry,
+    /// materials, pressure.
+    Brake(BrakeSpec),
     /// Assembled matrices from another code, each a sum of Matrix Market files.
     Matrices {
         stiffness: Vec<MatrixTerm>,
@@ -175,6 +179,7 @@ impl Scene {
                     .validate()
                     .map_err(|e| format!("key 'model.material': {e}"))?;
             }
+            ModelSource::Brake(spec) => spec.validate()?,
             ModelSource::Abaqus { file } => {
                 if file.as_os_str().is_empty() {
                     return Err("key 'model.file': name the .inp file".into());
@@ -228,6 +233,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn a_brake_scene_takes_defaults_and_names_unknown_keys() {
+        let text = "[model]\nsource = \"brake\"\ncomponents = [\"disc\", \"inner_pad\"]\ntarget_dofs = 5000\n[model.geometry]\ndisc_thickness = 0.03\n";
+        let s = Scene::parse(text, "b.toml").unwrap();
+        let ModelSource::Brake(spec) = &s.model else {
+            panic!("not a brake")
+        };
+        assert_eq!(spec.components.len(), 2);
+        assert_eq!(spec.geometry.disc_thickness, 0.03);
+        assert_eq!(spec.geometry.pad_arc_deg, 52.0);
+        let e = Scene::parse(&text.replace("disc_thickness", "disc_thicknes"), "b.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("b.toml") && e.contains("disc_thicknes"), "{e}");
+        let e = Scene::parse(&text.replace("0.03", "-0.03"), "b.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("model.geometry.disc_thickness"), "{e}");
+        let e = Scene::parse(&text.replace("\"inner_pad\"", "\"rotor\""), "b.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("rotor") && e.contains("inner_pad"), "{e}");
+    }
+
+    #[test]
     fn default_scene_parses() {
         let s = Scene::parse(DEFAULT_SCENE, "default").unwrap();
         assert!(s.real_modes.is_some());
@@ -235,22 +264,25 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named() {
-        let text = DEFAULT_SCENE.replace("count = 30", "count = 30\nmodes = 4");
+        let text = DEFAULT_SCENE.replace("count = 50", "count = 50\nmodes = 4");
         let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
         assert!(e.contains("x.toml") && e.contains("modes"), "{e}");
     }
 
     #[test]
     fn negative_thickness_is_named() {
-        let text = DEFAULT_SCENE.replace("thickness = 0.028", "thickness = -0.028");
+        let text = DEFAULT_SCENE.replace("disc_thickness = 0.028", "disc_thickness = -0.028");
         let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
-        assert!(e.contains("model.thickness"), "{e}");
+        assert!(e.contains("model.geometry.disc_thickness"), "{e}");
     }
 
     #[test]
     fn nan_modulus_is_named() {
         let text = DEFAULT_SCENE.replace("e = 1.1e11", "e = nan");
         let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
-        assert!(e.contains("model.material") && e.contains("NaN"), "{e}");
+        assert!(
+            e.contains("model.materials.disc") && e.contains("NaN"),
+            "{e}"
+        );
     }
 }

@@ -34,9 +34,21 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+fn scene_file(name: &str) -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("jobs")
+            .join(name),
+    )
+    .unwrap()
+}
+
 fn default_scene() -> String {
-    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/default.toml"))
-        .unwrap()
+    scene_file("default.toml")
+}
+
+fn disc_ring_scene() -> String {
+    scene_file("disc-ring-modes.toml")
 }
 
 #[test]
@@ -53,7 +65,13 @@ fn default_scene_runs_end_to_end_on_two_ranks() {
     assert!(stdout.contains("timings"), "{stdout}");
     // Only rank 0 prints: the header appears once.
     assert_eq!(stdout.matches("squeal 0.").count(), 1, "{stdout}");
-    for f in ["results/results.h5", "results/results.xdmf"] {
+    assert!(stdout.contains("mesh quality"), "{stdout}");
+    assert!(stdout.contains("rigid-body mode"), "{stdout}");
+    for f in [
+        "results/results.h5",
+        "results/results.xdmf",
+        "results/model.png",
+    ] {
         let p = dir.join(f);
         assert!(
             p.metadata().map(|m| m.len() > 0).unwrap_or(false),
@@ -63,7 +81,9 @@ fn default_scene_runs_end_to_end_on_two_ranks() {
     }
     let xdmf = std::fs::read_to_string(dir.join("results/results.xdmf")).unwrap();
     assert!(
-        xdmf.contains("Hexahedron") && xdmf.contains("mode 001"),
+        xdmf.contains("Hexahedron")
+            && xdmf.contains("mode 001")
+            && xdmf.contains("disc_friction_outer"),
         "{xdmf}"
     );
 }
@@ -93,8 +113,8 @@ fn expect_failure(name: &str, scene: &str, needles: &[&str]) {
 fn negative_thickness_names_the_key() {
     expect_failure(
         "thickness",
-        &default_scene().replace("thickness = 0.028", "thickness = -0.028"),
-        &["scene.toml", "model.thickness"],
+        &default_scene().replace("disc_thickness = 0.028", "disc_thickness = -0.028"),
+        &["scene.toml", "model.geometry.disc_thickness"],
     );
 }
 
@@ -102,7 +122,7 @@ fn negative_thickness_names_the_key() {
 fn unknown_key_names_the_key() {
     expect_failure(
         "unknown",
-        &default_scene().replace("count = 30", "count = 30\nnumber = 3"),
+        &default_scene().replace("count = 50", "count = 50\nnumber = 3"),
         &["scene.toml", "number"],
     );
 }
@@ -117,7 +137,7 @@ fn missing_matrix_file_names_the_file() {
 fn missing_node_set_names_the_sets() {
     expect_failure(
         "nodeset",
-        &default_scene().replace("clamp = [\"inner\"]", "clamp = [\"hat\"]"),
+        &disc_ring_scene().replace("clamp = [\"inner\"]", "clamp = [\"hat\"]"),
         &["no node set 'hat'", "inner"],
     );
 }
@@ -139,7 +159,7 @@ fn frequencies(stdout: &str) -> Vec<f64> {
 #[test]
 fn written_inp_reimported_gives_the_same_modes() {
     let dir = scratch("inp");
-    let scene = default_scene()
+    let scene = disc_ring_scene()
         .replace(
             "directory = \"results\"",
             "directory = \"first\"\nwrite_inp = true",

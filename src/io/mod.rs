@@ -1,6 +1,7 @@
 //! Input and output: Matrix Market, user matrices, HDF5 results with XDMF.
 
 pub mod matrix_market;
+pub mod preview;
 pub mod results;
 pub mod user_matrices;
 pub mod xdmf;

@@ -157,6 +157,55 @@ impl ResultsFile {
                 &mesh.materials[block.material].name,
             )?;
         }
+        // Component id (block index) of every element, in global element order.
+        let ids: Vec<u64> = mesh
+            .blocks
+            .iter()
+            .enumerate()
+            .flat_map(|(b, block)| std::iter::repeat_n(b as u64, block.len()))
+            .collect();
+        let ds = self.dataset::<u64>("model/component_id", &[ids.len()], "1")?;
+        if self.rank == 0 && !ids.is_empty() {
+            ds.write(&Array1::from(ids)).map_err(self.err())?;
+        }
+        self.set_text(
+            "model",
+            "components",
+            &mesh
+                .blocks
+                .iter()
+                .map(|b| b.name.as_str())
+                .collect::<Vec<_>>()
+                .join(","),
+        )?;
+        for (name, faces) in &mesh.surfaces {
+            let group = format!("model/surfaces/{name}");
+            let ds = self.dataset::<u64>(&format!("{group}/faces"), &[faces.len(), 2], "1")?;
+            if self.rank == 0 && !faces.is_empty() {
+                let a = Array2::from_shape_vec(
+                    (faces.len(), 2),
+                    faces
+                        .iter()
+                        .flat_map(|&(e, f)| [e as u64, f as u64])
+                        .collect(),
+                )
+                .unwrap();
+                ds.write(&a).map_err(self.err())?;
+            }
+            // Corner connectivity for ParaView (quadrilaterals or triangles).
+            if let Some(corners) = surface_corners(mesh, faces) {
+                let width = corners.len() / faces.len().max(1);
+                let ds = self.dataset::<u64>(
+                    &format!("{group}/connectivity"),
+                    &[faces.len(), width],
+                    "1",
+                )?;
+                if self.rank == 0 && !faces.is_empty() {
+                    let a = Array2::from_shape_vec((faces.len(), width), corners).unwrap();
+                    ds.write(&a).map_err(self.err())?;
+                }
+            }
+        }
         Ok(())
     }
 
@@ -243,4 +292,23 @@ impl ResultsFile {
         }
         Ok(())
     }
+}
+
+/// Corner nodes of every face of a surface, when all faces have the same corner count.
+pub fn surface_corners(mesh: &Mesh, faces: &[(usize, u8)]) -> Option<Vec<u64>> {
+    let mut out = Vec::new();
+    let mut width = None;
+    for &(e, f) in faces {
+        let (b, _) = mesh.locate_element(e);
+        let corners = if mesh.blocks[b].kind.faces() == 6 {
+            4
+        } else {
+            3
+        };
+        if *width.get_or_insert(corners) != corners {
+            return None;
+        }
+        out.extend(mesh.face_nodes(e, f)[..corners].iter().map(|&n| n as u64));
+    }
+    Some(out)
 }

@@ -55,6 +55,31 @@ pub fn write(
         }
         x += "</Grid>\n";
     }
-    x += "</Grid>\n</Domain>\n</Xdmf>\n";
+    x += "</Grid>\n";
+    // Surfaces (contact interfaces, loaded faces) as their own grids.
+    let surfaces: Vec<(&String, usize, usize)> = mesh
+        .surfaces
+        .iter()
+        .filter_map(|(name, faces)| {
+            crate::io::results::surface_corners(mesh, faces)
+                .map(|c| (name, faces.len(), c.len() / faces.len().max(1)))
+        })
+        .collect();
+    if !surfaces.is_empty() {
+        x += "<Grid Name=\"surfaces\" GridType=\"Collection\" CollectionType=\"Spatial\">\n";
+        for (name, nf, width) in surfaces {
+            let topology = if width == 4 {
+                "Quadrilateral"
+            } else {
+                "Triangle"
+            };
+            let _ = writeln!(
+                x,
+                "<Grid Name=\"{name}\" GridType=\"Uniform\">\n<Topology TopologyType=\"{topology}\" NumberOfElements=\"{nf}\">\n<DataItem Dimensions=\"{nf} {width}\" NumberType=\"UInt\" Precision=\"8\" Format=\"HDF\">{h5_name}:/model/surfaces/{name}/connectivity</DataItem>\n</Topology>\n<Geometry GeometryType=\"XYZ\">\n<DataItem Dimensions=\"{n} 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">{h5_name}:/model/coordinates</DataItem>\n</Geometry>\n</Grid>"
+            );
+        }
+        x += "</Grid>\n";
+    }
+    x += "</Domain>\n</Xdmf>\n";
     std::fs::write(path, x)
 }

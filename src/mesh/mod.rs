@@ -3,10 +3,13 @@
 
 pub mod abaqus_inp;
 pub mod brake;
+pub mod partition;
 pub mod quality;
 pub mod structured;
 
 use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
 
 use crate::fem::material::Material;
 use crate::fem::shape::ElementKind;
@@ -165,4 +168,31 @@ impl Mesh {
             )
         })
     }
+}
+
+/// How two surfaces interact (the contact stage builds its laws from this).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum InterfaceKind {
+    /// Lining on disc: normal contact law and friction with the disc sliding.
+    Sliding,
+    /// Component joints held by friction without sliding.
+    Sticking,
+}
+
+/// A contact interface: contact points at the Gauss points of `master`, projected on `slave`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Interface {
+    pub name: String,
+    pub master: String,
+    pub slave: String,
+    pub kind: InterfaceKind,
+}
+
+/// The brake-line pressure acting on a surface: total force = pressure x `area` (the
+/// hydraulic area), spread uniformly over the surface, pushing into it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressureLoad {
+    pub surface: String,
+    pub area: f64,
 }

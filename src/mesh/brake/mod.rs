@@ -20,6 +20,7 @@ use crate::fem::material::{Elasticity, Material};
 use crate::fem::shape::ElementKind;
 use crate::fem::system::Clamp;
 use crate::mesh::Mesh;
+pub use crate::mesh::{Interface, InterfaceKind, PressureLoad};
 use grid::{Grid, GridMesh};
 
 /// Which cells of a grid belong to which block.
@@ -344,33 +345,6 @@ impl BrakeSpec {
         }
         Ok(())
     }
-}
-
-/// How two surfaces interact (the contact stage builds its laws from this).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum InterfaceKind {
-    /// Lining on disc: normal contact law and friction with the disc sliding.
-    Sliding,
-    /// Component joints held by friction without sliding.
-    Sticking,
-}
-
-/// A contact interface: contact points at the Gauss points of `master`, projected on `slave`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Interface {
-    pub name: String,
-    pub master: String,
-    pub slave: String,
-    pub kind: InterfaceKind,
-}
-
-/// The brake-line pressure acting on a surface: total force = pressure x `area` (the
-/// hydraulic area), spread uniformly over the surface, pushing into it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PressureLoad {
-    pub surface: String,
-    pub area: f64,
 }
 
 /// A generated brake: mesh, constraints, interfaces and loads.
