@@ -52,7 +52,7 @@ pub enum ModelSource {
     Abaqus { file: PathBuf },
     /// The parametric disc brake (`mesh::brake`): components, size, element, geometry,
     /// materials, pressure.
-    Brake(BrakeSpec),
+    Brake(Box<BrakeSpec>),
     /// Assembled matrices from another code, each a sum of Matrix Market files.
     Matrices {
         stiffness: Vec<MatrixTerm>,
