@@ -29,6 +29,8 @@ pub enum RunError {
     Results(#[from] ResultsError),
     #[error("mesh: {0}")]
     Inp(#[from] crate::mesh::abaqus_inp::InpError),
+    #[error("mesh: {0}")]
+    Msh(#[from] crate::mesh::gmsh_msh::MshError),
     #[error("{0}")]
     Quality(#[from] crate::mesh::quality::QualityError),
     #[error("model: {0}")]
@@ -130,6 +132,14 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
                 })
                 .collect();
             m
+        }
+        ModelSource::Gmsh {
+            file,
+            materials,
+            clamp,
+        } => {
+            let msh = crate::mesh::gmsh_msh::read(&scene_dir.join(file), materials)?;
+            Model::plain(msh.mesh, clamp.iter().map(|s| Clamp::all(s)).collect())
         }
         ModelSource::Block {
             element,

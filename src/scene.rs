@@ -50,6 +50,14 @@ pub enum ModelSource {
     },
     /// An Abaqus input file (the subset of `mesh::abaqus_inp`); its *BOUNDARY clamps apply.
     Abaqus { file: PathBuf },
+    /// A Gmsh 4.1 ASCII mesh: physical volumes are components (each needs a material here,
+    /// by name), physical surfaces are surfaces and node sets; `clamp` names node sets.
+    Gmsh {
+        file: PathBuf,
+        materials: std::collections::BTreeMap<String, Material>,
+        #[serde(default)]
+        clamp: Vec<String>,
+    },
     /// The parametric disc brake (`mesh::brake`): components, size, element, geometry,
     /// materials, pressure.
     Brake(Box<BrakeSpec>),
@@ -180,6 +188,17 @@ impl Scene {
                     .map_err(|e| format!("key 'model.material': {e}"))?;
             }
             ModelSource::Brake(spec) => spec.validate()?,
+            ModelSource::Gmsh {
+                file, materials, ..
+            } => {
+                if file.as_os_str().is_empty() {
+                    return Err("key 'model.file': name the .msh file".into());
+                }
+                for (name, m) in materials {
+                    m.validate()
+                        .map_err(|e| format!("key 'model.materials.{name}': {e}"))?;
+                }
+            }
             ModelSource::Abaqus { file } => {
                 if file.as_os_str().is_empty() {
                     return Err("key 'model.file': name the .inp file".into());

@@ -3,6 +3,7 @@
 
 pub mod abaqus_inp;
 pub mod brake;
+pub mod gmsh_msh;
 pub mod partition;
 pub mod quality;
 pub mod structured;

@@ -1,0 +1,456 @@
+//! Gmsh meshes (`.msh`, format 4.1 ASCII). Physical volumes become element blocks
+//! (components) named after the physical group; physical surfaces become element-face
+//! surfaces (each surface element is matched to the face of the volume element it bounds) and
+//! node sets of the same name; physical points and curves become node sets. Materials come
+//! from the scene, by block name.
+//!
+//! Node orders differ from Abaqus for the quadratic elements: Gmsh numbers the mid-edge nodes
+//! of a 20-node hexahedron and of a 10-node tetrahedron in its own edge order
+//! (`GMSH_HEX_EDGES`, `GMSH_TET_EDGES`); they are permuted on reading.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+use super::{ElementBlock, Mesh};
+use crate::fem::material::Material;
+use crate::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
+
+/// Gmsh's edge order of the 20-node hexahedron (mid-edge nodes 8..19).
+const GMSH_HEX_EDGES: [[usize; 2]; 12] = [
+    [0, 1],
+    [0, 3],
+    [0, 4],
+    [1, 2],
+    [1, 5],
+    [2, 3],
+    [2, 6],
+    [3, 7],
+    [4, 5],
+    [4, 7],
+    [5, 6],
+    [6, 7],
+];
+
+/// Gmsh's edge order of the 10-node tetrahedron (mid-edge nodes 4..9).
+const GMSH_TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [3, 0], [3, 2], [3, 1]];
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MshError {
+    #[error("{file}: {message}")]
+    Io { file: PathBuf, message: String },
+    #[error("{file}:{line}: {message}")]
+    Syntax {
+        file: PathBuf,
+        line: usize,
+        message: String,
+    },
+    #[error("{file}: {message}")]
+    Model { file: PathBuf, message: String },
+}
+
+/// Element types: (kind of volume element | number of corners of a face element, nodes).
+fn element_type(t: u32) -> Option<(Option<ElementKind>, usize, usize)> {
+    // (volume kind, face corners (0 when not a face), node count)
+    Some(match t {
+        5 => (Some(ElementKind::Hex8), 0, 8),
+        17 => (Some(ElementKind::Hex20), 0, 20),
+        4 => (Some(ElementKind::Tet4), 0, 4),
+        11 => (Some(ElementKind::Tet10), 0, 10),
+        2 => (None, 3, 3),
+        9 => (None, 3, 6),
+        3 => (None, 4, 4),
+        16 => (None, 4, 8),
+        10 => (None, 4, 9),
+        15 => (None, 0, 1),
+        1 => (None, 0, 2),
+        8 => (None, 0, 3),
+        _ => return None,
+    })
+}
+
+/// Permutation `abaqus[i] = gmsh[perm[i]]` of a quadratic element's nodes.
+fn permutation(kind: ElementKind) -> Vec<usize> {
+    let (ours, theirs, first): (&[[usize; 2]], &[[usize; 2]], usize) = match kind {
+        ElementKind::Hex20 => (&HEX_EDGES, &GMSH_HEX_EDGES, 8),
+        ElementKind::Tet10 => (&TET_EDGES, &GMSH_TET_EDGES, 4),
+        _ => return (0..kind.nodes()).collect(),
+    };
+    let mut perm: Vec<usize> = (0..first).collect();
+    for &[a, b] in ours {
+        let j = theirs
+            .iter()
+            .position(|&[p, q]| (p, q) == (a, b) || (p, q) == (b, a))
+            .expect("same edges");
+        perm.push(first + j);
+    }
+    perm
+}
+
+struct Reader<'a> {
+    file: &'a Path,
+    lines: Vec<&'a str>,
+    pos: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn syntax(&self, message: impl Into<String>) -> MshError {
+        MshError::Syntax {
+            file: self.file.to_path_buf(),
+            line: self.pos.min(self.lines.len()),
+            message: message.into(),
+        }
+    }
+
+    fn next(&mut self) -> Result<&'a str, MshError> {
+        let line = *self
+            .lines
+            .get(self.pos)
+            .ok_or_else(|| self.syntax("unexpected end of file"))?;
+        self.pos += 1;
+        Ok(line.trim())
+    }
+
+    fn numbers<T: std::str::FromStr>(&mut self) -> Result<Vec<T>, MshError> {
+        let line = self.next()?;
+        line.split_whitespace()
+            .map(|w| {
+                w.parse::<T>()
+                    .map_err(|_| self.syntax(format!("'{w}' is not a number")))
+            })
+            .collect()
+    }
+
+    fn expect(&mut self, tag: &str) -> Result<(), MshError> {
+        let line = self.next()?;
+        if line != tag {
+            return Err(self.syntax(format!("expected {tag}, found '{line}'")));
+        }
+        Ok(())
+    }
+}
+
+/// A mesh read from a Gmsh file.
+#[derive(Debug, Clone)]
+pub struct MshModel {
+    pub mesh: Mesh,
+    /// Section names skipped (line, name).
+    pub skipped: Vec<(usize, String)>,
+}
+
+/// Reads a Gmsh 4.1 ASCII file. `materials` gives the material of each physical volume by
+/// name; every volume group needs one.
+pub fn read(path: &Path, materials: &BTreeMap<String, Material>) -> Result<MshModel, MshError> {
+    let text = std::fs::read(path).map_err(|e| MshError::Io {
+        file: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let text = String::from_utf8(text).map_err(|_| MshError::Model {
+        file: path.to_path_buf(),
+        message: "not a text file: binary .msh is not supported; save it as ASCII 4.1 (gmsh option -format msh41 with Mesh.Binary = 0)".into(),
+    })?;
+    let model_err = |message: String| MshError::Model {
+        file: path.to_path_buf(),
+        message,
+    };
+    let mut r = Reader {
+        file: path,
+        lines: text.lines().collect(),
+        pos: 0,
+    };
+    let mut names: HashMap<(u32, i64), String> = HashMap::new();
+    // (dim, entity tag) -> physical tags
+    let mut entity_groups: HashMap<(u32, i64), Vec<i64>> = HashMap::new();
+    let mut node_index: HashMap<u64, usize> = HashMap::new();
+    let mut coords: Vec<[f64; 3]> = Vec::new();
+    let mut skipped = Vec::new();
+    let mut seen_format = false;
+    // Element blocks as read: (dim, entity, type, [(tag, nodes)]).
+    type RawElements = Vec<(u64, Vec<u64>)>;
+    let mut raw: Vec<(u32, i64, u32, RawElements, usize)> = Vec::new();
+    while r.pos < r.lines.len() {
+        let line = r.next()?;
+        if line.is_empty() {
+            continue;
+        }
+        match line {
+            "$MeshFormat" => {
+                let header = r.next()?;
+                let mut w = header.split_whitespace();
+                let version = w.next().unwrap_or("");
+                let file_type = w.next().unwrap_or("");
+                if !version.starts_with("4.1") {
+                    return Err(r.syntax(format!(
+                        "MSH version {version}: only 4.1 is read (re-save with gmsh -format msh41)"
+                    )));
+                }
+                if file_type != "0" {
+                    return Err(
+                        r.syntax("binary MSH is not supported: save as ASCII (Mesh.Binary = 0)")
+                    );
+                }
+                seen_format = true;
+                r.expect("$EndMeshFormat")?;
+            }
+            "$PhysicalNames" => {
+                let n: Vec<usize> = r.numbers()?;
+                for _ in 0..*n.first().ok_or_else(|| r.syntax("missing count"))? {
+                    let l = r.next()?;
+                    let mut w = l.splitn(3, char::is_whitespace);
+                    let dim: u32 = w
+                        .next()
+                        .and_then(|s| s.parse().ok())
+                        .ok_or_else(|| r.syntax("bad physical name line"))?;
+                    let tag: i64 = w
+                        .next()
+                        .and_then(|s| s.parse().ok())
+                        .ok_or_else(|| r.syntax("bad physical name line"))?;
+                    let name = w.next().unwrap_or("").trim().trim_matches('"').to_string();
+                    names.insert((dim, tag), name);
+                }
+                r.expect("$EndPhysicalNames")?;
+            }
+            "$Entities" => {
+                let counts: Vec<usize> = r.numbers()?;
+                if counts.len() != 4 {
+                    return Err(r.syntax("expected 4 entity counts"));
+                }
+                for (dim, &count) in counts.iter().enumerate() {
+                    for _ in 0..count {
+                        let v: Vec<f64> = r.numbers()?;
+                        // Points: tag x y z nphys tags...; others: tag 6 box values nphys tags...
+                        let at = if dim == 0 { 4 } else { 7 };
+                        let np = *v.get(at).ok_or_else(|| r.syntax("short entity line"))? as usize;
+                        let tags: Vec<i64> = v
+                            .get(at + 1..at + 1 + np)
+                            .ok_or_else(|| r.syntax("short entity line"))?
+                            .iter()
+                            .map(|&t| t as i64)
+                            .collect();
+                        entity_groups.insert((dim as u32, v[0] as i64), tags);
+                    }
+                }
+                r.expect("$EndEntities")?;
+            }
+            "$Nodes" => {
+                let head: Vec<usize> = r.numbers()?;
+                let blocks = *head.first().ok_or_else(|| r.syntax("missing count"))?;
+                for _ in 0..blocks {
+                    let b: Vec<i64> = r.numbers()?;
+                    if b.len() != 4 {
+                        return Err(r.syntax("node block header needs 4 numbers"));
+                    }
+                    // Parametric coordinates (b[2] = 1) follow x y z on the same line.
+                    let n = b[3] as usize;
+                    let mut tags = Vec::with_capacity(n);
+                    for _ in 0..n {
+                        let t: Vec<u64> = r.numbers()?;
+                        tags.push(*t.first().ok_or_else(|| r.syntax("missing node tag"))?);
+                    }
+                    for tag in tags {
+                        let x: Vec<f64> = r.numbers()?;
+                        if x.len() < 3 {
+                            return Err(r.syntax("node needs x y z"));
+                        }
+                        if x[..3].iter().any(|v| !v.is_finite()) {
+                            return Err(r.syntax(format!("node {tag}: coordinate is not finite")));
+                        }
+                        if node_index.insert(tag, coords.len()).is_some() {
+                            return Err(r.syntax(format!("node {tag} defined twice")));
+                        }
+                        coords.push([x[0], x[1], x[2]]);
+                    }
+                }
+                r.expect("$EndNodes")?;
+            }
+            "$Elements" => {
+                let head: Vec<usize> = r.numbers()?;
+                let blocks = *head.first().ok_or_else(|| r.syntax("missing count"))?;
+                for _ in 0..blocks {
+                    let b: Vec<i64> = r.numbers()?;
+                    if b.len() != 4 {
+                        return Err(r.syntax("element block header needs 4 numbers"));
+                    }
+                    let line = r.pos;
+                    let ty = b[2] as u32;
+                    let (_, _, nodes) = element_type(ty).ok_or_else(|| {
+                        r.syntax(format!(
+                            "element type {ty} is not supported (volumes: 4 tet4, 5 hex8, 11 tet10, 17 hex20; faces: 2, 3, 9, 10, 16)"
+                        ))
+                    })?;
+                    let mut elements = Vec::with_capacity(b[3] as usize);
+                    for _ in 0..b[3] {
+                        let v: Vec<u64> = r.numbers()?;
+                        if v.len() != nodes + 1 {
+                            return Err(r.syntax(format!(
+                                "element of type {ty} needs a tag and {nodes} nodes, found {} numbers",
+                                v.len()
+                            )));
+                        }
+                        elements.push((v[0], v[1..].to_vec()));
+                    }
+                    raw.push((b[0] as u32, b[1], ty, elements, line));
+                }
+                r.expect("$EndElements")?;
+            }
+            section if section.starts_with('$') && !section.starts_with("$End") => {
+                // Post-processing data, periodicity, ...: cannot change K or M.
+                skipped.push((r.pos, section[1..].to_string()));
+                let end = format!("$End{}", &section[1..]);
+                while r.next()? != end {}
+            }
+            other => return Err(r.syntax(format!("unexpected line '{other}'"))),
+        }
+    }
+    if !seen_format {
+        return Err(model_err("no $MeshFormat section: not a Gmsh file".into()));
+    }
+    let group_name = |dim: u32, tag: i64| {
+        names
+            .get(&(dim, tag))
+            .cloned()
+            .unwrap_or_else(|| format!("physical_{dim}_{tag}"))
+    };
+    let node = |tag: u64, line: usize| -> Result<usize, MshError> {
+        node_index
+            .get(&tag)
+            .copied()
+            .ok_or_else(|| MshError::Syntax {
+                file: path.to_path_buf(),
+                line,
+                message: format!("node {tag} is not defined"),
+            })
+    };
+
+    // Volume elements, one block per (physical group, element kind).
+    let mut mesh = Mesh {
+        coords,
+        ..Default::default()
+    };
+    let mut block_of: HashMap<(String, ElementKind), usize> = HashMap::new();
+    let mut pending: Vec<(usize, Vec<usize>, u64)> = Vec::new();
+    for (dim, entity, ty, elements, line) in &raw {
+        let (Some(kind), _, _) = element_type(*ty).unwrap() else {
+            continue;
+        };
+        if *dim != 3 {
+            continue;
+        }
+        let groups = entity_groups
+            .get(&(3, *entity))
+            .cloned()
+            .unwrap_or_default();
+        let name = match groups.first() {
+            Some(&g) => group_name(3, g),
+            None => format!("volume_{entity}"),
+        };
+        let next = block_of.len();
+        let b = *block_of.entry((name, kind)).or_insert(next);
+        let perm = permutation(kind);
+        for (tag, nodes) in elements {
+            let ours: Vec<usize> = perm
+                .iter()
+                .map(|&p| node(nodes[p], *line))
+                .collect::<Result<_, _>>()?;
+            pending.push((b, ours, *tag));
+        }
+    }
+    if block_of.is_empty() {
+        return Err(model_err(
+            "no volume elements (types 4, 5, 11, 17): mesh the volumes, and put them in physical groups".into(),
+        ));
+    }
+    let mut blocks = vec![(String::new(), ElementKind::Hex8); block_of.len()];
+    for ((name, kind), &b) in &block_of {
+        blocks[b] = (name.clone(), *kind);
+    }
+    for (name, kind) in &blocks {
+        let material = materials.get(name).ok_or_else(|| {
+            model_err(format!(
+                "physical volume '{name}' has no material: add [model.materials.{name}] to the scene (materials given: {})",
+                materials.keys().cloned().collect::<Vec<_>>().join(", ")
+            ))
+        })?;
+        let index = match mesh.materials.iter().position(|m| m.name == material.name) {
+            Some(i) => i,
+            None => {
+                mesh.materials.push(material.clone());
+                mesh.materials.len() - 1
+            }
+        };
+        mesh.blocks.push(ElementBlock {
+            name: name.clone(),
+            kind: *kind,
+            material: index,
+            connectivity: Vec::new(),
+        });
+    }
+    // Global element order = block order: count first.
+    let mut per_block: Vec<Vec<(Vec<usize>, u64)>> = vec![Vec::new(); blocks.len()];
+    for (b, nodes, tag) in pending {
+        per_block[b].push((nodes, tag));
+    }
+    for (b, elements) in per_block.into_iter().enumerate() {
+        for (nodes, _) in elements {
+            mesh.blocks[b].connectivity.extend(nodes);
+        }
+    }
+
+    // Faces of volume elements by their sorted corners.
+    let mut faces: HashMap<Vec<usize>, (usize, u8)> = HashMap::new();
+    let mut g = 0;
+    for block in &mesh.blocks {
+        let corners = if block.kind.faces() == 6 { 4 } else { 3 };
+        for e in 0..block.len() {
+            let nodes = block.element(e);
+            for f in 1..=block.kind.faces() {
+                let mut key: Vec<usize> = block.kind.face_local_nodes(f)[..corners]
+                    .iter()
+                    .map(|&i| nodes[i])
+                    .collect();
+                key.sort_unstable();
+                faces.insert(key, (g + e, f));
+            }
+        }
+        g += block.len();
+    }
+
+    // Lower-dimensional physical groups: node sets, and surfaces for dim 2.
+    for (dim, entity, ty, elements, line) in &raw {
+        if *dim == 3 {
+            continue;
+        }
+        let groups = entity_groups
+            .get(&(*dim, *entity))
+            .cloned()
+            .unwrap_or_default();
+        let (_, corners, _) = element_type(*ty).unwrap();
+        for group in groups {
+            let name = group_name(*dim, group);
+            let mut set: Vec<usize> = Vec::new();
+            for (tag, nodes) in elements {
+                let ids: Vec<usize> = nodes
+                    .iter()
+                    .map(|&n| node(n, *line))
+                    .collect::<Result<_, _>>()?;
+                set.extend(&ids);
+                if *dim == 2 && corners > 0 {
+                    let mut key = ids[..corners].to_vec();
+                    key.sort_unstable();
+                    let face = faces.get(&key).ok_or_else(|| MshError::Syntax {
+                        file: path.to_path_buf(),
+                        line: *line,
+                        message: format!(
+                            "surface element {tag} of physical surface '{name}' is not a face of any volume element"
+                        ),
+                    })?;
+                    mesh.surfaces.entry(name.clone()).or_default().push(*face);
+                }
+            }
+            let entry = mesh.node_sets.entry(name).or_default();
+            entry.extend(set);
+            entry.sort_unstable();
+            entry.dedup();
+        }
+    }
+    Ok(MshModel { mesh, skipped })
+}
