@@ -276,6 +276,20 @@ mod tests {
     }
 
     #[test]
+    fn every_scene_in_jobs_parses() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs");
+        let mut count = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                count += 1;
+            }
+        }
+        assert!(count >= 4, "{count} scenes");
+    }
+
+    #[test]
     fn default_scene_parses() {
         let s = Scene::parse(DEFAULT_SCENE, "default").unwrap();
         assert!(s.real_modes.is_some());
