@@ -8,8 +8,8 @@
 //!   mount bar  ===|===================|===   (inboard, below the pads' inner radius)
 //! ```
 
-use super::grid::{Axis, CellFace, Frame, Grid, GridMesh};
-use super::{cells, BrakeGeometry, Selector};
+use super::grid::{revolved_volume, Axis, CellFace, Frame, Grid, GridMesh};
+use super::{BrakeGeometry, Selector};
 use crate::fem::material::Material;
 use crate::fem::shape::ElementKind;
 
@@ -81,25 +81,9 @@ pub fn grid(g: &BrakeGeometry, h: f64) -> (Grid, Selector) {
     let r_mid = 0.5 * (r[0] + r[5]);
     let grid = Grid {
         axes: [
-            Axis::new(
-                &r,
-                &r.windows(2)
-                    .map(|w| cells(w[1] - w[0], h, 1))
-                    .collect::<Vec<_>>(),
-            ),
-            Axis::new(
-                &theta,
-                &theta
-                    .windows(2)
-                    .map(|w| cells(r_mid * (w[1] - w[0]), h, 1))
-                    .collect::<Vec<_>>(),
-            ),
-            Axis::new(
-                &z,
-                &z.windows(2)
-                    .map(|w| cells(w[1] - w[0], h, 1))
-                    .collect::<Vec<_>>(),
-            ),
+            Axis::sized(&r, h, 1.0),
+            Axis::sized(&theta, h, r_mid),
+            Axis::sized(&z, h, 1.0),
         ],
         frame: Frame::Cylindrical { center: [0.0, 0.0] },
     };
@@ -129,19 +113,5 @@ pub fn mesh(g: &BrakeGeometry, material: &Material, h: f64, kind: ElementKind) -
 
 pub fn volume(g: &BrakeGeometry) -> f64 {
     let (r, theta, z) = breaks(g);
-    let select = selector();
-    let mut v = 0.0;
-    for ri in 0..5 {
-        for ti in 0..3 {
-            for zi in 0..6 {
-                if select([ri, ti, zi]).is_some() {
-                    v += 0.5
-                        * (theta[ti + 1] - theta[ti])
-                        * (r[ri + 1].powi(2) - r[ri].powi(2))
-                        * (z[zi + 1] - z[zi]);
-                }
-            }
-        }
-    }
-    v
+    revolved_volume(&r, &theta, &z, &*selector())
 }

@@ -56,6 +56,16 @@ impl Axis {
         }
     }
 
+    /// An axis through `breaks` whose segments get `cells(length, h, 1)` cells each; `scale`
+    /// turns a parameter length into a physical one (a radius for angles, else 1).
+    pub fn sized(breaks: &[f64], h: f64, scale: f64) -> Self {
+        let cells: Vec<usize> = breaks
+            .windows(2)
+            .map(|w| super::cells(scale * (w[1] - w[0]), h, 1))
+            .collect();
+        Axis::new(breaks, &cells)
+    }
+
     pub fn graded(mut self, segment: usize, grading: Grading) -> Self {
         self.segments[segment].grading = grading;
         self
@@ -140,6 +150,30 @@ impl Frame {
             ],
         }
     }
+}
+
+/// Exact volume of the coarse cells (r, theta, z) a selector keeps, revolved about z:
+/// (theta1 - theta0) / 2 (r1^2 - r0^2) (z1 - z0) each.
+pub fn revolved_volume(
+    r: &[f64],
+    theta: &[f64],
+    z: &[f64],
+    select: &dyn Fn([usize; 3]) -> Option<usize>,
+) -> f64 {
+    let mut v = 0.0;
+    for ri in 0..r.len() - 1 {
+        for ti in 0..theta.len() - 1 {
+            for zi in 0..z.len() - 1 {
+                if select([ri, ti, zi]).is_some() {
+                    v += 0.5
+                        * (theta[ti + 1] - theta[ti])
+                        * (r[ri + 1].powi(2) - r[ri].powi(2))
+                        * (z[zi + 1] - z[zi]);
+                }
+            }
+        }
+    }
+    v
 }
 
 /// A face of a grid cell: the direction of its outward normal in parameter space.

@@ -46,19 +46,8 @@ pub fn grid(g: &BrakeGeometry, side: Side, h: f64) -> (Grid, Selector) {
     z_cells[z_backplate] = cells(g.backplate_thickness, h, 1);
     let grid = Grid {
         axes: [
-            Axis::new(
-                &r,
-                &r.windows(2)
-                    .map(|w| cells(w[1] - w[0], h, 1))
-                    .collect::<Vec<_>>(),
-            ),
-            Axis::new(
-                &theta,
-                &theta
-                    .windows(2)
-                    .map(|w| cells(mean * (w[1] - w[0]), h, 1))
-                    .collect::<Vec<_>>(),
-            ),
+            Axis::sized(&r, h, 1.0),
+            Axis::sized(&theta, h, mean),
             Axis::new(&z, &z_cells),
         ],
         frame: Frame::Cylindrical { center: [0.0, 0.0] },
