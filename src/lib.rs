@@ -6,6 +6,7 @@
 // Index loops over components and nodes mirror the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+pub mod contact;
 pub mod eigen;
 pub mod fem;
 pub mod io;

@@ -342,6 +342,19 @@ impl<'p> SparseMatrix<'p> {
         ))
     }
 
+    /// Overwrites the values with those of `source`, whose nonzero pattern must be a subset of
+    /// this matrix's (entries outside it become zero).
+    ///
+    /// # Collective
+    pub fn copy_values_from(&mut self, source: &SparseMatrix) -> Result<()> {
+        call!(MatCopy(source.raw, self.raw, ffi::SUBSET_NONZERO_PATTERN))
+    }
+
+    /// # Collective
+    pub fn zero_entries(&mut self) -> Result<()> {
+        call!(MatZeroEntries(self.raw))
+    }
+
     /// Same layout, pattern and values.
     ///
     /// # Collective

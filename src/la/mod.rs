@@ -7,6 +7,7 @@
 pub mod eigen;
 pub(crate) mod error;
 pub mod matrix;
+pub mod observation;
 pub mod quadratic;
 pub mod solver;
 pub mod vector;
@@ -23,6 +24,7 @@ pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
 use error::call;
 pub use error::{LaError, PetscError, Result};
 pub use matrix::{MatrixFormat, MatrixInfo, Preallocation, SparseMatrix};
+pub use observation::ObservationMatrix;
 pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
 pub use solver::{DirectSolver, Factorization, FactorizationReport};
 pub use vector::Vector;

@@ -144,6 +144,31 @@ impl<'p> Vector<'p> {
         })
     }
 
+    /// Adds values at global indices (any rank's); call [`Vector::assemble`] before use.
+    pub fn add_values(&self, indices: &[i32], values: &[f64]) -> Result<()> {
+        debug_assert_eq!(indices.len(), values.len());
+        call!(VecSetValues(
+            self.raw,
+            indices.len() as ffi::PetscInt,
+            indices.as_ptr(),
+            values.as_ptr(),
+            ffi::ADD_VALUES
+        ))
+    }
+
+    /// Sends values added for other ranks' entries to their owners.
+    ///
+    /// # Collective
+    pub fn assemble(&self) -> Result<()> {
+        call!(VecAssemblyBegin(self.raw))?;
+        call!(VecAssemblyEnd(self.raw))
+    }
+
+    /// `self = x .* y`
+    pub fn pointwise_mult(&self, x: &Vector, y: &Vector) -> Result<()> {
+        call!(VecPointwiseMult(self.raw, x.raw, y.raw))
+    }
+
     /// All entries on every rank (for small vectors and tests).
     ///
     /// # Collective

@@ -1,0 +1,378 @@
+//! Contact and friction laws (DESIGN.md §2). Pressure is positive in compression, the gap
+//! positive when open; tractions are per unit area, positive along the point's tangent on the
+//! master (pad) side.
+
+use serde::{Deserialize, Serialize};
+
+/// Normal law p(g) with its contact stiffness k_c = -dp/dg.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "lowercase", deny_unknown_fields)]
+pub enum NormalLaw {
+    /// p = p0 exp(-lambda g); below the gap `linear_below_gap` (a penetration, so negative;
+    /// default where p = 1000 p0) it continues linearly with its slope there, so deep
+    /// penetration never overflows.
+    Exponential {
+        p0: f64,
+        lambda: f64,
+        #[serde(default)]
+        linear_below_gap: Option<f64>,
+    },
+    /// p = k max(0, -g).
+    Linear { stiffness: f64 },
+}
+
+/// Pressure, contact stiffness -dp/dg and its derivative d(k_c)/dg at one gap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NormalState {
+    pub pressure: f64,
+    pub stiffness: f64,
+    pub stiffness_slope: f64,
+}
+
+impl NormalLaw {
+    /// The penetration where the exponential law turns linear.
+    pub fn guard_gap(&self) -> Option<f64> {
+        match *self {
+            NormalLaw::Exponential {
+                lambda,
+                linear_below_gap,
+                ..
+            } => Some(linear_below_gap.unwrap_or(-(1000.0f64).ln() / lambda)),
+            NormalLaw::Linear { .. } => None,
+        }
+    }
+
+    pub fn eval(&self, g: f64) -> NormalState {
+        match *self {
+            NormalLaw::Exponential { p0, lambda, .. } => {
+                let g_lin = self.guard_gap().unwrap();
+                if g >= g_lin {
+                    let p = p0 * (-lambda * g).exp();
+                    NormalState {
+                        pressure: p,
+                        stiffness: lambda * p,
+                        stiffness_slope: -lambda * lambda * p,
+                    }
+                } else {
+                    let p_lin = p0 * (-lambda * g_lin).exp();
+                    let k_lin = lambda * p_lin;
+                    NormalState {
+                        pressure: p_lin + k_lin * (g_lin - g),
+                        stiffness: k_lin,
+                        stiffness_slope: 0.0,
+                    }
+                }
+            }
+            NormalLaw::Linear { stiffness } => {
+                if g < 0.0 {
+                    NormalState {
+                        pressure: -stiffness * g,
+                        stiffness,
+                        stiffness_slope: 0.0,
+                    }
+                } else {
+                    NormalState {
+                        pressure: 0.0,
+                        stiffness: 0.0,
+                        stiffness_slope: 0.0,
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether a point at gap g counts as open: no contact for the linear law, less than 1 %
+    /// of p0 for the exponential one (its pressure never vanishes).
+    pub fn is_open(&self, g: f64) -> bool {
+        match *self {
+            NormalLaw::Exponential { lambda, .. } => g > (100.0f64).ln() / lambda,
+            NormalLaw::Linear { .. } => g >= 0.0,
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let positive = |k: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("'{k}' = {v}: must be positive and finite"))
+            }
+        };
+        match *self {
+            NormalLaw::Exponential {
+                p0,
+                lambda,
+                linear_below_gap,
+            } => {
+                positive("p0", p0)?;
+                positive("lambda", lambda)?;
+                if let Some(g) = linear_below_gap {
+                    if !(g.is_finite() && g < 0.0) {
+                        return Err(format!(
+                            "'linear_below_gap' = {g}: must be a negative gap (a penetration)"
+                        ));
+                    }
+                }
+                Ok(())
+            }
+            NormalLaw::Linear { stiffness } => positive("stiffness", stiffness),
+        }
+    }
+}
+
+/// Tangential law: friction along the sliding direction, or elastic stick.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "law", rename_all = "lowercase", deny_unknown_fields)]
+pub enum FrictionLaw {
+    /// Regularized Coulomb: t = mu p clamp(w / slip_speed, -1, 1) (DESIGN's min(k_t |w|, mu p)
+    /// with k_t = mu p / slip_speed).
+    Coulomb { mu: f64, slip_speed: f64 },
+    /// t = mu p (2/pi) atan(w / slip_speed).
+    Arctan { mu: f64, slip_speed: f64 },
+    /// Velocity-dependent friction (Stribeck-like decay, a negative slope):
+    /// mu(w) = mu_kinetic + (mu_static - mu_kinetic) exp(-|w| / decay_speed), regularized by
+    /// (2/pi) atan(w / slip_speed).
+    Stribeck {
+        mu_static: f64,
+        mu_kinetic: f64,
+        decay_speed: f64,
+        slip_speed: f64,
+    },
+    /// Elastic stick in the tangent plane: t = mu k_c(g) delta (the joints between
+    /// components, which do not slide).
+    Stick { mu: f64 },
+    /// Frictionless.
+    None,
+}
+
+/// Traction and its derivatives with respect to pressure and sliding speed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Traction {
+    pub traction: f64,
+    pub d_pressure: f64,
+    pub d_speed: f64,
+}
+
+impl FrictionLaw {
+    /// Whether the law makes points slide (the disc interfaces) rather than stick elastically.
+    pub fn is_sliding(&self) -> bool {
+        !matches!(self, FrictionLaw::Stick { .. } | FrictionLaw::None)
+    }
+
+    /// The friction coefficient at high sliding speed (for torque checks and reports).
+    pub fn mu(&self) -> f64 {
+        match *self {
+            FrictionLaw::Coulomb { mu, .. }
+            | FrictionLaw::Arctan { mu, .. }
+            | FrictionLaw::Stick { mu } => mu,
+            FrictionLaw::Stribeck { mu_kinetic, .. } => mu_kinetic,
+            FrictionLaw::None => 0.0,
+        }
+    }
+
+    /// The speed below which a point counts as sticking.
+    pub fn slip_speed(&self) -> f64 {
+        match *self {
+            FrictionLaw::Coulomb { slip_speed, .. }
+            | FrictionLaw::Arctan { slip_speed, .. }
+            | FrictionLaw::Stribeck { slip_speed, .. } => slip_speed,
+            _ => 0.0,
+        }
+    }
+
+    /// Friction traction at pressure p and sliding speed w (sliding laws only; `Stick` and
+    /// `None` give zero here, see [`FrictionLaw::stick_stiffness`]).
+    pub fn traction(&self, p: f64, w: f64) -> Traction {
+        let two_over_pi = 2.0 / std::f64::consts::PI;
+        match *self {
+            FrictionLaw::Coulomb { mu, slip_speed } => {
+                let s = w / slip_speed;
+                if s.abs() < 1.0 {
+                    Traction {
+                        traction: mu * p * s,
+                        d_pressure: mu * s,
+                        d_speed: mu * p / slip_speed,
+                    }
+                } else {
+                    Traction {
+                        traction: mu * p * s.signum(),
+                        d_pressure: mu * s.signum(),
+                        d_speed: 0.0,
+                    }
+                }
+            }
+            FrictionLaw::Arctan { mu, slip_speed } => {
+                let s = w / slip_speed;
+                let a = two_over_pi * s.atan();
+                Traction {
+                    traction: mu * p * a,
+                    d_pressure: mu * a,
+                    d_speed: mu * p * two_over_pi / (slip_speed * (1.0 + s * s)),
+                }
+            }
+            FrictionLaw::Stribeck {
+                mu_static,
+                mu_kinetic,
+                decay_speed,
+                slip_speed,
+            } => {
+                let s = w / slip_speed;
+                let a = two_over_pi * s.atan();
+                let da = two_over_pi / (slip_speed * (1.0 + s * s));
+                let e = (-w.abs() / decay_speed).exp();
+                let mu = mu_kinetic + (mu_static - mu_kinetic) * e;
+                let dmu = -(mu_static - mu_kinetic) * e / decay_speed * w.signum();
+                Traction {
+                    traction: mu * p * a,
+                    d_pressure: mu * a,
+                    d_speed: p * (dmu * a + mu * da),
+                }
+            }
+            FrictionLaw::Stick { .. } | FrictionLaw::None => Traction {
+                traction: 0.0,
+                d_pressure: 0.0,
+                d_speed: 0.0,
+            },
+        }
+    }
+
+    /// Tangential stiffness factor of elastic stick: traction = factor x k_c x delta.
+    pub fn stick_stiffness(&self) -> f64 {
+        match *self {
+            FrictionLaw::Stick { mu } => mu,
+            _ => 0.0,
+        }
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let nonneg = |k: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("'{k}' = {v}: must be finite and not negative"))
+            }
+        };
+        let positive = |k: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("'{k}' = {v}: must be positive and finite"))
+            }
+        };
+        match *self {
+            FrictionLaw::Coulomb { mu, slip_speed } | FrictionLaw::Arctan { mu, slip_speed } => {
+                nonneg("mu", mu)?;
+                positive("slip_speed", slip_speed)
+            }
+            FrictionLaw::Stribeck {
+                mu_static,
+                mu_kinetic,
+                decay_speed,
+                slip_speed,
+            } => {
+                nonneg("mu_static", mu_static)?;
+                nonneg("mu_kinetic", mu_kinetic)?;
+                positive("decay_speed", decay_speed)?;
+                positive("slip_speed", slip_speed)
+            }
+            FrictionLaw::Stick { mu } => nonneg("mu", mu),
+            FrictionLaw::None => Ok(()),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs().max(1e-300)
+    }
+
+    /// Every derivative against a central difference (relative error below 1e-6), also at the
+    /// exponential law's guard and beyond it, and for speeds crossing zero.
+    #[test]
+    fn law_tangents_match_central_differences() {
+        let exp = NormalLaw::Exponential {
+            p0: 1e6,
+            lambda: 2e5,
+            linear_below_gap: None,
+        };
+        let g_lin = exp.guard_gap().unwrap();
+        for g in [
+            3e-5,
+            1e-6,
+            0.0,
+            -1e-5,
+            0.5 * g_lin,
+            1.001 * g_lin,
+            0.999 * g_lin,
+            -1.0,
+        ] {
+            let s = exp.eval(g);
+            let h = 1e-9;
+            let (sp, sm) = (exp.eval(g + h), exp.eval(g - h));
+            let fd = -(sp.pressure - sm.pressure) / (2.0 * h);
+            assert!(
+                rel(fd, s.stiffness) < 1e-6,
+                "g = {g}: {fd} vs {}",
+                s.stiffness
+            );
+            let fd = (sp.stiffness - sm.stiffness) / (2.0 * h);
+            if s.stiffness_slope != 0.0 {
+                assert!(rel(fd, s.stiffness_slope) < 1e-6, "g = {g}");
+            } else {
+                assert!(fd.abs() < 1e-6 * s.stiffness / h, "g = {g}");
+            }
+            assert!(s.pressure.is_finite() && s.stiffness.is_finite());
+        }
+        // Deep penetration: finite, linear, continuous at the guard.
+        let deep = exp.eval(-1.0);
+        assert!(deep.pressure.is_finite() && deep.pressure > 0.0);
+        let (a, b) = (
+            exp.eval(g_lin * (1.0 + 1e-12)),
+            exp.eval(g_lin * (1.0 - 1e-12)),
+        );
+        assert!(rel(a.pressure, b.pressure) < 1e-9 && rel(a.stiffness, b.stiffness) < 1e-9);
+
+        let p = 8e5;
+        for law in [
+            FrictionLaw::Coulomb {
+                mu: 0.4,
+                slip_speed: 1e-3,
+            },
+            FrictionLaw::Arctan {
+                mu: 0.4,
+                slip_speed: 1e-3,
+            },
+            FrictionLaw::Stribeck {
+                mu_static: 0.5,
+                mu_kinetic: 0.35,
+                decay_speed: 0.5,
+                slip_speed: 1e-3,
+            },
+        ] {
+            for w in [-2.0, -3e-4, -1e-7, 0.0, 1e-7, 4e-4, 1.3] {
+                let t = law.traction(p, w);
+                let h = 1e-5 * w.abs().max(1e-3);
+                let fd_w =
+                    (law.traction(p, w + h).traction - law.traction(p, w - h).traction) / (2.0 * h);
+                let scale = t.d_speed.abs().max(1e-3 * law.mu() * p);
+                assert!(
+                    (fd_w - t.d_speed).abs() < 1e-6 * scale,
+                    "{law:?} w = {w}: {fd_w} vs {}",
+                    t.d_speed
+                );
+                let hp = 1.0;
+                let fd_p = (law.traction(p + hp, w).traction - law.traction(p - hp, w).traction)
+                    / (2.0 * hp);
+                assert!(
+                    (fd_p - t.d_pressure).abs() < 1e-6 * t.d_pressure.abs().max(1e-6),
+                    "{law:?} w = {w}"
+                );
+                // Friction opposes the relative motion and never exceeds mu_static p.
+                assert!(t.traction * w >= 0.0 && t.traction.abs() <= 0.5 * p * (1.0 + 1e-12));
+            }
+        }
+    }
+}

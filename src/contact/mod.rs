@@ -1,0 +1,662 @@
+//! Contact and friction (DESIGN.md §2): pairing once, observation matrices C_NOR, C_TAN,
+//! C_CONV as distributed sparse matrices, laws, and the contact force and tangent matrices
+//! at a state. The disc mesh does not rotate (Eulerian frame): the rigid sliding speed
+//! Omega r and the convection term Omega C_CONV q enter the sliding speed instead.
+
+pub mod kernel;
+pub mod law;
+pub mod pairing;
+pub mod surface;
+
+use std::collections::{BTreeMap, HashMap};
+
+use serde::{Deserialize, Serialize};
+
+use crate::fem::dofmap::DofMap;
+use crate::la::{
+    LaError, MatrixFormat, ObservationMatrix, Petsc, Preallocation, SparseMatrix, Vector,
+};
+use crate::mesh::{Interface, InterfaceKind, Mesh};
+use kernel::{Observed, Part, PointResponse, PointRows, Status};
+use law::{FrictionLaw, NormalLaw};
+use pairing::{Axis, ContactPoint};
+
+/// The `[contact]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSettings {
+    /// Disc speed Omega (rad/s) about `axis`; positive turns e_theta = axis x e_r.
+    #[serde(default = "default_disc_speed")]
+    pub disc_speed: f64,
+    #[serde(default = "default_axis")]
+    pub axis: [f64; 3],
+    #[serde(default)]
+    pub center: [f64; 3],
+    /// Gauss points per direction on the master faces (quadrilaterals n x n; triangles 1,
+    /// 3 or 6 points).
+    #[serde(default = "default_gauss")]
+    pub gauss_points: usize,
+    /// Largest distance (m) between a master point and its projection; farther points miss.
+    #[serde(default = "default_search")]
+    pub search_distance: f64,
+    /// Laws of the sliding interfaces (pad linings on the disc).
+    #[serde(default = "default_sliding")]
+    pub sliding: InterfaceLaws,
+    /// Laws of the sticking interfaces (component joints).
+    #[serde(default = "default_sticking")]
+    pub sticking: InterfaceLaws,
+    /// Per-interface overrides, by interface name.
+    #[serde(default)]
+    pub interfaces: BTreeMap<String, InterfaceLaws>,
+}
+
+fn default_disc_speed() -> f64 {
+    2.0 * std::f64::consts::PI
+}
+fn default_axis() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn default_gauss() -> usize {
+    2
+}
+fn default_search() -> f64 {
+    1e-3
+}
+fn default_sliding() -> InterfaceLaws {
+    InterfaceLaws {
+        normal: NormalLaw::Exponential {
+            p0: 1e6,
+            lambda: 2e5,
+            linear_below_gap: None,
+        },
+        friction: FrictionLaw::Coulomb {
+            mu: 0.4,
+            slip_speed: 1e-3,
+        },
+    }
+}
+fn default_sticking() -> InterfaceLaws {
+    InterfaceLaws {
+        normal: NormalLaw::Exponential {
+            p0: 1e6,
+            lambda: 2e5,
+            linear_below_gap: None,
+        },
+        friction: FrictionLaw::Stick { mu: 0.2 },
+    }
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            disc_speed: default_disc_speed(),
+            axis: default_axis(),
+            center: [0.0; 3],
+            gauss_points: default_gauss(),
+            search_distance: default_search(),
+            sliding: default_sliding(),
+            sticking: default_sticking(),
+            interfaces: BTreeMap::new(),
+        }
+    }
+}
+
+/// Normal and tangential law of an interface.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InterfaceLaws {
+    pub normal: NormalLaw,
+    pub friction: FrictionLaw,
+}
+
+impl ContactSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if !self.disc_speed.is_finite() {
+            return Err(format!(
+                "key 'contact.disc_speed' = {}: must be finite (rad/s)",
+                self.disc_speed
+            ));
+        }
+        if surface::norm(self.axis) < 1e-12 || self.axis.iter().any(|a| !a.is_finite()) {
+            return Err(format!(
+                "key 'contact.axis' = {:?}: must be a non-zero vector",
+                self.axis
+            ));
+        }
+        if !(1..=4).contains(&self.gauss_points) {
+            return Err(format!(
+                "key 'contact.gauss_points' = {}: must be 1 to 4",
+                self.gauss_points
+            ));
+        }
+        if !(self.search_distance.is_finite() && self.search_distance > 0.0) {
+            return Err(format!(
+                "key 'contact.search_distance' = {}: must be a positive length (m)",
+                self.search_distance
+            ));
+        }
+        let mut all: Vec<(String, &InterfaceLaws)> = vec![
+            ("contact.sliding".into(), &self.sliding),
+            ("contact.sticking".into(), &self.sticking),
+        ];
+        all.extend(
+            self.interfaces
+                .iter()
+                .map(|(k, v)| (format!("contact.interfaces.{k}"), v)),
+        );
+        for (key, laws) in all {
+            laws.normal
+                .validate()
+                .map_err(|e| format!("key '{key}.normal': {e}"))?;
+            laws.friction
+                .validate()
+                .map_err(|e| format!("key '{key}.friction': {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// Each interface of the model with its laws; an override naming no interface is an error.
+    pub fn resolve(&self, interfaces: &[Interface]) -> Result<Vec<ResolvedInterface>, String> {
+        for name in self.interfaces.keys() {
+            if !interfaces.iter().any(|i| &i.name == name) {
+                return Err(format!(
+                    "key 'contact.interfaces.{name}': the model has no interface '{name}' (it has: {})",
+                    interfaces.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
+        Ok(interfaces
+            .iter()
+            .map(|i| {
+                let laws = self
+                    .interfaces
+                    .get(&i.name)
+                    .copied()
+                    .unwrap_or(match i.kind {
+                        InterfaceKind::Sliding => self.sliding,
+                        InterfaceKind::Sticking => self.sticking,
+                    });
+                ResolvedInterface {
+                    name: i.name.clone(),
+                    master: i.master.clone(),
+                    slave: i.slave.clone(),
+                    normal: laws.normal,
+                    friction: laws.friction,
+                }
+            })
+            .collect())
+    }
+
+    pub fn axis(&self) -> Axis {
+        Axis {
+            direction: surface::normalize(self.axis),
+            center: self.center,
+        }
+    }
+}
+
+/// An interface with its laws.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResolvedInterface {
+    pub name: String,
+    pub master: String,
+    pub slave: String,
+    pub normal: NormalLaw,
+    pub friction: FrictionLaw,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ContactError {
+    #[error("contact: {0}")]
+    Setup(String),
+    #[error(transparent)]
+    La(#[from] LaError),
+}
+
+/// Contact points distributed over the ranks with their observation matrices.
+pub struct ContactModel<'p> {
+    pub interfaces: Vec<ResolvedInterface>,
+    /// Every point on every rank (pairing is cheap and replicated), by point id.
+    pub points: Vec<ContactPoint>,
+    /// Master points that missed the slave surface, and candidates, per interface.
+    pub misses: Vec<usize>,
+    pub candidates: Vec<usize>,
+    /// Point ids in global row order.
+    pub row_ids: Vec<usize>,
+    /// Global rows of this rank: [first_row, first_row + local.len()).
+    pub first_row: usize,
+    /// This rank's points (ids) and their dense rows.
+    pub local: Vec<usize>,
+    pub rows: Vec<PointRows>,
+    pub c_nor: ObservationMatrix<'p>,
+    pub c_tan: ObservationMatrix<'p>,
+    pub c_tan2: ObservationMatrix<'p>,
+    pub c_conv: ObservationMatrix<'p>,
+    pub disc_speed: f64,
+    pub pairing_seconds: f64,
+}
+
+/// The contact response of this rank's points at one state.
+#[derive(Debug, Clone)]
+pub struct ContactState {
+    pub observed: Vec<Observed>,
+    pub response: Vec<PointResponse>,
+    pub friction_scale: f64,
+}
+
+/// Summed results per interface.
+#[derive(Debug, Clone, Default)]
+pub struct InterfaceSummary {
+    pub normal_force: f64,
+    pub friction_force: f64,
+    /// Braking torque about the axis (N m): sum of r w t over the points.
+    pub torque: f64,
+    /// Sum of mu_k w p r over the sliding points (the Coulomb estimate of the torque).
+    pub coulomb_torque: f64,
+    pub max_pressure: f64,
+    pub min_gap: f64,
+    pub open: usize,
+    pub stick: usize,
+    pub slip: usize,
+}
+
+impl<'p> ContactModel<'p> {
+    /// Pairs the interfaces and builds the observation matrices.
+    ///
+    /// # Collective
+    pub fn new(
+        petsc: &'p Petsc,
+        mesh: &Mesh,
+        dofs: &DofMap,
+        interfaces: Vec<ResolvedInterface>,
+        settings: &ContactSettings,
+    ) -> Result<Self, ContactError> {
+        let start = std::time::Instant::now();
+        let axis = settings.axis();
+        let pairing = pairing::pair(
+            mesh,
+            &interfaces,
+            axis,
+            settings.gauss_points,
+            settings.search_distance,
+        )
+        .map_err(ContactError::Setup)?;
+        for (i, itf) in interfaces.iter().enumerate() {
+            let found = pairing.candidates[i] - pairing.misses[i];
+            if found == 0 {
+                return Err(ContactError::Setup(format!(
+                    "interface '{}': none of the {} points of surface '{}' lies within contact.search_distance = {} m of surface '{}'; check the surfaces or raise the distance",
+                    itf.name, pairing.candidates[i], itf.master, settings.search_distance, itf.slave
+                )));
+            }
+        }
+        let points = pairing.points;
+        let owner: Vec<usize> = points
+            .iter()
+            .map(|p| dofs.owner_of_node(*p.master_nodes.iter().min().unwrap()))
+            .collect();
+        let mut row_ids: Vec<usize> = (0..points.len()).collect();
+        row_ids.sort_by_key(|&i| (owner[i], i));
+        let rank = dofs.rank;
+        let first_row = owner.iter().filter(|&&o| o < rank).count();
+        let local: Vec<usize> = row_ids
+            .iter()
+            .copied()
+            .filter(|&i| owner[i] == rank)
+            .collect();
+        let rows: Vec<PointRows> = local
+            .iter()
+            .map(|&i| point_rows(&points[i], dofs, &interfaces))
+            .collect();
+        let sparse = |f: fn(&PointRows) -> &Vec<f64>| -> Vec<Vec<(i32, f64)>> {
+            rows.iter()
+                .map(|r| {
+                    r.dofs
+                        .iter()
+                        .zip(f(r))
+                        .filter(|(d, v)| **d >= 0 && **v != 0.0)
+                        .map(|(d, v)| (*d, *v))
+                        .collect()
+                })
+                .collect()
+        };
+        let columns = dofs.owned_dofs();
+        let c_nor =
+            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.nor), columns.clone())?;
+        let c_tan =
+            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan), columns.clone())?;
+        let c_tan2 =
+            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan2), columns.clone())?;
+        let c_conv = ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.conv), columns)?;
+        Ok(ContactModel {
+            interfaces,
+            misses: pairing.misses,
+            candidates: pairing.candidates,
+            points,
+            row_ids,
+            first_row,
+            local,
+            rows,
+            c_nor,
+            c_tan,
+            c_tan2,
+            c_conv,
+            disc_speed: settings.disc_speed,
+            pairing_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Omega r at a point (zero on interfaces that do not slide).
+    fn rigid_speed(&self, id: usize) -> f64 {
+        let p = &self.points[id];
+        if self.interfaces[p.interface].friction.is_sliding() {
+            self.disc_speed * p.radius
+        } else {
+            0.0
+        }
+    }
+
+    /// Observes displacement q (and velocity v, zero if None) and applies the laws.
+    ///
+    /// # Collective
+    pub fn evaluate(
+        &self,
+        q: &Vector,
+        v: Option<&Vector>,
+        friction_scale: f64,
+    ) -> Result<ContactState, LaError> {
+        let g = self.c_nor.new_point_vector()?;
+        let s1 = g.duplicate()?;
+        let s2 = g.duplicate()?;
+        let conv = g.duplicate()?;
+        let w = g.duplicate()?;
+        self.c_nor.mult(q, &g)?;
+        self.c_tan.mult(q, &s1)?;
+        self.c_tan2.mult(q, &s2)?;
+        self.c_conv.mult(q, &conv)?;
+        if let Some(v) = v {
+            self.c_tan.mult(v, &w)?;
+        }
+        let (g, s1, s2, conv, w) = (
+            g.local()?,
+            s1.local()?,
+            s2.local()?,
+            conv.local()?,
+            w.local()?,
+        );
+        let mut observed = Vec::with_capacity(self.local.len());
+        let mut response = Vec::with_capacity(self.local.len());
+        for (k, &id) in self.local.iter().enumerate() {
+            let p = &self.points[id];
+            let itf = &self.interfaces[p.interface];
+            let sliding = itf.friction.is_sliding();
+            let o = Observed {
+                gap: g[k] + p.initial_gap,
+                slip: [s1[k], s2[k]],
+                speed: w[k]
+                    + self.rigid_speed(id)
+                    + if sliding {
+                        self.disc_speed * conv[k]
+                    } else {
+                        0.0
+                    },
+            };
+            response.push(kernel::respond(
+                &itf.normal,
+                &itf.friction,
+                friction_scale,
+                o,
+            ));
+            observed.push(o);
+        }
+        Ok(ContactState {
+            observed,
+            response,
+            friction_scale,
+        })
+    }
+
+    /// The contact force f_N + f_T = C_NOR^T (w p) - C_TAN^T (w t1) - C_TAN2^T (w t2).
+    ///
+    /// # Collective
+    pub fn force(&self, state: &ContactState, out: &Vector) -> Result<(), LaError> {
+        let (wp, wt1, wt2) = (
+            self.c_nor.new_point_vector()?,
+            self.c_nor.new_point_vector()?,
+            self.c_nor.new_point_vector()?,
+        );
+        {
+            let (mut a, mut b, mut c) = (wp.local_mut()?, wt1.local_mut()?, wt2.local_mut()?);
+            for (k, &id) in self.local.iter().enumerate() {
+                let w = self.points[id].weight;
+                let r = &state.response[k];
+                a[k] = w * r.pressure;
+                b[k] = -w * r.traction[0];
+                c[k] = -w * r.traction[1];
+            }
+        }
+        self.c_nor.mult_transpose(&wp, out)?;
+        self.c_tan.mult_transpose_add(&wt1, out, out)?;
+        self.c_tan2.mult_transpose_add(&wt2, out, out)
+    }
+
+    /// Adds the chosen tangent parts of this rank's points to `matrix` (entries of other
+    /// ranks' rows travel at assembly; call `assemble` after).
+    pub fn add_tangent(
+        &self,
+        state: &ContactState,
+        parts: &[Part],
+        matrix: &mut SparseMatrix,
+    ) -> Result<(), LaError> {
+        let mut dense = Vec::new();
+        for (k, &id) in self.local.iter().enumerate() {
+            let rows = &self.rows[k];
+            let n = rows.dofs.len();
+            dense.clear();
+            dense.resize(n * n, 0.0);
+            let sliding = self.interfaces[self.points[id].interface]
+                .friction
+                .is_sliding();
+            let omega = if sliding { self.disc_speed } else { 0.0 };
+            for &part in parts {
+                kernel::add_tangent(
+                    rows,
+                    self.points[id].weight,
+                    omega,
+                    &state.observed[k],
+                    &state.response[k],
+                    part,
+                    &mut dense,
+                );
+            }
+            matrix.add_values(&rows.dofs, &rows.dofs, &dense)?;
+        }
+        Ok(())
+    }
+
+    /// Preallocation of a matrix with the pattern of `base` (if any) joined with every
+    /// contact point's coupling.
+    ///
+    /// # Collective (when `base` is given)
+    pub fn pattern(
+        &self,
+        base: Option<&SparseMatrix>,
+        dofs: &DofMap,
+        interfaces_rows: &[i32],
+    ) -> Result<Preallocation, LaError> {
+        let own = dofs.owned_dofs();
+        let mut extra: HashMap<usize, Vec<i32>> = HashMap::new();
+        let mut d = Vec::new();
+        for p in &self.points {
+            d.clear();
+            point_dofs(p, dofs, &mut d);
+            d.retain(|&x| x >= 0);
+            for &r in &d {
+                if own.contains(&(r as usize)) {
+                    extra
+                        .entry(r as usize - own.start)
+                        .or_default()
+                        .extend_from_slice(&d);
+                }
+            }
+        }
+        let _ = interfaces_rows;
+        let n = own.len();
+        let mut pre = Preallocation {
+            diag: vec![0; n],
+            off: vec![0; n],
+            diag_upper: vec![0; n],
+            off_upper: vec![0; n],
+        };
+        let mut count = |row: usize, cols: &mut Vec<i32>| {
+            cols.sort_unstable();
+            cols.dedup();
+            let dg = cols
+                .iter()
+                .filter(|&&c| own.contains(&(c as usize)))
+                .count();
+            pre.diag[row] = dg as i32;
+            pre.off[row] = (cols.len() - dg) as i32;
+            pre.diag_upper[row] = pre.diag[row];
+            pre.off_upper[row] = pre.off[row];
+        };
+        match base {
+            Some(b) => {
+                b.for_each_local_row(|row, cols, _| {
+                    let local = row - own.start;
+                    let mut all = cols.to_vec();
+                    if let Some(e) = extra.get(&local) {
+                        all.extend_from_slice(e);
+                    }
+                    count(local, &mut all);
+                })?;
+            }
+            None => {
+                for (row, cols) in extra.iter_mut() {
+                    count(*row, cols);
+                }
+            }
+        }
+        Ok(pre)
+    }
+
+    /// A new AIJ matrix holding only the given contact tangent parts at `state`.
+    ///
+    /// # Collective
+    pub fn tangent_matrix(
+        &self,
+        petsc: &'p Petsc,
+        dofs: &DofMap,
+        state: &ContactState,
+        parts: &[Part],
+    ) -> Result<SparseMatrix<'p>, LaError> {
+        let pre = self.pattern(None, dofs, &[])?;
+        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
+        self.add_tangent(state, parts, &mut m)?;
+        m.assemble()?;
+        Ok(m)
+    }
+
+    /// Per-interface sums over all ranks.
+    ///
+    /// # Collective
+    pub fn summarize(&self, petsc: &Petsc, state: &ContactState) -> Vec<InterfaceSummary> {
+        let mut out = vec![
+            InterfaceSummary {
+                min_gap: f64::INFINITY,
+                ..Default::default()
+            };
+            self.interfaces.len()
+        ];
+        for (k, &id) in self.local.iter().enumerate() {
+            let p = &self.points[id];
+            let itf = &self.interfaces[p.interface];
+            let (o, r) = (&state.observed[k], &state.response[k]);
+            let s = &mut out[p.interface];
+            s.normal_force += p.weight * r.pressure;
+            s.friction_force += p.weight * r.traction[0];
+            if itf.friction.is_sliding() {
+                s.torque += p.weight * r.traction[0] * p.radius;
+                s.coulomb_torque +=
+                    state.friction_scale * itf.friction.mu() * p.weight * r.pressure * p.radius;
+            }
+            s.max_pressure = s.max_pressure.max(r.pressure);
+            s.min_gap = s.min_gap.min(o.gap);
+            match r.status {
+                Status::Open => s.open += 1,
+                Status::Stick => s.stick += 1,
+                Status::Slip => s.slip += 1,
+            }
+        }
+        let world = petsc.world();
+        for s in &mut out {
+            s.normal_force = crate::parallel::sum(world, s.normal_force);
+            s.friction_force = crate::parallel::sum(world, s.friction_force);
+            s.torque = crate::parallel::sum(world, s.torque);
+            s.coulomb_torque = crate::parallel::sum(world, s.coulomb_torque);
+            s.max_pressure = crate::parallel::max(world, s.max_pressure);
+            s.min_gap = -crate::parallel::max(world, -s.min_gap);
+            s.open = crate::parallel::sum(world, s.open as f64) as usize;
+            s.stick = crate::parallel::sum(world, s.stick as f64) as usize;
+            s.slip = crate::parallel::sum(world, s.slip as f64) as usize;
+        }
+        out
+    }
+
+    /// A per-point value of this rank's points, gathered on every rank in point-id order.
+    ///
+    /// # Collective
+    pub fn gather(&self, petsc: &'p Petsc, local: &[f64]) -> Result<Vec<f64>, LaError> {
+        let v = Vector::from_local(petsc, local)?;
+        let rows = v.gather_all()?;
+        let mut out = vec![0.0; rows.len()];
+        for (row, value) in rows.into_iter().enumerate() {
+            out[self.row_ids[row]] = value;
+        }
+        Ok(out)
+    }
+}
+
+/// The DOFs of a point: master nodes then slave nodes, 3 each.
+fn point_dofs(p: &ContactPoint, dofs: &DofMap, out: &mut Vec<i32>) {
+    for &n in p.master_nodes.iter().chain(&p.slave_nodes) {
+        out.extend_from_slice(&dofs.node_dofs[n]);
+    }
+}
+
+/// Dense rows of C_NOR, C_TAN, C_TAN2, C_CONV at a point. Normal rows observe master minus
+/// slave (the gap opens when the pad moves along the slave's outward normal); tangential rows
+/// slave minus master (the disc's motion under the pad).
+pub fn point_rows(p: &ContactPoint, dofs: &DofMap, interfaces: &[ResolvedInterface]) -> PointRows {
+    let mut d = Vec::new();
+    point_dofs(p, dofs, &mut d);
+    let n = d.len();
+    let mut rows = PointRows {
+        dofs: d,
+        nor: vec![0.0; n],
+        tan: vec![0.0; n],
+        tan2: vec![0.0; n],
+        conv: vec![0.0; n],
+    };
+    let sliding = interfaces[p.interface].friction.is_sliding();
+    let nm = p.master_nodes.len();
+    for (a, &na) in p.master_shape.iter().enumerate() {
+        for c in 0..3 {
+            rows.nor[3 * a + c] = na * p.normal[c];
+            rows.tan[3 * a + c] = -na * p.tangent[c];
+            rows.tan2[3 * a + c] = -na * p.tangent2[c];
+        }
+    }
+    for (b, &nb) in p.slave_shape.iter().enumerate() {
+        for c in 0..3 {
+            let i = 3 * (nm + b) + c;
+            rows.nor[i] = -nb * p.normal[c];
+            rows.tan[i] = nb * p.tangent[c];
+            rows.tan2[i] = nb * p.tangent2[c];
+            if sliding {
+                rows.conv[i] = p.slave_dtheta[b] * p.tangent[c];
+            }
+        }
+    }
+    rows
+}
