@@ -16,3 +16,4 @@ pub mod parallel;
 pub mod pipeline;
 pub mod progress;
 pub mod scene;
+pub mod statics;

@@ -150,7 +150,36 @@ fn print_summary(s: &RunSummary) {
             b.rows, b.row_imbalance, b.elements, b.element_imbalance
         );
     }
-    if !s.unsupported.is_empty() {
+    if let Some(st) = &s.statics {
+        println!(
+            "static preload: {} contact points, {} load steps, {} Newton iterations, {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
+            st.points, st.load_steps, st.newton_iterations, st.factorizations, st.factor_entries, st.final_residual
+        );
+        for (name, missed, of) in &st.misses {
+            if *missed > 0 {
+                println!("    {name}: {missed} of {of} master points have no partner within contact.search_distance (dropped)");
+            }
+        }
+        println!("    interface                          normal force (N)  friction (N)  torque (N m)  max p (MPa)  open/stick/slip");
+        for (name, i) in &st.interfaces {
+            println!(
+                "    {name:34} {:16.3} {:13.3} {:13.4} {:12.4}  {}/{}/{}",
+                i.normal_force,
+                i.friction_force,
+                i.torque,
+                i.max_pressure * 1e-6,
+                i.open,
+                i.stick,
+                i.slip
+            );
+        }
+        let torque: f64 = st.interfaces.iter().map(|(_, i)| i.torque).sum();
+        println!(
+            "    piston force {:.3} N, braking torque {:.4} N m",
+            st.piston_force, torque
+        );
+    }
+    if !s.unsupported.is_empty() && s.statics.is_none() {
         println!(
             "not held against rigid-body motion (no contact yet): {}; their modes at 0 Hz are flagged rigid",
             s.unsupported.join(", ")

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::eigen::real_modes::{real_modes, RealModes};
-use crate::fem::system::{assemble_system, AssembledSystem, Clamp, SystemError};
+use crate::fem::system::{assemble_system_as, AssembledSystem, Clamp, SystemError};
 use crate::io::matrix_market::{self, MatrixMarketError};
 use crate::io::results::{ResultsError, ResultsFile};
 use crate::io::user_matrices::load_sum;
@@ -35,6 +35,10 @@ pub enum RunError {
     Quality(#[from] crate::mesh::quality::QualityError),
     #[error("model: {0}")]
     Model(String),
+    #[error("{0}")]
+    Contact(#[from] crate::contact::ContactError),
+    #[error("{0}")]
+    Statics(#[from] crate::statics::StaticError),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -76,6 +80,25 @@ pub struct RunSummary {
     pub factor_entries: Option<f64>,
     pub ordering: Option<&'static str>,
     pub output: PathBuf,
+    /// The static preload, when the scene asked for one.
+    pub statics: Option<StaticSummary>,
+}
+
+/// What the static preload found, for the summary.
+#[derive(Debug, Clone)]
+pub struct StaticSummary {
+    pub points: usize,
+    pub misses: Vec<(String, usize, usize)>,
+    pub interfaces: Vec<(String, crate::contact::InterfaceSummary)>,
+    pub newton_iterations: usize,
+    pub load_steps: usize,
+    pub factorizations: usize,
+    pub factor_entries: f64,
+    pub pairing_seconds: f64,
+    pub seconds: f64,
+    pub seconds_factorizing: f64,
+    pub piston_force: f64,
+    pub final_residual: f64,
 }
 
 /// A finite-element model ready for assembly: mesh, constraints, contact interfaces and
@@ -271,8 +294,10 @@ pub fn run(
             crate::mesh::abaqus_inp::write(&path, &built.mesh, &named)
                 .map_err(|source| RunError::Io { path, source })?;
         }
+        // The Newton tangent K0 + contact is unsymmetric (LU): assemble K0 as AIJ then.
+        let format = scene.statics.as_ref().map(|_| crate::la::MatrixFormat::Aij);
         let s = timings.time("assembly", || {
-            assemble_system(petsc, &built.mesh, &built.clamps)
+            assemble_system_as(petsc, &built.mesh, &built.clamps, format)
         })?;
         let fixed: Vec<[bool; 3]> = s.dofs.node_dofs.iter().map(|d| d.map(|x| x < 0)).collect();
         unsupported = partition::unsupported_parts(&built.mesh, &fixed);
@@ -305,6 +330,72 @@ pub fn run(
         _ => unreachable!("a scene has a model"),
     };
     let dofs = k.global_rows();
+
+    // Static preload with contact, and the tangent stiffness of that state.
+    let mut preload: Option<(crate::contact::ContactModel, crate::statics::StaticState)> = None;
+    let mut tangent: Option<SparseMatrix> = None;
+    if let (Some(settings), Some(model), Some(system)) = (&scene.statics, &model, &system) {
+        let contact_settings = scene.contact.clone().unwrap_or_default();
+        if model.interfaces.is_empty() {
+            return Err(RunError::Model(
+                "key 'statics': the model has no contact interfaces (a brake model or an .inp with *CONTACT PAIR has them)".into(),
+            ));
+        }
+        let interfaces = contact_settings
+            .resolve(&model.interfaces)
+            .map_err(RunError::Model)?;
+        let contact = timings.time("contact pairing", || {
+            crate::contact::ContactModel::new(
+                petsc,
+                &model.mesh,
+                &system.dofs,
+                interfaces,
+                &contact_settings,
+            )
+        })?;
+        let f_ext = crate::statics::pressure_load(
+            petsc,
+            &model.mesh,
+            &system.dofs,
+            &model.loads,
+            model.pressure,
+        )
+        .map_err(RunError::Model)?;
+        let rank0 = petsc.rank() == 0;
+        let state = timings.time("static preload", || {
+            crate::statics::solve(petsc, k, &system.dofs, &contact, &f_ext, settings, |r| {
+                if rank0 {
+                    println!(
+                        "  static step {} (pressure {:>3.0} %, friction {:>3.0} %) iteration {:>2}: residual {:.3e} N (of {:.3e}){}",
+                        r.load_step,
+                        100.0 * r.pressure_fraction,
+                        100.0 * r.friction_fraction,
+                        r.iteration,
+                        r.residual,
+                        r.reference,
+                        if r.step_length > 0.0 && r.step_length < 1.0 { format!(", step {:.3}", r.step_length) } else { String::new() }
+                    );
+                }
+            })
+        })?;
+        let kt = timings.time("tangent state", || -> Result<SparseMatrix, LaError> {
+            let mut kt = contact.joined_matrix(petsc, k, &system.dofs)?;
+            contact.add_tangent(
+                &state.contact,
+                &[
+                    crate::contact::kernel::Part::Normal,
+                    crate::contact::kernel::Part::Stick,
+                ],
+                &mut kt,
+            )?;
+            kt.assemble()?;
+            kt.set_symmetric(true)?;
+            Ok(kt)
+        })?;
+        tangent = Some(kt);
+        preload = Some((contact, state));
+    }
+    let k = tangent.as_ref().unwrap_or(k);
 
     for format in &scene.output.export_matrices {
         timings.time("export matrices", || -> Result<(), RunError> {
@@ -365,6 +456,17 @@ pub fn run(
         file.write_table("partition/rows_per_rank", &rows, "1")?;
         file.write_table("partition/elements_per_rank", &elements, "1")?;
     }
+    let mut static_summary = None;
+    if let (Some((contact, state)), Some(system), Some(model)) = (&preload, &system, &model) {
+        static_summary = Some(write_static(
+            petsc,
+            &file,
+            contact,
+            state,
+            &system.dofs,
+            model,
+        )?);
+    }
     if let Some(modes) = &modes {
         file.write_real_modes(modes, system.as_ref().map(|s| &s.dofs))?;
     }
@@ -420,5 +522,127 @@ pub fn run(
         unsupported,
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
+        statics: static_summary,
+    })
+}
+
+/// Writes the static state under /static: displacement, every contact point (point-id order)
+/// and per-interface sums; returns the summary.
+///
+/// # Collective
+fn write_static(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    contact: &crate::contact::ContactModel,
+    state: &crate::statics::StaticState,
+    dofs: &crate::fem::dofmap::DofMap,
+    model: &Model,
+) -> Result<StaticSummary, RunError> {
+    let q = state.displacement.local()?;
+    file.write_nodal("static/displacement", dofs, &q, "m")?;
+    drop(q);
+    let c = &state.contact;
+    let column =
+        |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..contact.local.len()).map(f).collect() };
+    let columns: Vec<(&str, Vec<f64>, &str)> = vec![
+        ("gap", column(&|k| c.observed[k].gap), "m"),
+        ("pressure", column(&|k| c.response[k].pressure), "Pa"),
+        (
+            "contact_stiffness",
+            column(&|k| c.response[k].stiffness),
+            "Pa/m",
+        ),
+        ("traction", column(&|k| c.response[k].traction[0]), "Pa"),
+        ("sliding_speed", column(&|k| c.observed[k].speed), "m/s"),
+        (
+            "status",
+            column(&|k| c.response[k].status as u8 as f64),
+            "0 open, 1 stick, 2 slip",
+        ),
+    ];
+    for (name, local, units) in columns {
+        let all = contact.gather(petsc, &local)?;
+        file.write_table(&format!("static/contact/{name}"), &all, units)?;
+    }
+    let pts = &contact.points;
+    for (d, axis) in ["x", "y", "z"].iter().enumerate() {
+        let v: Vec<f64> = pts.iter().map(|p| p.position[d]).collect();
+        file.write_table(&format!("static/contact/{axis}"), &v, "m")?;
+    }
+    let v: Vec<f64> = pts.iter().map(|p| p.interface as f64).collect();
+    file.write_table(
+        "static/contact/interface",
+        &v,
+        "index into /static/interfaces order",
+    )?;
+    let v: Vec<f64> = pts.iter().map(|p| p.weight).collect();
+    file.write_table("static/contact/weight", &v, "m^2")?;
+    let v: Vec<f64> = pts.iter().map(|p| p.radius).collect();
+    file.write_table("static/contact/radius", &v, "m")?;
+    for (i, (itf, s)) in contact.interfaces.iter().zip(&state.summaries).enumerate() {
+        let g = format!("static/interfaces/{}", itf.name);
+        file.set_number(&g, "index", i as f64)?;
+        file.set_number(
+            &g,
+            "points",
+            (contact.candidates[i] - contact.misses[i]) as f64,
+        )?;
+        file.set_number(&g, "missed_points", contact.misses[i] as f64)?;
+        file.set_number(&g, "normal_force_n", s.normal_force)?;
+        file.set_number(&g, "friction_force_n", s.friction_force)?;
+        file.set_number(&g, "braking_torque_nm", s.torque)?;
+        file.set_number(&g, "max_pressure_pa", s.max_pressure)?;
+        file.set_number(&g, "min_gap_m", s.min_gap)?;
+        file.set_number(&g, "open_points", s.open as f64)?;
+        file.set_number(&g, "stick_points", s.stick as f64)?;
+        file.set_number(&g, "slip_points", s.slip as f64)?;
+        file.set_text(&g, "normal_law", &format!("{:?}", itf.normal))?;
+        file.set_text(&g, "friction_law", &format!("{:?}", itf.friction))?;
+    }
+    let log = |f: &dyn Fn(&crate::statics::NewtonRecord) -> f64| -> Vec<f64> {
+        state.log.iter().map(f).collect()
+    };
+    file.write_table(
+        "static/newton/load_step",
+        &log(&|r| r.load_step as f64),
+        "1",
+    )?;
+    file.write_table(
+        "static/newton/iteration",
+        &log(&|r| r.iteration as f64),
+        "1",
+    )?;
+    file.write_table("static/newton/residual", &log(&|r| r.residual), "N")?;
+    file.write_table("static/newton/step_length", &log(&|r| r.step_length), "1")?;
+    file.set_number("static", "factorizations", state.factorizations as f64)?;
+    file.set_number("static", "factor_entries", state.factor_entries)?;
+    let piston_force: f64 = model.loads.first().map_or(0.0, |l| l.area * model.pressure);
+    file.set_number("static", "piston_force_n", piston_force)?;
+    let torque: f64 = state.summaries.iter().map(|s| s.torque).sum();
+    file.set_number("static", "braking_torque_nm", torque)?;
+    let last = state.log.last().expect("a converged step");
+    Ok(StaticSummary {
+        points: pts.len(),
+        misses: contact
+            .interfaces
+            .iter()
+            .enumerate()
+            .map(|(i, itf)| (itf.name.clone(), contact.misses[i], contact.candidates[i]))
+            .collect(),
+        interfaces: contact
+            .interfaces
+            .iter()
+            .map(|i| i.name.clone())
+            .zip(state.summaries.iter().cloned())
+            .collect(),
+        newton_iterations: state.log.iter().filter(|r| r.step_length > 0.0).count(),
+        load_steps: last.load_step,
+        factorizations: state.factorizations,
+        factor_entries: state.factor_entries,
+        pairing_seconds: contact.pairing_seconds,
+        seconds: state.seconds,
+        seconds_factorizing: state.seconds_factorizing,
+        piston_force,
+        final_residual: last.residual,
     })
 }

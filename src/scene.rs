@@ -18,6 +18,13 @@ pub const DEFAULT_SCENE: &str = include_str!("../jobs/default.toml");
 #[serde(deny_unknown_fields)]
 pub struct Scene {
     pub model: ModelSource,
+    /// Contact laws and disc speed (used when `[statics]` is present).
+    #[serde(default)]
+    pub contact: Option<crate::contact::ContactSettings>,
+    /// Static preload with contact and friction; real modes are then those of the tangent
+    /// state (K0 + K_c + K_stick).
+    #[serde(default)]
+    pub statics: Option<crate::statics::StaticSettings>,
     #[serde(default)]
     pub real_modes: Option<RealModeRequest>,
     #[serde(default)]
@@ -234,6 +241,15 @@ impl Scene {
                     "key 'real_modes.tolerance' = {}: must be in (0, 1)",
                     r.tolerance
                 ));
+            }
+        }
+        if let Some(c) = &self.contact {
+            c.validate()?;
+        }
+        if let Some(st) = &self.statics {
+            st.validate()?;
+            if matches!(self.model, ModelSource::Matrices { .. }) {
+                return Err("key 'statics': a static preload needs a mesh with contact interfaces, not assembled matrices".into());
             }
         }
         for e in &self.output.export_matrices {

@@ -49,7 +49,8 @@ pub struct PointResponse {
     stick: f64,
 }
 
-/// The law pair of an interface applied at one point; `friction_scale` ramps friction in.
+/// The law pair of an interface applied at one point; `friction_scale` ramps the friction of
+/// sliding interfaces in.
 pub fn respond(
     normal: &NormalLaw,
     friction: &FrictionLaw,
@@ -77,7 +78,8 @@ pub fn respond(
             stick: 0.0,
         }
     } else {
-        let kt = friction_scale * friction.stick_stiffness();
+        // Joints hold from the start: the friction ramp is for the sliding interfaces only.
+        let kt = friction.stick_stiffness();
         PointResponse {
             pressure: n.pressure,
             stiffness: n.stiffness,

@@ -540,6 +540,34 @@ impl<'p> ContactModel<'p> {
         Ok(pre)
     }
 
+    /// A new assembled AIJ matrix with the values of `base` on the pattern of `base` joined
+    /// with every contact coupling (explicit zeros there), ready for `copy_values_from(base)`
+    /// and `add_tangent` again and again.
+    ///
+    /// # Collective
+    pub fn joined_matrix(
+        &self,
+        petsc: &'p Petsc,
+        base: &SparseMatrix,
+        dofs: &DofMap,
+    ) -> Result<SparseMatrix<'p>, LaError> {
+        let pre = self.pattern(Some(base), dofs, &[])?;
+        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
+        let mut failed = Ok(());
+        base.for_each_local_row(|row, cols, vals| {
+            if failed.is_ok() {
+                failed = m.add_values(&[row as i32], cols, vals);
+            }
+        })?;
+        failed?;
+        for rows in &self.rows {
+            let zeros = vec![0.0; rows.dofs.len() * rows.dofs.len()];
+            m.add_values(&rows.dofs, &rows.dofs, &zeros)?;
+        }
+        m.assemble()?;
+        Ok(m)
+    }
+
     /// A new AIJ matrix holding only the given contact tangent parts at `state`.
     ///
     /// # Collective

@@ -1,0 +1,392 @@
+//! Static preload (DESIGN.md §2): Newton on K0 q - f_N(q) - f_T(q) = f_ext with a backtracking
+//! line search and load stepping (pressure ramp, then friction ramp with the disc sliding at
+//! Omega), each Newton step a MUMPS LU of the unsymmetric tangent.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use crate::contact::kernel::Part;
+use crate::contact::surface::Face;
+use crate::contact::{ContactModel, ContactState, InterfaceSummary};
+use crate::fem::dofmap::DofMap;
+use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::mesh::{Mesh, PressureLoad};
+
+/// The `[statics]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StaticSettings {
+    /// Equal pressure increments up to the full brake pressure.
+    #[serde(default = "default_pressure_steps")]
+    pub pressure_steps: usize,
+    /// Equal friction increments after the pressure (0: friction at once with the pressure).
+    #[serde(default = "default_friction_steps")]
+    pub friction_steps: usize,
+    /// Converged when |residual| <= tolerance x max(|f_ext|, |f_contact|).
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+}
+
+fn default_pressure_steps() -> usize {
+    4
+}
+fn default_friction_steps() -> usize {
+    2
+}
+fn default_tolerance() -> f64 {
+    // Round-off leaves about 1e-10 of the force on the brake (K0 q sums terms ~1e4 x larger).
+    1e-9
+}
+fn default_max_iterations() -> usize {
+    40
+}
+
+impl Default for StaticSettings {
+    fn default() -> Self {
+        StaticSettings {
+            pressure_steps: default_pressure_steps(),
+            friction_steps: default_friction_steps(),
+            tolerance: default_tolerance(),
+            max_iterations: default_max_iterations(),
+        }
+    }
+}
+
+impl StaticSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.pressure_steps == 0 {
+            return Err("key 'statics.pressure_steps' must be at least 1".into());
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
+            return Err(format!(
+                "key 'statics.tolerance' = {}: must be in (0, 0.01)",
+                self.tolerance
+            ));
+        }
+        if self.max_iterations == 0 {
+            return Err("key 'statics.max_iterations' must be at least 1".into());
+        }
+        Ok(())
+    }
+
+    /// (pressure fraction, friction fraction) of every load step.
+    pub fn schedule(&self, friction: bool) -> Vec<(f64, f64)> {
+        let n = self.pressure_steps;
+        let m = if friction { self.friction_steps } else { 0 };
+        let full_friction = if friction && m == 0 { 1.0 } else { 0.0 };
+        let mut s: Vec<(f64, f64)> = (1..=n)
+            .map(|i| (i as f64 / n as f64, full_friction))
+            .collect();
+        s.extend((1..=m).map(|j| (1.0, j as f64 / m as f64)));
+        s
+    }
+}
+
+/// One Newton iteration in the convergence log.
+#[derive(Debug, Clone, Copy)]
+pub struct NewtonRecord {
+    pub load_step: usize,
+    pub pressure_fraction: f64,
+    pub friction_fraction: f64,
+    pub iteration: usize,
+    pub residual: f64,
+    pub reference: f64,
+    /// Line-search step length taken after this residual (0 on the converged record).
+    pub step_length: f64,
+}
+
+/// The preloaded state.
+pub struct StaticState<'p> {
+    pub displacement: Vector<'p>,
+    pub contact: ContactState,
+    pub summaries: Vec<InterfaceSummary>,
+    pub log: Vec<NewtonRecord>,
+    pub factorizations: usize,
+    /// Load increments that were halved after a stall.
+    pub cut_steps: usize,
+    /// MUMPS factor entries of the last factorization.
+    pub factor_entries: f64,
+    pub seconds_factorizing: f64,
+    pub seconds: f64,
+    /// |f_ext| at full pressure (N).
+    pub load_norm: f64,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum StaticError {
+    #[error(
+        "static preload did not converge at load step {step} (pressure {pressure:.0} %, friction {friction:.0} %) after {iterations} Newton iterations: residual {residual:.3e} N > tolerance {target:.3e} N; the largest residual sits on interface '{interface}'. Try more statics.pressure_steps, a softer contact law (smaller lambda) or a closer initial fit of the surfaces"
+    )]
+    NotConverged {
+        step: usize,
+        pressure: f64,
+        friction: f64,
+        iterations: usize,
+        residual: f64,
+        target: f64,
+        interface: String,
+    },
+    #[error("static preload: {0}")]
+    La(#[from] LaError),
+}
+
+/// The consistent nodal forces of the brake-line pressure: on each loaded surface a uniform
+/// traction pressure x area / (surface area), pushing into the surface.
+///
+/// # Collective
+pub fn pressure_load<'p>(
+    petsc: &'p Petsc,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    loads: &[PressureLoad],
+    pressure: f64,
+) -> Result<Vector<'p>, String> {
+    let f = Vector::new(petsc, dofs.local_dofs()).map_err(|e| e.to_string())?;
+    if petsc.rank() == 0 {
+        for load in loads {
+            let faces: Vec<Face> = mesh
+                .surface(&load.surface)?
+                .iter()
+                .map(|&(e, s)| Face::new(mesh, e, s))
+                .collect();
+            let area: f64 = faces.iter().map(|f| f.area(3)).sum();
+            if area.is_nan() || area <= 0.0 {
+                return Err(format!("loaded surface '{}' has no area", load.surface));
+            }
+            let traction = pressure * load.area / area;
+            let (mut idx, mut val) = (Vec::new(), Vec::new());
+            for face in &faces {
+                for (xi, w) in face.shape.rule(3) {
+                    let p = face.at(xi);
+                    let (n, j) = p.normal();
+                    for (a, &node) in face.nodes.iter().enumerate() {
+                        for c in 0..3 {
+                            let d = dofs.node_dofs[node][c];
+                            if d >= 0 {
+                                idx.push(d);
+                                val.push(-traction * n[c] * p.n[a] * w * j);
+                            }
+                        }
+                    }
+                }
+            }
+            f.add_values(&idx, &val).map_err(|e| e.to_string())?;
+        }
+    }
+    f.assemble().map_err(|e| e.to_string())?;
+    Ok(f)
+}
+
+/// Solves for the preloaded state. `k0` must be AIJ (LU). `progress` receives each record.
+///
+/// # Collective
+pub fn solve<'p>(
+    petsc: &'p Petsc,
+    k0: &SparseMatrix<'p>,
+    dofs: &DofMap,
+    contact: &ContactModel<'p>,
+    f_ext: &Vector<'p>,
+    settings: &StaticSettings,
+    mut progress: impl FnMut(&NewtonRecord),
+) -> Result<StaticState<'p>, StaticError> {
+    let start = Instant::now();
+    let friction = contact
+        .interfaces
+        .iter()
+        .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
+        && contact.disc_speed != 0.0;
+    let mut jac = contact.joined_matrix(petsc, k0, dofs)?;
+    let q = k0.new_vector()?;
+    let trial = q.duplicate()?;
+    let dq = q.duplicate()?;
+    let residual = q.duplicate()?;
+    let f = q.duplicate()?;
+    let fc = q.duplicate()?;
+    let load_norm = f_ext.norm2()?;
+    let mut log = Vec::new();
+    let (mut factorizations, mut factor_entries, mut seconds_factorizing) = (0usize, 0.0, 0.0);
+    let mut cut_steps = 0usize;
+
+    // R = K0 q - f_c(q) - f; returns (|R|, reference force, state).
+    let eval = |q: &Vector<'p>,
+                psi: f64,
+                f: &Vector<'p>,
+                r: &Vector<'p>|
+     -> Result<(f64, f64, ContactState), LaError> {
+        let state = contact.evaluate(q, None, psi)?;
+        contact.force(&state, &fc)?;
+        k0.mult(q, r)?;
+        r.axpy(-1.0, &fc)?;
+        r.axpy(-1.0, f)?;
+        Ok((r.norm2()?, f.norm2()?.max(fc.norm2()?), state))
+    };
+
+    // Load steps; a step whose Newton iterations stall is retried from the last converged
+    // state with half the increment (logged), at most `MAX_CUTS` times in a row.
+    const MAX_CUTS: usize = 6;
+    let mut targets: std::collections::VecDeque<(f64, f64)> = settings.schedule(friction).into();
+    let mut converged_at = (0.0, 0.0);
+    let saved = q.duplicate()?;
+    let mut cuts = 0;
+    let mut step = 0;
+    let mut last_state = None;
+    while let Some(&(phi, psi)) = targets.front() {
+        step += 1;
+        f.copy_from(f_ext)?;
+        f.scale(phi)?;
+        let (mut r, mut reference, mut state) = eval(&q, psi, &f, &residual)?;
+        let mut history = Vec::new();
+        let mut iteration = 0;
+        let outcome = loop {
+            let target = settings.tolerance * reference;
+            let record = |step_length| NewtonRecord {
+                load_step: step,
+                pressure_fraction: phi,
+                friction_fraction: psi,
+                iteration,
+                residual: r,
+                reference,
+                step_length,
+            };
+            if r <= target {
+                let rec = record(0.0);
+                progress(&rec);
+                log.push(rec);
+                break Ok(state);
+            }
+            history.push(r);
+            let stalled = history.len() > 8 && r > 0.5 * history[history.len() - 5];
+            if iteration >= settings.max_iterations || !r.is_finite() || stalled {
+                break Err((iteration, r, target));
+            }
+            jac.copy_values_from(k0)?;
+            contact.add_tangent(
+                &state,
+                &[Part::Normal, Part::Stick, Part::Friction],
+                &mut jac,
+            )?;
+            jac.assemble()?;
+            let t = Instant::now();
+            let solver = DirectSolver::factorize(petsc, &jac, Factorization::Lu, "static_")?;
+            seconds_factorizing += t.elapsed().as_secs_f64();
+            factorizations += 1;
+            factor_entries = solver.report().factor_entries;
+            residual.scale(-1.0)?;
+            solver.solve(&residual, &dq)?;
+            drop(solver);
+            // Backtracking: the first step length with sufficient decrease of |R|, else the
+            // best one tried if it lowers |R| at all, else the step has failed.
+            let mut alpha = 1.0;
+            let mut best: Option<(f64, f64)> = None;
+            let chosen = loop {
+                trial.copy_from(&q)?;
+                trial.axpy(alpha, &dq)?;
+                let rt = eval(&trial, psi, &f, &residual)?.0;
+                if rt.is_finite() && rt <= (1.0 - 1e-4 * alpha) * r {
+                    break Some(alpha);
+                }
+                if rt.is_finite() && best.is_none_or(|b| rt < b.1) {
+                    best = Some((alpha, rt));
+                }
+                if alpha < 1.0 / 1024.0 {
+                    break best.filter(|b| b.1 < r).map(|b| b.0);
+                }
+                alpha *= 0.5;
+            };
+            let Some(alpha) = chosen else {
+                break Err((iteration, r, target));
+            };
+            let rec = record(alpha);
+            progress(&rec);
+            log.push(rec);
+            q.axpy(alpha, &dq)?;
+            (r, reference, state) = eval(&q, psi, &f, &residual)?;
+            iteration += 1;
+        };
+        match outcome {
+            Ok(state) => {
+                targets.pop_front();
+                converged_at = (phi, psi);
+                saved.copy_from(&q)?;
+                cuts = 0;
+                last_state = Some(state);
+            }
+            Err((iterations, r, target)) => {
+                if cuts >= MAX_CUTS || cut_steps >= 4 * MAX_CUTS {
+                    return Err(StaticError::NotConverged {
+                        step,
+                        pressure: 100.0 * phi,
+                        friction: 100.0 * psi,
+                        iterations,
+                        residual: r,
+                        target,
+                        interface: worst_interface(petsc, contact, dofs, &residual)?,
+                    });
+                }
+                cuts += 1;
+                cut_steps += 1;
+                q.copy_from(&saved)?;
+                let half = (0.5 * (converged_at.0 + phi), 0.5 * (converged_at.1 + psi));
+                targets.push_front(half);
+                if petsc.rank() == 0 {
+                    println!(
+                        "  static step {step} stalled at residual {r:.3e} N: cutting the increment, next target pressure {:.1} %, friction {:.1} %",
+                        100.0 * half.0,
+                        100.0 * half.1
+                    );
+                }
+            }
+        }
+    }
+    let state = last_state.expect("at least one load step");
+    let summaries = contact.summarize(petsc, &state);
+    Ok(StaticState {
+        displacement: q,
+        contact: state,
+        summaries,
+        log,
+        factorizations,
+        cut_steps,
+        factor_entries,
+        seconds_factorizing,
+        seconds: start.elapsed().as_secs_f64(),
+        load_norm,
+    })
+}
+
+/// The interface whose master DOFs carry the largest residual (for the error message).
+///
+/// # Collective
+fn worst_interface(
+    petsc: &Petsc,
+    contact: &ContactModel,
+    dofs: &DofMap,
+    residual: &Vector,
+) -> Result<String, LaError> {
+    let own = dofs.owned_dofs();
+    let r = residual.local()?;
+    let mut worst = vec![0.0f64; contact.interfaces.len()];
+    for p in &contact.points {
+        for &n in &p.master_nodes {
+            for &d in &dofs.node_dofs[n] {
+                if d >= 0 && own.contains(&(d as usize)) {
+                    let v = r[d as usize - own.start].abs();
+                    worst[p.interface] = worst[p.interface].max(v);
+                }
+            }
+        }
+    }
+    let worst: Vec<f64> = worst
+        .iter()
+        .map(|&w| crate::parallel::max(petsc.world(), w))
+        .collect();
+    Ok(worst
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(b.1))
+        .map(|(i, _)| contact.interfaces[i].name.clone())
+        .unwrap_or_else(|| "(none)".into()))
+}
