@@ -458,6 +458,7 @@ pub fn run(
     }
     let mut static_summary = None;
     if let (Some((contact, state)), Some(system), Some(model)) = (&preload, &system, &model) {
+        let settings = scene.contact.clone().unwrap_or_default();
         static_summary = Some(write_static(
             petsc,
             &file,
@@ -465,6 +466,8 @@ pub fn run(
             state,
             &system.dofs,
             model,
+            &settings,
+            output,
         )?);
     }
     if let Some(modes) = &modes {
@@ -537,6 +540,8 @@ fn write_static(
     state: &crate::statics::StaticState,
     dofs: &crate::fem::dofmap::DofMap,
     model: &Model,
+    settings: &crate::contact::ContactSettings,
+    output: &Path,
 ) -> Result<StaticSummary, RunError> {
     let q = state.displacement.local()?;
     file.write_nodal("static/displacement", dofs, &q, "m")?;
@@ -563,6 +568,26 @@ fn write_static(
     for (name, local, units) in columns {
         let all = contact.gather(petsc, &local)?;
         file.write_table(&format!("static/contact/{name}"), &all, units)?;
+        // Maps of the sliding interfaces (the pads) in the disc plane.
+        if petsc.rank() == 0 && (name == "pressure" || name == "contact_stiffness") {
+            for (i, itf) in contact.interfaces.iter().enumerate() {
+                if !itf.friction.is_sliding() {
+                    continue;
+                }
+                let path = output.join(format!("contact_{name}_{}.png", itf.name));
+                crate::io::contact_map::write_map(
+                    &path,
+                    &model.mesh,
+                    &contact.points,
+                    &all,
+                    i,
+                    settings.gauss_points,
+                    settings.axis(),
+                    &format!("{name} ({units}) on {}", itf.name),
+                )
+                .map_err(|source| RunError::Io { path, source })?;
+            }
+        }
     }
     let pts = &contact.points;
     for (d, axis) in ["x", "y", "z"].iter().enumerate() {

@@ -482,7 +482,6 @@ impl<'p> ContactModel<'p> {
         &self,
         base: Option<&SparseMatrix>,
         dofs: &DofMap,
-        interfaces_rows: &[i32],
     ) -> Result<Preallocation, LaError> {
         let own = dofs.owned_dofs();
         let mut extra: HashMap<usize, Vec<i32>> = HashMap::new();
@@ -500,7 +499,6 @@ impl<'p> ContactModel<'p> {
                 }
             }
         }
-        let _ = interfaces_rows;
         let n = own.len();
         let mut pre = Preallocation {
             diag: vec![0; n],
@@ -551,7 +549,7 @@ impl<'p> ContactModel<'p> {
         base: &SparseMatrix,
         dofs: &DofMap,
     ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(Some(base), dofs, &[])?;
+        let pre = self.pattern(Some(base), dofs)?;
         let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
         let mut failed = Ok(());
         base.for_each_local_row(|row, cols, vals| {
@@ -578,7 +576,7 @@ impl<'p> ContactModel<'p> {
         state: &ContactState,
         parts: &[Part],
     ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(None, dofs, &[])?;
+        let pre = self.pattern(None, dofs)?;
         let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
         self.add_tangent(state, parts, &mut m)?;
         m.assemble()?;

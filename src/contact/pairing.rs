@@ -31,8 +31,9 @@ pub struct ContactPoint {
     pub slave_shape: Vec<f64>,
     /// d(N)/d(theta) of the slave shape functions (rad^-1), for the convection term.
     pub slave_dtheta: Vec<f64>,
-    /// The master face (element, face) and the slave face.
+    /// The master face (element, face), the point's parametric position on it, and the slave face.
     pub master_face: (usize, u8),
+    pub master_xi: [f64; 2],
     pub slave_face: (usize, u8),
 }
 
@@ -155,6 +156,7 @@ pub fn pair(
                     slave_shape: sp.n.clone(),
                     slave_dtheta,
                     master_face: (e, f),
+                    master_xi: xi,
                     slave_face: (sface.element, sface.face),
                 });
             }

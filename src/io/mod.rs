@@ -1,5 +1,6 @@
 //! Input and output: Matrix Market, user matrices, HDF5 results with XDMF.
 
+pub mod contact_map;
 pub mod matrix_market;
 pub mod preview;
 pub mod results;
