@@ -533,6 +533,7 @@ pub fn run(
 /// and per-interface sums; returns the summary.
 ///
 /// # Collective
+#[allow(clippy::too_many_arguments)]
 fn write_static(
     petsc: &Petsc,
     file: &ResultsFile,
