@@ -342,3 +342,69 @@ impl BoxTree {
         out.sort_unstable();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::law::{FrictionLaw, NormalLaw};
+    use crate::fem::material::Material;
+    use crate::fem::shape::ElementKind;
+    use crate::mesh::structured::block;
+
+    fn faces_at(mesh: &Mesh, elements: std::ops::Range<usize>, z0: f64) -> Vec<(usize, u8)> {
+        elements
+            .flat_map(|e| (1..=6u8).map(move |f| (e, f)))
+            .filter(|&(e, f)| {
+                mesh.face_nodes(e, f)
+                    .iter()
+                    .all(|&n| (mesh.coords[n][2] - z0).abs() < 1e-12)
+            })
+            .collect()
+    }
+
+    /// A master surface overhanging its slave: points beyond the slave's edge miss and are
+    /// counted; the others project exactly (gap = the offset, weights sum to the paired area).
+    #[test]
+    fn overhanging_points_miss_and_the_rest_project_exactly() {
+        let steel = Material::isotropic("steel", 2.1e11, 0.3, 7850.0);
+        for kind in [ElementKind::Hex8, ElementKind::Hex20] {
+            let mut mesh = block([1.0, 1.0, 0.5], [3, 3, 1], kind, steel.clone());
+            let n_lower = mesh.element_count();
+            // Upper block 1.5 wide in x, lifted by a 1e-4 gap: x in (1, 1.5] overhangs.
+            let mut upper = block([1.5, 1.0, 0.5], [6, 4, 1], kind, steel.clone());
+            for c in &mut upper.coords {
+                c[2] += 0.5 + 1e-4;
+            }
+            upper.node_sets.clear();
+            mesh.append(upper);
+            let all = mesh.element_count();
+            mesh.surfaces
+                .insert("slave".into(), faces_at(&mesh, 0..n_lower, 0.5));
+            mesh.surfaces
+                .insert("master".into(), faces_at(&mesh, n_lower..all, 0.5 + 1e-4));
+            let itf = ResolvedInterface {
+                name: "test".into(),
+                master: "master".into(),
+                slave: "slave".into(),
+                normal: NormalLaw::Linear { stiffness: 1.0 },
+                friction: FrictionLaw::None,
+            };
+            let axis = Axis {
+                direction: [0.0, 0.0, 1.0],
+                center: [0.0; 3],
+            };
+            let p = pair(&mesh, &[itf], axis, 2, 1e-3).unwrap();
+            // 6 x 4 master faces x 4 points; the 2 columns of faces beyond x = 1 miss.
+            assert_eq!(p.candidates[0], 96, "{kind:?}");
+            assert_eq!(p.misses[0], 32, "{kind:?}");
+            let area: f64 = p.points.iter().map(|q| q.weight).sum();
+            assert!((area - 1.0).abs() < 1e-12, "{kind:?}: paired area {area}");
+            for q in &p.points {
+                assert!((q.initial_gap - 1e-4).abs() < 1e-12, "{kind:?}");
+                assert!((q.normal[2] - 1.0).abs() < 1e-12);
+                let s: f64 = q.slave_shape.iter().sum();
+                assert!((s - 1.0).abs() < 1e-12);
+            }
+        }
+    }
+}
