@@ -216,23 +216,8 @@ mod tests {
         };
         let g_lin = exp.guard_gap().unwrap();
         let lin = NormalLaw::Linear { stiffness: 3e11 };
-        let frictions = [
-            FrictionLaw::Coulomb {
-                mu: 0.4,
-                slip_speed: 1e-3,
-            },
-            FrictionLaw::Arctan {
-                mu: 0.4,
-                slip_speed: 1e-3,
-            },
-            FrictionLaw::Stribeck {
-                mu_static: 0.5,
-                mu_kinetic: 0.35,
-                decay_speed: 0.2,
-                slip_speed: 1e-3,
-            },
-            FrictionLaw::Stick { mu: 0.2 },
-        ];
+        let [coulomb, arctan, stribeck] = crate::contact::law::sample_sliding_laws(0.2);
+        let frictions = [coulomb, arctan, stribeck, FrictionLaw::Stick { mu: 0.2 }];
         let n = 12;
         let rows = rows(n, 7);
         let (weight, omega) = (2.5e-5, 6.0);

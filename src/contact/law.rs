@@ -91,13 +91,6 @@ impl NormalLaw {
     }
 
     pub fn validate(&self) -> Result<(), String> {
-        let positive = |k: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("'{k}' = {v}: must be positive and finite"))
-            }
-        };
         match *self {
             NormalLaw::Exponential {
                 p0,
@@ -117,6 +110,22 @@ impl NormalLaw {
             }
             NormalLaw::Linear { stiffness } => positive("stiffness", stiffness),
         }
+    }
+}
+
+fn positive(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("'{key}' = {v}: must be positive and finite"))
+    }
+}
+
+fn non_negative(key: &str, v: f64) -> Result<(), String> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(format!("'{key}' = {v}: must be finite and not negative"))
     }
 }
 
@@ -245,23 +254,9 @@ impl FrictionLaw {
     }
 
     pub fn validate(&self) -> Result<(), String> {
-        let nonneg = |k: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
-                Ok(())
-            } else {
-                Err(format!("'{k}' = {v}: must be finite and not negative"))
-            }
-        };
-        let positive = |k: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
-                Ok(())
-            } else {
-                Err(format!("'{k}' = {v}: must be positive and finite"))
-            }
-        };
         match *self {
             FrictionLaw::Coulomb { mu, slip_speed } | FrictionLaw::Arctan { mu, slip_speed } => {
-                nonneg("mu", mu)?;
+                non_negative("mu", mu)?;
                 positive("slip_speed", slip_speed)
             }
             FrictionLaw::Stribeck {
@@ -270,15 +265,36 @@ impl FrictionLaw {
                 decay_speed,
                 slip_speed,
             } => {
-                nonneg("mu_static", mu_static)?;
-                nonneg("mu_kinetic", mu_kinetic)?;
+                non_negative("mu_static", mu_static)?;
+                non_negative("mu_kinetic", mu_kinetic)?;
                 positive("decay_speed", decay_speed)?;
                 positive("slip_speed", slip_speed)
             }
-            FrictionLaw::Stick { mu } => nonneg("mu", mu),
+            FrictionLaw::Stick { mu } => non_negative("mu", mu),
             FrictionLaw::None => Ok(()),
         }
     }
+}
+
+/// The sliding laws the tests exercise: Coulomb, arctan and Stribeck at typical values.
+#[cfg(test)]
+pub(crate) fn sample_sliding_laws(decay_speed: f64) -> [FrictionLaw; 3] {
+    [
+        FrictionLaw::Coulomb {
+            mu: 0.4,
+            slip_speed: 1e-3,
+        },
+        FrictionLaw::Arctan {
+            mu: 0.4,
+            slip_speed: 1e-3,
+        },
+        FrictionLaw::Stribeck {
+            mu_static: 0.5,
+            mu_kinetic: 0.35,
+            decay_speed,
+            slip_speed: 1e-3,
+        },
+    ]
 }
 
 #[cfg(test)]
@@ -336,22 +352,7 @@ mod tests {
         assert!(rel(a.pressure, b.pressure) < 1e-9 && rel(a.stiffness, b.stiffness) < 1e-9);
 
         let p = 8e5;
-        for law in [
-            FrictionLaw::Coulomb {
-                mu: 0.4,
-                slip_speed: 1e-3,
-            },
-            FrictionLaw::Arctan {
-                mu: 0.4,
-                slip_speed: 1e-3,
-            },
-            FrictionLaw::Stribeck {
-                mu_static: 0.5,
-                mu_kinetic: 0.35,
-                decay_speed: 0.5,
-                slip_speed: 1e-3,
-            },
-        ] {
+        for law in sample_sliding_laws(0.5) {
             for w in [-2.0, -3e-4, -1e-7, 0.0, 1e-7, 4e-4, 1.3] {
                 let t = law.traction(p, w);
                 let h = 1e-5 * w.abs().max(1e-3);

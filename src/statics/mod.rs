@@ -281,29 +281,37 @@ pub fn solve<'p>(
             // best one tried if it lowers |R| at all, else the step has failed.
             let mut alpha = 1.0;
             let mut best: Option<(f64, f64)> = None;
+            // The accepted trial's evaluation is kept (it is the next iterate's residual and
+            // contact state); only the best-of fallback needs a fresh evaluation.
             let chosen = loop {
                 trial.copy_from(&q)?;
                 trial.axpy(alpha, &dq)?;
-                let rt = eval(&trial, psi, &f, &residual)?.0;
+                let evaluated = eval(&trial, psi, &f, &residual)?;
+                let rt = evaluated.0;
                 if rt.is_finite() && rt <= (1.0 - 1e-4 * alpha) * r {
-                    break Some(alpha);
+                    break Some((alpha, Some(evaluated)));
                 }
                 if rt.is_finite() && best.is_none_or(|b| rt < b.1) {
                     best = Some((alpha, rt));
                 }
                 if alpha < 1.0 / 1024.0 {
-                    break best.filter(|b| b.1 < r).map(|b| b.0);
+                    break best.filter(|b| b.1 < r).map(|b| (b.0, None));
                 }
                 alpha *= 0.5;
             };
-            let Some(alpha) = chosen else {
+            let Some((alpha, evaluated)) = chosen else {
+                // Leave the residual of the current iterate for the error report.
+                eval(&q, psi, &f, &residual)?;
                 break Err((iteration, r, target));
             };
             let rec = record(alpha);
             progress(&rec);
             log.push(rec);
             q.axpy(alpha, &dq)?;
-            (r, reference, state) = eval(&q, psi, &f, &residual)?;
+            (r, reference, state) = match evaluated {
+                Some(e) => e,
+                None => eval(&q, psi, &f, &residual)?,
+            };
             iteration += 1;
         };
         match outcome {

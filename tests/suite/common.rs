@@ -39,3 +39,10 @@ pub fn say(petsc: &Petsc, text: &str) {
 pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
+
+/// Where the 1-rank run of the suite leaves results for the 2-rank run to compare against.
+pub fn suite_dir() -> std::path::PathBuf {
+    std::env::var_os("SQUEAL_SUITE_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
+}

@@ -14,18 +14,16 @@
 //!   (1e-8 relative), the braking torque equals sum(mu w p r) over the sliding points (1e-8),
 //!   and 1 and 2 ranks give the same contact pressures to round-off.
 
-use std::path::PathBuf;
-
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::{assemble_system_as, Clamp};
+use squeal::fem::system::{assemble_system_as, AssembledSystem, Clamp};
 use squeal::la::{MatrixFormat, Petsc};
 use squeal::mesh::structured::block;
 use squeal::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
 use squeal::statics::{pressure_load, solve, StaticSettings};
 
-use super::common::{rel, say, steel};
+use super::common::{rel, say, steel, suite_dir};
 
 pub fn tests() -> Vec<super::NamedTest> {
     vec![
@@ -162,16 +160,7 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         tolerance: 1e-12,
         ..Default::default()
     };
-    let state = solve(
-        petsc,
-        &system.stiffness,
-        &system.dofs,
-        &contact,
-        &f,
-        &statics,
-        |_| {},
-    )
-    .map_err(|e| e.to_string())?;
+    let state = preload(petsc, &system, &contact, &f, &statics)?;
     let worst = state
         .contact
         .response
@@ -188,12 +177,6 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
     Ok(worst)
 }
 
-fn suite_dir() -> PathBuf {
-    std::env::var_os("SQUEAL_SUITE_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
-}
-
 fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\n";
     let scene = squeal::scene::Scene::parse(text, "brake").map_err(|e| e.to_string())?;
@@ -203,7 +186,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     let system = assemble_system_as(petsc, &model.mesh, &model.clamps, Some(MatrixFormat::Aij))
         .map_err(|e| e.to_string())?;
     let mut settings = ContactSettings::default();
-    // mu 0.25: see jobs/default.toml on the static limit of this pad geometry.
+    // mu 0.25: see jobs/brake-static-preload.toml on the static limit of the anchored pads.
     settings.sliding.friction = FrictionLaw::Coulomb {
         mu: 0.25,
         slip_speed: 1e-3,
@@ -219,16 +202,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         model.pressure,
     )?;
     let statics = StaticSettings::default();
-    let state = solve(
-        petsc,
-        &system.stiffness,
-        &system.dofs,
-        &contact,
-        &f,
-        &statics,
-        |_| {},
-    )
-    .map_err(|e| e.to_string())?;
+    let state = preload(petsc, &system, &contact, &f, &statics)?;
     let piston = model.loads[0].area * model.pressure;
     let mut worst_force: f64 = 0.0;
     let mut worst_torque: f64 = 0.0;
@@ -293,4 +267,24 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         return Err(format!("pressures differ by {diff:e} of the largest"));
     }
     Ok(())
+}
+
+/// The static preload with the suite's error type.
+fn preload<'p>(
+    petsc: &'p Petsc,
+    system: &AssembledSystem<'p>,
+    contact: &ContactModel<'p>,
+    f: &squeal::la::Vector<'p>,
+    settings: &StaticSettings,
+) -> Result<squeal::statics::StaticState<'p>, String> {
+    solve(
+        petsc,
+        &system.stiffness,
+        &system.dofs,
+        contact,
+        f,
+        settings,
+        |_| {},
+    )
+    .map_err(|e| e.to_string())
 }

@@ -20,7 +20,7 @@ use squeal::la::{
 };
 use squeal::mesh::structured::block;
 
-use super::common::{rel, say, solve_modes, steel};
+use super::common::{rel, say, solve_modes, steel, suite_dir};
 
 pub fn tests() -> Vec<super::NamedTest> {
     vec![
@@ -38,12 +38,6 @@ pub fn tests() -> Vec<super::NamedTest> {
             matrix_market_export_import_roundtrip,
         ),
     ]
-}
-
-fn suite_dir() -> PathBuf {
-    std::env::var_os("SQUEAL_SUITE_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
 }
 
 fn data_dir() -> PathBuf {
