@@ -1,11 +1,16 @@
 //! The anchor bracket: bolted to the knuckle on the inboard side, two arms reach over the
-//! disc's rim; their abutment faces hold the backplate ears of both pads against the drag.
-//! Revolved about the disc axis.
+//! disc's rim; their abutment faces hold the backplate ears of both pads against the drag, and
+//! a U-shaped slot in each arm (a rail under and over each ear, as the abutment clips of real
+//! calipers have) holds the ears radially. Without the rails only the friction of the end
+//! faces holds the pad's in-plane rotation, and the static preload reaches a limit point near
+//! mu = 0.29. Revolved about the disc axis.
 //!
 //! ```text
-//!   theta ->  arm |       pads        | arm
-//!   abutment  ->  |[ear]         [ear]|  <-  abutment     (both pad layers, z = +-back)
-//!   mount bar  ===|===================|===   (inboard, below the pads' inner radius)
+//!   theta ->  arm |        pads         | arm
+//!             ====|====            =====|====  <- upper rail
+//!   abutment  ->  |[ear]           [ear]|  <-  abutment     (both pad layers, z = +-back)
+//!             ====|====            =====|====  <- lower rail
+//!   mount bar  ===|=====================|===   (inboard, below the pads' inner radius)
 //! ```
 
 use super::grid::{revolved_volume, Axis, CellFace, Frame, Grid, GridMesh};
@@ -25,12 +30,27 @@ const BRIDGE: f64 = 0.010;
 const FACE_CLEARANCE: f64 = 0.002;
 
 const R_MOUNT: usize = 0;
+const R_LOWER_RAIL: usize = 1;
 const R_ABUTMENT: usize = 2;
+const R_UPPER_RAIL: usize = 3;
 const R_BRIDGE: usize = 4;
-const T_CENTRE: usize = 1;
+/// Theta segments: arm, ear, centre (between the ears), ear, arm.
+const T_CENTRE: usize = 2;
 const Z_MOUNT: usize = 0;
 
-pub fn breaks(g: &BrakeGeometry) -> ([f64; 6], [f64; 4], [f64; 7]) {
+fn is_ear(ti: usize) -> bool {
+    ti == T_CENTRE - 1 || ti == T_CENTRE + 1
+}
+
+fn is_arm(ti: usize) -> bool {
+    ti == 0 || ti == T_CENTRE + 2
+}
+
+fn is_pad_layer(zi: usize) -> bool {
+    zi == 1 || zi == 5
+}
+
+pub fn breaks(g: &BrakeGeometry) -> ([f64; 6], [f64; 6], [f64; 7]) {
     let half = g.pad_arc_deg.to_radians() / 2.0;
     let ear = half + g.ear_deg.to_radians();
     let arm = ear + ARM_DEG.to_radians();
@@ -57,20 +77,22 @@ pub fn breaks(g: &BrakeGeometry) -> ([f64; 6], [f64; 4], [f64; 7]) {
         bond,
         back,
     ];
-    (r, [-arm, -ear, ear, arm], z)
+    (r, [-arm, -ear, -half, half, ear, arm], z)
 }
 
 fn selector() -> Selector {
     Box::new(|c: [usize; 3]| -> Option<usize> {
         let [ri, ti, zi] = c;
-        let on = if ti == T_CENTRE {
-            zi == Z_MOUNT && ri == R_MOUNT
-        } else {
+        let on = if is_arm(ti) {
             match zi {
                 Z_MOUNT => true,
-                1 | 5 => ri >= R_ABUTMENT,
+                1 | 5 => ri >= R_LOWER_RAIL,
                 _ => ri == R_BRIDGE,
             }
+        } else if is_ear(ti) && is_pad_layer(zi) {
+            ri == R_LOWER_RAIL || ri == R_UPPER_RAIL
+        } else {
+            zi == Z_MOUNT && ri == R_MOUNT
         };
         on.then_some(0)
     })
@@ -90,17 +112,22 @@ pub fn grid(g: &BrakeGeometry, h: f64) -> (Grid, Selector) {
     (grid, selector())
 }
 
-/// Surfaces `anchor_abutments` (faces on the backplate ears) and `anchor_mount` (bolt faces on
-/// the knuckle, under the arms); node set `anchor_bolts` (clamped).
+/// Surfaces `anchor_abutments` (end faces and rail faces on the backplate ears) and
+/// `anchor_mount` (bolt faces on the knuckle, under the arms); node set `anchor_bolts` (clamped).
 pub fn mesh(g: &BrakeGeometry, material: &Material, h: f64, kind: ElementKind) -> GridMesh {
     let (grid, select) = grid(g, h);
     let mut m = grid.mesh(kind, &[("anchor", material.clone())], &select);
     m.add_surface("anchor_abutments", |c, f| {
-        (c[2] == 1 || c[2] == 5) && c[0] == R_ABUTMENT && f.axis == 1 && (c[1] == 0) == f.positive
+        let [ri, ti, zi] = c;
+        let end_face = is_arm(ti) && ri == R_ABUTMENT && f.axis == 1 && (ti == 0) == f.positive;
+        let rail_face = is_ear(ti)
+            && f.axis == 0
+            && ((ri == R_LOWER_RAIL && f.positive) || (ri == R_UPPER_RAIL && !f.positive));
+        is_pad_layer(zi) && (end_face || rail_face)
     });
     m.add_surface("anchor_mount", |c, f| {
         c[2] == Z_MOUNT
-            && c[1] != T_CENTRE
+            && is_arm(c[1])
             && c[0] <= 1
             && f == CellFace {
                 axis: 2,

@@ -67,7 +67,7 @@ pub fn grid(g: &BrakeGeometry, side: Side, h: f64) -> (Grid, Selector) {
 
 /// Blocks `<side>_lining`, `<side>_backplate`; surfaces `<side>_lining_friction` (facing the
 /// disc), `<side>_backplate_back` (facing piston or fingers), `<side>_backplate_ears` (the
-/// end faces on the abutments); node sets of the last two.
+/// end and radial faces of the ears, on the anchor's abutments and rails); node sets of the last two.
 pub fn mesh(
     g: &BrakeGeometry,
     side: Side,
@@ -102,8 +102,9 @@ pub fn mesh(
     m.add_surface(&format!("{s}_backplate_back"), |c, f| {
         c[2] == z_backplate && f == away
     });
+    // End faces and the radial faces of the ears (on the anchor's rails).
     m.add_surface(&format!("{s}_backplate_ears"), |c, f| {
-        c[2] == z_backplate && f.axis == 1
+        c[2] == z_backplate && (f.axis == 1 || (c[1] != T_LINING && f.axis == 0))
     });
     m.add_node_set_of_surface(
         &format!("{s}_backplate_back"),
