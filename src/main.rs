@@ -152,8 +152,8 @@ fn print_summary(s: &RunSummary) {
     }
     if let Some(st) = &s.statics {
         println!(
-            "static preload: {} contact points, {} load steps, {} Newton iterations, {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
-            st.points, st.load_steps, st.newton_iterations, st.factorizations, st.factor_entries, st.final_residual
+            "static preload: {} contact points, {} load steps, {} Newton iterations ({} solves), {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
+            st.points, st.load_steps, st.newton_iterations, st.solves, st.factorizations, st.factor_entries, st.final_residual
         );
         for (name, missed, of) in &st.misses {
             if *missed > 0 {

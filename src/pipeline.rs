@@ -93,6 +93,7 @@ pub struct StaticSummary {
     pub newton_iterations: usize,
     pub load_steps: usize,
     pub factorizations: usize,
+    pub solves: usize,
     pub factor_entries: f64,
     pub pairing_seconds: f64,
     pub seconds: f64,
@@ -641,6 +642,7 @@ fn write_static(
     file.write_table("static/newton/residual", &log(&|r| r.residual), "N")?;
     file.write_table("static/newton/step_length", &log(&|r| r.step_length), "1")?;
     file.set_number("static", "factorizations", state.factorizations as f64)?;
+    file.set_number("static", "solves", state.solves as f64)?;
     file.set_number("static", "factor_entries", state.factor_entries)?;
     let piston_force: f64 = model.loads.first().map_or(0.0, |l| l.area * model.pressure);
     file.set_number("static", "piston_force_n", piston_force)?;
@@ -664,6 +666,7 @@ fn write_static(
         newton_iterations: state.log.iter().filter(|r| r.step_length > 0.0).count(),
         load_steps: last.load_step,
         factorizations: state.factorizations,
+        solves: state.solves,
         factor_entries: state.factor_entries,
         pairing_seconds: contact.pairing_seconds,
         seconds: state.seconds,

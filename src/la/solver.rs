@@ -127,6 +127,9 @@ impl<'p> DirectSolver<'p> {
         configure_mumps_pc(pc, a.format(), kind)?;
         call!(KSPSetFromOptions(solver.raw))?;
         call!(KSPSetUp(solver.raw))?;
+        // The factor belongs to the matrix as it was now: later changes of `a` (a Newton
+        // tangent updated in place) must not trigger a silent refactorization inside KSPSolve.
+        call!(KSPSetReusePreconditioner(solver.raw, ffi::PETSC_TRUE))?;
         let mut factor = std::ptr::null_mut();
         call!(PCFactorGetMatrix(pc, &mut factor))?;
         solver.report = mumps_report(factor, prefix)?;
