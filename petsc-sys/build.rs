@@ -148,6 +148,13 @@ fn main() {
         Ok(dir) if !dir.is_empty() => from_dirs(Path::new(&dir)),
         _ => from_pkg_config(),
     };
+    // squeal calls LAPACK/BLAS directly for small dense problems (the library PETSc uses;
+    // SQUEAL_LAPACK_LIBS overrides, e.g. "mkl_rt" on a cluster).
+    println!("cargo:rerun-if-env-changed=SQUEAL_LAPACK_LIBS");
+    let lapack = std::env::var("SQUEAL_LAPACK_LIBS").unwrap_or_else(|_| "lapack blas".into());
+    for lib in lapack.split_whitespace() {
+        println!("cargo:rustc-link-lib={lib}");
+    }
     let mut include_dirs = found.include_dirs;
     include_dirs.extend(mpi_include_dirs());
     check_configuration(&include_dirs);

@@ -23,6 +23,14 @@ pub fn sum(comm: &SimpleCommunicator, value: f64) -> f64 {
     global
 }
 
+/// Element-wise sum over ranks, in place.
+///
+/// # Collective
+pub fn sum_in_place(comm: &SimpleCommunicator, values: &mut [f64]) {
+    let local = values.to_vec();
+    comm.all_reduce_into(&local[..], values, SystemOperation::sum());
+}
+
 /// Maximum over ranks.
 ///
 /// # Collective

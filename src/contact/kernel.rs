@@ -134,8 +134,62 @@ pub enum Part {
     Damping,
 }
 
-/// Adds the point's contribution of `part` to a dense row-major |dofs| x |dofs| matrix:
-/// -d(force)/du for stiffness parts, -d(force)/dv for damping.
+/// One of the observation rows of a point (the channels a tangent couples).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Channel {
+    Nor = 0,
+    Tan = 1,
+    Tan2 = 2,
+    Conv = 3,
+}
+
+impl PointRows {
+    pub fn row(&self, c: Channel) -> &[f64] {
+        match c {
+            Channel::Nor => &self.nor,
+            Channel::Tan => &self.tan,
+            Channel::Tan2 => &self.tan2,
+            Channel::Conv => &self.conv,
+        }
+    }
+}
+
+/// The point's contribution of `part` as rank-one terms `coef c_a c_b^T` over its observation
+/// rows: -d(force)/du for stiffness parts, -d(force)/dv for damping. The one definition both
+/// the sparse tangents (over DOFs) and the projected ones (over modal coordinates) use.
+pub fn tangent_terms(
+    weight: f64,
+    omega: f64,
+    o: &Observed,
+    r: &PointResponse,
+    part: Part,
+) -> Vec<(f64, Channel, Channel)> {
+    use Channel::*;
+    let terms = match part {
+        Part::Normal => vec![(weight * r.stiffness, Nor, Nor)],
+        Part::Stick => {
+            let k = weight * r.stick * r.stiffness;
+            vec![(k, Tan, Tan), (k, Tan2, Tan2)]
+        }
+        Part::Friction => {
+            if r.stick != 0.0 {
+                // t_i = mu k_c(g) slip_i: the coupling through dk_c/dg.
+                let c = weight * r.stick * r.stiffness_slope;
+                vec![(c * o.slip[0], Tan, Nor), (c * o.slip[1], Tan2, Nor)]
+            } else {
+                // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
+                vec![
+                    (-weight * r.d_pressure * r.stiffness, Tan, Nor),
+                    (weight * r.d_speed * omega, Tan, Conv),
+                ]
+            }
+        }
+        Part::Damping => vec![(weight * r.d_speed, Tan, Tan)],
+    };
+    terms.into_iter().filter(|t| t.0 != 0.0).collect()
+}
+
+/// Adds the point's contribution of `part` to a dense row-major |dofs| x |dofs| matrix.
 pub fn add_tangent(
     rows: &PointRows,
     weight: f64,
@@ -146,10 +200,8 @@ pub fn add_tangent(
     out: &mut [f64],
 ) {
     let n = rows.dofs.len();
-    let mut outer = |coef: f64, a: &[f64], b: &[f64]| {
-        if coef == 0.0 {
-            return;
-        }
+    for (coef, a, b) in tangent_terms(weight, omega, o, r, part) {
+        let (a, b) = (rows.row(a), rows.row(b));
         for i in 0..n {
             if a[i] == 0.0 {
                 continue;
@@ -159,27 +211,6 @@ pub fn add_tangent(
                 out[i * n + j] += ai * b[j];
             }
         }
-    };
-    match part {
-        Part::Normal => outer(weight * r.stiffness, &rows.nor, &rows.nor),
-        Part::Stick => {
-            let k = weight * r.stick * r.stiffness;
-            outer(k, &rows.tan, &rows.tan);
-            outer(k, &rows.tan2, &rows.tan2);
-        }
-        Part::Friction => {
-            if r.stick != 0.0 {
-                // t_i = mu k_c(g) slip_i: the coupling through dk_c/dg.
-                let c = weight * r.stick * r.stiffness_slope;
-                outer(c * o.slip[0], &rows.tan, &rows.nor);
-                outer(c * o.slip[1], &rows.tan2, &rows.nor);
-            } else {
-                // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
-                outer(-weight * r.d_pressure * r.stiffness, &rows.tan, &rows.nor);
-                outer(weight * r.d_speed * omega, &rows.tan, &rows.conv);
-            }
-        }
-        Part::Damping => outer(weight * r.d_speed, &rows.tan, &rows.tan),
     }
 }
 

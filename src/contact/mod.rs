@@ -17,7 +17,7 @@ use crate::la::{
     LaError, MatrixFormat, ObservationMatrix, Petsc, Preallocation, SparseMatrix, Vector,
 };
 use crate::mesh::{Interface, InterfaceKind, Mesh};
-use kernel::{Observed, Part, PointResponse, PointRows, Status};
+use kernel::{Channel, Observed, Part, PointResponse, PointRows, Status};
 use law::{FrictionLaw, NormalLaw};
 use pairing::{Axis, ContactPoint};
 
@@ -472,6 +472,57 @@ impl<'p> ContactModel<'p> {
             matrix.add_values(&rows.dofs, &rows.dofs, &dense)?;
         }
         Ok(())
+    }
+
+    /// The rank-one terms of every local point's tangent `parts` (see
+    /// [`kernel::tangent_terms`]), in local point order.
+    pub fn tangent_terms(
+        &self,
+        state: &ContactState,
+        parts: &[Part],
+    ) -> Vec<Vec<(f64, Channel, Channel)>> {
+        self.local
+            .iter()
+            .enumerate()
+            .map(|(k, &id)| {
+                let point = &self.points[id];
+                let sliding = self.interfaces[point.interface].friction.is_sliding();
+                let omega = if sliding { self.disc_speed } else { 0.0 };
+                parts
+                    .iter()
+                    .flat_map(|&part| {
+                        kernel::tangent_terms(
+                            point.weight,
+                            omega,
+                            &state.observed[k],
+                            &state.response[k],
+                            part,
+                        )
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The observation rows applied to each shape: for every channel (normal, tangent, second
+    /// tangent, convection) a local-points x shapes column-major block.
+    ///
+    /// # Collective
+    pub fn observe_shapes(&self, shapes: &[Vector]) -> Result<[Vec<f64>; 4], LaError> {
+        let n = self.local.len();
+        let mut out: [Vec<f64>; 4] = Default::default();
+        let y = self.c_nor.new_point_vector()?;
+        for (c, matrix) in [&self.c_nor, &self.c_tan, &self.c_tan2, &self.c_conv]
+            .into_iter()
+            .enumerate()
+        {
+            out[c].reserve(n * shapes.len());
+            for x in shapes {
+                matrix.mult(x, &y)?;
+                out[c].extend_from_slice(&y.local()?);
+            }
+        }
+        Ok(out)
     }
 
     /// Preallocation of a matrix with the pattern of `base` (if any) joined with every

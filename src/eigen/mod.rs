@@ -1,3 +1,4 @@
-//! Eigenvalue analyses: real modes of the structure (and, later, complex modes).
+//! Eigenvalue analyses: real modes of the structure, complex modes of a tangent state.
 
+pub mod complex_modes;
 pub mod real_modes;

@@ -350,6 +350,13 @@ impl<'p> SparseMatrix<'p> {
         call!(MatCopy(source.raw, self.raw, ffi::SUBSET_NONZERO_PATTERN))
     }
 
+    /// `self *= alpha`
+    ///
+    /// # Collective
+    pub fn scale(&mut self, alpha: f64) -> Result<()> {
+        call!(MatScale(self.raw, alpha))
+    }
+
     /// # Collective
     pub fn zero_entries(&mut self) -> Result<()> {
         call!(MatZeroEntries(self.raw))

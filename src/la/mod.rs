@@ -6,6 +6,7 @@
 
 pub mod eigen;
 pub(crate) mod error;
+pub mod lapack;
 pub mod matrix;
 pub mod observation;
 pub mod quadratic;

@@ -1,6 +1,7 @@
 //! Tests of the MPI suite, grouped by the reference they reproduce.
 
 pub mod common;
+pub mod complex_modes;
 pub mod contact_statics;
 pub mod convergence;
 pub mod parallel_and_solvers;
@@ -19,5 +20,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(parallel_and_solvers::tests());
     v.extend(static_solve::tests());
     v.extend(contact_statics::tests());
+    v.extend(complex_modes::tests());
     v
 }

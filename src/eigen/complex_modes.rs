@@ -1,0 +1,654 @@
+//! Complex modes `(s^2 M + s C + K) psi = 0` of a tangent state, by two routes that must agree:
+//!
+//! - **full**: SLEPc's PEP (TOAR, shift-and-invert with MUMPS LU) on the full unsymmetric
+//!   quadratic problem in real arithmetic; complex eigenvalues come as conjugate pairs.
+//! - **projected**: on the M-orthonormal real modes Phi of the symmetric reference tangent
+//!   K_s = K0 + K_c + K_stick (Phi^T K_s Phi = diag(omega^2), Phi^T M Phi = I), the reduced
+//!   problem `(s^2 I + s C_p + K_p) y = 0` is dense and solved through its companion matrix by
+//!   LAPACK. Contact enters only through the observation rows: Phi^T (sum of point terms) Phi =
+//!   P_a^T diag(g) P_b with P_a = C_a Phi (points x modes), so a new tangent state (another mu,
+//!   pressure, speed, law) is re-projected in O(points x modes^2), without touching the full
+//!   matrices. That makes sweeps cheap.
+//!
+//! Both routes report frequency Im(s)/2pi, damping ratio -Re(s)/|s| and the backward error of
+//! every eigenpair on the full model, ||(s^2 M + s C + K) psi|| / ((|s|^2 ||M|| + |s| ||C|| +
+//! ||K||) ||psi||) (infinity norms of the matrices, 2-norm of the vectors; PEP's definition).
+
+use std::f64::consts::PI;
+use std::time::Instant;
+
+use mpi::topology::SimpleCommunicator;
+use serde::{Deserialize, Serialize};
+
+use crate::contact::kernel::Channel;
+use crate::la::lapack;
+use crate::la::{solve_quadratic, LaError, Petsc, QuadraticOptions, SparseMatrix, Vector};
+
+/// Which route(s) to run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Route {
+    #[default]
+    Projected,
+    Full,
+    /// Both, with the projected-vs-full comparison in the results.
+    Both,
+}
+
+/// The `[complex_modes]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ComplexModeSettings {
+    #[serde(default)]
+    pub method: Route,
+    /// Full route: modes (one per conjugate pair) nearest s = 0. Default: as many as real
+    /// modes, else 20.
+    #[serde(default)]
+    pub count: Option<usize>,
+    /// Keep the modes below this frequency (Hz); the full route then widens its search until
+    /// it has every eigenvalue with |s| below 2 pi f_max x 1.1.
+    #[serde(default)]
+    pub f_max_hz: Option<f64>,
+    /// Full route: PEP convergence tolerance.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    /// A mode is reported unstable when its damping ratio is below -instability_margin
+    /// (round-off puts the undamped modes of a friction-free model at |zeta| ~ 1e-12).
+    #[serde(default = "default_margin")]
+    pub instability_margin: f64,
+}
+
+fn default_tolerance() -> f64 {
+    1e-10
+}
+fn default_margin() -> f64 {
+    1e-6
+}
+
+impl Default for ComplexModeSettings {
+    fn default() -> Self {
+        ComplexModeSettings {
+            method: Route::default(),
+            count: None,
+            f_max_hz: None,
+            tolerance: default_tolerance(),
+            instability_margin: default_margin(),
+        }
+    }
+}
+
+impl ComplexModeSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if self.count == Some(0) {
+            return Err("key 'complex_modes.count' must be at least 1".into());
+        }
+        if let Some(f) = self.f_max_hz {
+            if !(f > 0.0 && f.is_finite()) {
+                return Err(format!(
+                    "key 'complex_modes.f_max_hz' = {f}: must be a positive frequency"
+                ));
+            }
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
+            return Err(format!(
+                "key 'complex_modes.tolerance' = {}: must be in (0, 0.01)",
+                self.tolerance
+            ));
+        }
+        if !(self.instability_margin >= 0.0 && self.instability_margin < 0.1) {
+            return Err(format!(
+                "key 'complex_modes.instability_margin' = {}: must be in [0, 0.1)",
+                self.instability_margin
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The `[damping]` table: Rayleigh damping C = alpha M + beta K0.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingSettings {
+    #[serde(default)]
+    pub rayleigh_alpha: f64,
+    #[serde(default)]
+    pub rayleigh_beta: f64,
+}
+
+impl DampingSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        for (key, v) in [
+            ("rayleigh_alpha", self.rayleigh_alpha),
+            ("rayleigh_beta", self.rayleigh_beta),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(format!(
+                    "key 'damping.{key}' = {v}: must be a finite non-negative number"
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// One complex mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ComplexMode {
+    /// Cj, numbered by ascending frequency.
+    pub name: String,
+    /// s = re + i im (1/s), the member of its conjugate pair with im >= 0.
+    pub eigenvalue: (f64, f64),
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    /// On the full model (see the module comment).
+    pub backward_error: f64,
+    pub unstable: bool,
+    /// Index (0-based) of the real mode with the largest participation, when known.
+    pub dominant_real_mode: Option<usize>,
+}
+
+/// Complex modes of one route, ascending in frequency.
+pub struct ComplexModes<'p> {
+    pub route: Route,
+    pub modes: Vec<ComplexMode>,
+    /// Real and imaginary parts of each shape (unit M-norm for the projected route).
+    pub shapes: Vec<(Vector<'p>, Vector<'p>)>,
+    /// Real modes in the projection basis (projected route), 0 for the full route.
+    pub basis: usize,
+    pub seconds: f64,
+}
+
+pub fn damping_ratio(s: (f64, f64)) -> f64 {
+    let r = s.0.hypot(s.1);
+    if r == 0.0 {
+        0.0
+    } else {
+        -s.0 / r
+    }
+}
+
+pub fn frequency_hz(s: (f64, f64)) -> f64 {
+    s.1 / (2.0 * PI)
+}
+
+/// The full model's quadratic operators, for the full route and for residuals.
+pub struct Operators<'a, 'p> {
+    pub k: &'a SparseMatrix<'p>,
+    pub c: &'a SparseMatrix<'p>,
+    pub m: &'a SparseMatrix<'p>,
+    norms: [f64; 3],
+}
+
+impl<'a, 'p> Operators<'a, 'p> {
+    /// # Collective
+    pub fn new(
+        k: &'a SparseMatrix<'p>,
+        c: &'a SparseMatrix<'p>,
+        m: &'a SparseMatrix<'p>,
+    ) -> Result<Self, LaError> {
+        let norms = [k.norm_infinity()?, c.norm_infinity()?, m.norm_infinity()?];
+        Ok(Operators { k, c, m, norms })
+    }
+
+    /// Backward error of (s, xr + i xi) on the full model.
+    ///
+    /// # Collective
+    pub fn backward_error(&self, s: (f64, f64), xr: &Vector, xi: &Vector) -> Result<f64, LaError> {
+        // (s^2 M + s C + K) x with s^2 = (a, b), s = (c, d), x = xr + i xi:
+        // real = a M xr - b M xi + c C xr - d C xi + K xr, imaginary likewise.
+        let (re, im) = s;
+        let (a, b) = (re * re - im * im, 2.0 * re * im);
+        let tmp = xr.duplicate()?;
+        let (rr, ri) = (xr.duplicate()?, xr.duplicate()?);
+        self.k.mult(xr, &rr)?;
+        self.k.mult(xi, &ri)?;
+        for (op, cr, ci) in [(self.m, a, b), (self.c, re, im)] {
+            op.mult(xr, &tmp)?;
+            rr.axpy(cr, &tmp)?;
+            ri.axpy(ci, &tmp)?;
+            op.mult(xi, &tmp)?;
+            rr.axpy(-ci, &tmp)?;
+            ri.axpy(cr, &tmp)?;
+        }
+        let r = rr.norm2()?.hypot(ri.norm2()?);
+        let x = xr.norm2()?.hypot(xi.norm2()?);
+        let abs = re.hypot(im);
+        let scale = abs * abs * self.norms[2] + abs * self.norms[1] + self.norms[0];
+        Ok(if x > 0.0 && scale > 0.0 {
+            r / (scale * x)
+        } else {
+            f64::INFINITY
+        })
+    }
+}
+
+/// Orders modes by frequency, names them and flags the unstable ones.
+fn finish(
+    mut modes: Vec<ComplexMode>,
+    settings: &ComplexModeSettings,
+) -> (Vec<ComplexMode>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..modes.len()).collect();
+    order.sort_by(|&a, &b| {
+        let (sa, sb) = (modes[a].eigenvalue, modes[b].eigenvalue);
+        sa.1.total_cmp(&sb.1).then(sa.0.total_cmp(&sb.0))
+    });
+    let mut sorted: Vec<ComplexMode> = order.iter().map(|&i| modes[i].clone()).collect();
+    for (j, m) in sorted.iter_mut().enumerate() {
+        m.name = format!("C{}", j + 1);
+        m.unstable = m.damping_ratio < -settings.instability_margin;
+    }
+    modes.clear();
+    (sorted, order)
+}
+
+fn mode(s: (f64, f64), backward_error: f64, dominant: Option<usize>) -> ComplexMode {
+    ComplexMode {
+        name: String::new(),
+        eigenvalue: s,
+        frequency_hz: frequency_hz(s),
+        damping_ratio: damping_ratio(s),
+        backward_error,
+        unstable: false,
+        dominant_real_mode: dominant,
+    }
+}
+
+/// The full route.
+///
+/// # Collective
+pub fn full<'p>(
+    petsc: &'p Petsc,
+    ops: &Operators<'_, 'p>,
+    settings: &ComplexModeSettings,
+    default_count: usize,
+) -> Result<ComplexModes<'p>, LaError> {
+    let start = Instant::now();
+    let mut nev = settings.count.unwrap_or(default_count).max(1);
+    let wanted_radius = settings.f_max_hz.map(|f| 2.0 * PI * f * 1.1);
+    let sol = loop {
+        let opts = QuadraticOptions {
+            count: 2 * nev,
+            target: 0.0,
+            tolerance: settings.tolerance,
+            scale: true,
+            prefix: "complex_".into(),
+        };
+        let sol = solve_quadratic(petsc, ops.k, ops.c, ops.m, &opts)?;
+        let radius = sol
+            .values
+            .iter()
+            .map(|&(r, i)| r.hypot(i))
+            .fold(0.0f64, f64::max);
+        match wanted_radius {
+            Some(w) if radius < w && nev < 4096 && sol.values.len() >= 2 * nev => {
+                // Not every eigenvalue below f_max is in yet: widen the search.
+                let grow = ((w / radius.max(1e-300)).powi(2) * nev as f64).ceil() as usize;
+                nev = grow.clamp(2 * nev, 4 * nev);
+            }
+            _ => break sol,
+        }
+    };
+    let mut modes = Vec::new();
+    let mut shapes = Vec::new();
+    for (i, &(re, im)) in sol.values.iter().enumerate() {
+        if im < 0.0 {
+            continue;
+        }
+        if settings
+            .f_max_hz
+            .is_some_and(|f| frequency_hz((re, im)) > f)
+        {
+            continue;
+        }
+        let (xr, xi) = &sol.vectors[i];
+        let eta = ops.backward_error((re, im), xr, xi)?;
+        modes.push(mode((re, im), eta, None));
+        shapes.push((xr.try_clone()?, xi.try_clone()?));
+    }
+    let (modes, order) = finish(modes, settings);
+    let mut slots: Vec<Option<(Vector, Vector)>> = shapes.into_iter().map(Some).collect();
+    let shapes = order
+        .iter()
+        .map(|&i| slots[i].take().expect("each shape once"))
+        .collect();
+    Ok(ComplexModes {
+        route: Route::Full,
+        modes,
+        shapes,
+        basis: 0,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The real-mode basis of the projected route, with the contact observation of every mode.
+pub struct ModalProjection {
+    /// Modes in the basis.
+    pub size: usize,
+    pub omega2: Vec<f64>,
+    /// P_a = C_a Phi for the four channels: local points x modes, column-major.
+    channels: [Vec<f64>; 4],
+    points: usize,
+    /// Phi^T (contact part of K_s) Phi, summed over ranks: removed again from diag(omega^2)
+    /// when the contact state changes.
+    reference: Vec<f64>,
+}
+
+/// A complex number as (re, im).
+pub type Complex = (f64, f64);
+/// An eigenvalue with its modal coordinates.
+pub type DenseEigenpair = (Complex, Vec<Complex>);
+/// Projected K, C and M (column-major).
+pub type ProjectedOperators = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// Point terms `(coefficient, channel a, channel b)` of every local point.
+pub type PointTerms = [Vec<(f64, Channel, Channel)>];
+
+impl ModalProjection {
+    /// `omega2`: eigenvalues of the basis modes (M-orthonormal eigenvectors of K_s);
+    /// `channels`: their observation (see [`crate::contact::ContactModel::observe_shapes`]);
+    /// `reference`: the point terms of the symmetric contact part inside K_s.
+    ///
+    /// # Collective
+    pub fn new(
+        comm: &SimpleCommunicator,
+        omega2: Vec<f64>,
+        channels: [Vec<f64>; 4],
+        points: usize,
+        reference: &PointTerms,
+    ) -> Self {
+        let size = omega2.len();
+        for c in &channels {
+            assert_eq!(c.len(), points * size, "observed shapes: points x modes");
+        }
+        let mut p = ModalProjection {
+            size,
+            omega2,
+            channels,
+            points,
+            reference: Vec::new(),
+        };
+        p.reference = p.project(comm, reference);
+        p
+    }
+
+    /// Sum over points of the terms, projected: m x m column-major, summed over ranks.
+    ///
+    /// # Collective
+    pub fn project(&self, comm: &SimpleCommunicator, terms: &PointTerms) -> Vec<f64> {
+        let (n, m) = (self.points, self.size);
+        assert_eq!(terms.len(), n, "one term list per local point");
+        let mut out = vec![0.0; m * m];
+        // Group by channel pair: out += P_a^T diag(g) P_b, one GEMM per pair present.
+        let mut weights = vec![vec![0.0f64; n]; 16];
+        let mut present = [false; 16];
+        for (j, list) in terms.iter().enumerate() {
+            for &(g, a, b) in list {
+                let pair = a as usize * 4 + b as usize;
+                weights[pair][j] += g;
+                present[pair] = true;
+            }
+        }
+        let mut scaled = vec![0.0; n * m];
+        for pair in (0..16).filter(|&p| present[p]) {
+            let (a, b) = (pair / 4, pair % 4);
+            let g = &weights[pair];
+            for k in 0..m {
+                for j in 0..n {
+                    scaled[k * n + j] = g[j] * self.channels[b][k * n + j];
+                }
+            }
+            let product = lapack::gemm_tn(n, m, m, &self.channels[a], &scaled);
+            for (o, p) in out.iter_mut().zip(&product) {
+                *o += p;
+            }
+        }
+        crate::parallel::sum_in_place(comm, &mut out);
+        out
+    }
+
+    /// Projected stiffness and damping of a contact state: K_p = diag(omega^2) - reference +
+    /// Phi^T (stiffness terms) Phi; C_p = alpha I + beta K0_p + Phi^T (damping terms) Phi, with
+    /// K0_p = diag(omega^2) - reference.
+    ///
+    /// # Collective
+    pub fn operators(
+        &self,
+        comm: &SimpleCommunicator,
+        stiffness: &PointTerms,
+        damping_terms: &PointTerms,
+        damping: &DampingSettings,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let m = self.size;
+        let mut k0 = self.reference.iter().map(|x| -x).collect::<Vec<f64>>();
+        for i in 0..m {
+            k0[i * m + i] += self.omega2[i];
+        }
+        let contact = self.project(comm, stiffness);
+        let kp: Vec<f64> = k0.iter().zip(&contact).map(|(a, b)| a + b).collect();
+        let mut cp = self.project(comm, damping_terms);
+        for (c, k) in cp.iter_mut().zip(&k0) {
+            *c += damping.rayleigh_beta * k;
+        }
+        for i in 0..m {
+            cp[i * m + i] += damping.rayleigh_alpha;
+        }
+        (kp, cp)
+    }
+}
+
+/// Projects the full operators on `shapes` by products (for models without contact
+/// observation, e.g. user matrices): returns (K_p, C_p, M_p), column-major.
+///
+/// # Collective
+pub fn project_operators(
+    ops: &Operators,
+    shapes: &[Vector],
+) -> Result<ProjectedOperators, LaError> {
+    let m = shapes.len();
+    let mut out = [vec![0.0; m * m], vec![0.0; m * m], vec![0.0; m * m]];
+    if m == 0 {
+        let [k, c, mm] = out;
+        return Ok((k, c, mm));
+    }
+    let y = shapes[0].duplicate()?;
+    for (o, op) in out.iter_mut().zip([ops.k, ops.c, ops.m]) {
+        for j in 0..m {
+            op.mult(&shapes[j], &y)?;
+            for i in 0..m {
+                o[j * m + i] = shapes[i].dot(&y)?;
+            }
+        }
+    }
+    let [k, c, mm] = out;
+    Ok((k, c, mm))
+}
+
+/// Eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m, column-major) with Im(s) >= 0; y has
+/// unit 2-norm. Solved on the companion matrix, scaled by omega_r = sqrt(max |K_p,ii|) so its
+/// blocks are of order one (LAPACK balances the rest).
+pub fn solve_dense(
+    m: usize,
+    kp: &[f64],
+    cp: &[f64],
+) -> Result<Vec<DenseEigenpair>, String> {
+    let n = 2 * m;
+    let omega_r = (0..m)
+        .map(|i| kp[i * m + i].abs())
+        .fold(0.0f64, f64::max)
+        .sqrt()
+        .max(1e-300);
+    let mut a = vec![0.0; n * n];
+    for i in 0..m {
+        a[(m + i) * n + i] = 1.0;
+        for j in 0..m {
+            a[j * n + m + i] = -kp[j * m + i] / (omega_r * omega_r);
+            a[(m + j) * n + m + i] = -cp[j * m + i] / omega_r;
+        }
+    }
+    let e = lapack::eigen_general(n, a)?;
+    let mut out = Vec::new();
+    for (j, &(re, im)) in e.values.iter().enumerate() {
+        if im < 0.0 {
+            continue;
+        }
+        let z = &e.vectors[j];
+        let norm = z[..m]
+            .iter()
+            .map(|&(r, i)| r * r + i * i)
+            .sum::<f64>()
+            .sqrt();
+        if norm == 0.0 {
+            continue;
+        }
+        let y = z[..m].iter().map(|&(r, i)| (r / norm, i / norm)).collect();
+        out.push(((re * omega_r, im * omega_r), y));
+    }
+    Ok(out)
+}
+
+/// psi = Phi y for complex coordinates y.
+///
+/// # Collective
+pub fn expand<'p>(
+    shapes: &[Vector<'p>],
+    y: &[(f64, f64)],
+) -> Result<(Vector<'p>, Vector<'p>), LaError> {
+    let xr = shapes[0].duplicate()?;
+    let xi = shapes[0].duplicate()?;
+    xr.set_all(0.0)?;
+    xi.set_all(0.0)?;
+    for (phi, &(r, i)) in shapes.iter().zip(y) {
+        xr.axpy(r, phi)?;
+        xi.axpy(i, phi)?;
+    }
+    Ok((xr, xi))
+}
+
+/// The projected route from projected operators (M_p = I). With `ops`, each mode is expanded
+/// to the full model and its backward error computed there (else NaN, for fast sweeps).
+///
+/// # Collective
+pub fn projected<'p>(
+    shapes: &[Vector<'p>],
+    kp: &[f64],
+    cp: &[f64],
+    ops: Option<&Operators<'_, 'p>>,
+    settings: &ComplexModeSettings,
+) -> Result<ComplexModes<'p>, LaError> {
+    let start = Instant::now();
+    let m = shapes.len();
+    let pairs = solve_dense(m, kp, cp).map_err(LaError::Invalid)?;
+    let mut modes = Vec::new();
+    let mut coords = Vec::new();
+    for (s, y) in pairs {
+        if settings.f_max_hz.is_some_and(|f| frequency_hz(s) > f) {
+            continue;
+        }
+        let dominant = y
+            .iter()
+            .map(|&(r, i)| r * r + i * i)
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k);
+        modes.push(mode(s, f64::NAN, dominant));
+        coords.push(y);
+    }
+    let (mut modes, order) = finish(modes, settings);
+    let mut shapes_out = Vec::new();
+    if let Some(ops) = ops {
+        for (mode, &i) in modes.iter_mut().zip(&order) {
+            let (xr, xi) = expand(shapes, &coords[i])?;
+            mode.backward_error = ops.backward_error(mode.eigenvalue, &xr, &xi)?;
+            shapes_out.push((xr, xi));
+        }
+    }
+    Ok(ComplexModes {
+        route: Route::Projected,
+        modes,
+        shapes: shapes_out,
+        basis: m,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Modal coordinates of the projected modes (for tracking), in the order of `modes`.
+pub fn projected_coordinates(
+    m: usize,
+    kp: &[f64],
+    cp: &[f64],
+) -> Result<Vec<DenseEigenpair>, String> {
+    let mut pairs = solve_dense(m, kp, cp)?;
+    pairs.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1).then(a.0 .0.total_cmp(&b.0 .0)));
+    Ok(pairs)
+}
+
+/// Modal assurance criterion of two complex vectors: |a^H b|^2 / (|a|^2 |b|^2).
+pub fn mac(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
+    let (mut re, mut im, mut na, mut nb) = (0.0, 0.0, 0.0, 0.0);
+    for (&(ar, ai), &(br, bi)) in a.iter().zip(b) {
+        re += ar * br + ai * bi;
+        im += ar * bi - ai * br;
+        na += ar * ar + ai * ai;
+        nb += br * br + bi * bi;
+    }
+    if na == 0.0 || nb == 0.0 {
+        0.0
+    } else {
+        (re * re + im * im) / (na * nb)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dense_route_finds_damped_oscillators_exactly() {
+        // Uncoupled s^2 + c s + k: s = -c/2 +- i sqrt(k - c^2/4).
+        let m = 3;
+        let k = [4.0, 9.0e6, 16.0e10];
+        let c = [0.1, 30.0, 2.0e3];
+        let mut kp = vec![0.0; 9];
+        let mut cp = vec![0.0; 9];
+        for i in 0..m {
+            kp[i * m + i] = k[i];
+            cp[i * m + i] = c[i];
+        }
+        let pairs = solve_dense(m, &kp, &cp).unwrap();
+        assert_eq!(pairs.len(), 3);
+        for i in 0..m {
+            let exact = (-c[i] / 2.0, (k[i] - c[i] * c[i] / 4.0).sqrt());
+            let found = pairs
+                .iter()
+                .map(|p| p.0)
+                .min_by(|a, b| {
+                    let d = |s: &(f64, f64)| (s.0 - exact.0).hypot(s.1 - exact.1);
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap();
+            let err = (found.0 - exact.0).hypot(found.1 - exact.1) / exact.0.hypot(exact.1);
+            assert!(
+                err < 1e-12,
+                "oscillator {i}: {found:?} vs {exact:?} ({err:e})"
+            );
+        }
+    }
+
+    #[test]
+    fn mac_is_one_for_complex_multiples_and_zero_for_orthogonal() {
+        let a = [(1.0, 0.5), (-0.3, 2.0)];
+        let b: Vec<(f64, f64)> = a
+            .iter()
+            .map(|&(r, i)| (0.3 * r - 1.2 * i, 0.3 * i + 1.2 * r))
+            .collect();
+        assert!((mac(&a, &b) - 1.0).abs() < 1e-14);
+        assert!(mac(&[(1.0, 0.0), (0.0, 0.0)], &[(0.0, 0.0), (0.0, 1.0)]) < 1e-30);
+    }
+
+    #[test]
+    fn damping_ratio_and_frequency() {
+        let s = (-3.0, 4.0);
+        assert!((damping_ratio(s) - 0.6).abs() < 1e-15);
+        assert!((frequency_hz(s) - 4.0 / (2.0 * PI)).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,301 @@
+//! Complex modes (DESIGN.md §2, §6 rung 3).
+//!
+//! - 2-DOF mode-coupling model (Hoffmann, Fischer, Bertram, Gaul 2002, "A minimal model for
+//!   studying properties of the mode-coupling type instability in friction induced
+//!   oscillations", Mech. Res. Commun. 29; the form of DESIGN.md §6): mass m on springs k1, k2
+//!   at angles a1, a2 and a contact spring k3 on a belt sliding at constant speed. Stiffness
+//!   K(mu) = [[k11, k12 - mu k3], [k12, k22]] with k11 = k1 c1^2 + k2 c2^2, k12 = k1 c1 s1 +
+//!   k2 c2 s2, k22 = k1 s1^2 + k2 s2^2 + k3. Closed form: the two modes coalesce at
+//!   mu_crit = (((k11 - k22)/2)^2 + k12^2) / (k12 k3) with frequency omega_c = sqrt((k11 +
+//!   k22) / (2 m)); below, all Re(s) = 0 (no damping); above, one pair has Re(s) > 0.
+//!   The test builds the contact point with the code's own laws (linear normal law k3,
+//!   saturated Coulomb) and kernel, projects on the real modes and bisects mu on the sign of
+//!   the largest Re(s): mu_crit and omega_c agree with the closed form to 1e-8 relative. The
+//!   full route (SLEPc PEP on the same tangent) agrees with the projected one below and above.
+
+use squeal::contact::kernel::{self, Channel, Observed, Part, PointRows};
+use squeal::contact::law::{FrictionLaw, NormalLaw};
+use squeal::eigen::complex_modes::{
+    full, solve_dense, ComplexModeSettings, ModalProjection, Operators,
+};
+use squeal::la::{MatrixFormat, Petsc, Preallocation, SparseMatrix};
+
+use super::common::{rel, say};
+
+pub fn tests() -> Vec<super::NamedTest> {
+    vec![(
+        "hoffmann_two_dof_mode_coupling_mu_crit_and_coalescence",
+        hoffmann_two_dof,
+    )]
+}
+
+struct TwoDof {
+    m: f64,
+    k11: f64,
+    k12: f64,
+    k22_springs: f64,
+    k3: f64,
+}
+
+impl TwoDof {
+    fn new() -> Self {
+        let (k1, k2, k3) = (1.0e6, 8.0e5, 6.0e5);
+        let (a1, a2) = (45f64.to_radians(), 150f64.to_radians());
+        TwoDof {
+            m: 2.0,
+            k11: k1 * a1.cos().powi(2) + k2 * a2.cos().powi(2),
+            k12: k1 * a1.cos() * a1.sin() + k2 * a2.cos() * a2.sin(),
+            k22_springs: k1 * a1.sin().powi(2) + k2 * a2.sin().powi(2),
+            k3,
+        }
+    }
+    fn k22(&self) -> f64 {
+        self.k22_springs + self.k3
+    }
+    fn mu_crit(&self) -> f64 {
+        (((self.k11 - self.k22()) / 2.0).powi(2) + self.k12 * self.k12) / (self.k12 * self.k3)
+    }
+    fn omega_c(&self) -> f64 {
+        ((self.k11 + self.k22()) / (2.0 * self.m)).sqrt()
+    }
+}
+
+/// DOF 0: tangential (along the belt), DOF 1: normal. The contact point's rows, observed state
+/// (pressed in by 1e-4 m, sliding at 1 m/s) and response for friction coefficient mu.
+fn contact_point(model: &TwoDof, mu: f64) -> (PointRows, Observed, kernel::PointResponse) {
+    let rows = PointRows {
+        dofs: vec![0, 1],
+        nor: vec![0.0, 1.0],
+        tan: vec![1.0, 0.0],
+        tan2: vec![0.0, 0.0],
+        conv: vec![0.0, 0.0],
+    };
+    let normal = NormalLaw::Linear {
+        stiffness: model.k3,
+    };
+    let friction = FrictionLaw::Coulomb {
+        mu,
+        slip_speed: 1e-3,
+    };
+    let observed = kernel::observe(&rows, -1e-4, 1.0, 0.0, &[0.0, 0.0], &[0.0, 0.0]);
+    let response = kernel::respond(&normal, &friction, 1.0, observed);
+    (rows, observed, response)
+}
+
+/// The tangent K(mu) assembled by the kernel (dense 2 x 2, row-major).
+fn tangent(model: &TwoDof, mu: f64) -> [f64; 4] {
+    let (rows, o, r) = contact_point(model, mu);
+    let mut k = [model.k11, model.k12, model.k12, model.k22_springs];
+    for part in [Part::Normal, Part::Stick, Part::Friction] {
+        kernel::add_tangent(&rows, 1.0, 0.0, &o, &r, part, &mut k);
+    }
+    k
+}
+
+/// Real modes of the symmetric part (structure + normal contact), M = m I: omega^2 and
+/// M-orthonormal vectors.
+fn real_modes(model: &TwoDof) -> ([f64; 2], [[f64; 2]; 2]) {
+    let (a, b, d) = (model.k11, model.k12, model.k22());
+    let mean = 0.5 * (a + d);
+    let root = ((0.5 * (a - d)).powi(2) + b * b).sqrt();
+    let mut out = ([0.0; 2], [[0.0; 2]; 2]);
+    for (i, lambda) in [mean - root, mean + root].into_iter().enumerate() {
+        // (K - lambda I) v = 0: v = (b, lambda - a), or (lambda - d, b).
+        let v = if (lambda - a).abs() > (lambda - d).abs() {
+            [b, lambda - a]
+        } else {
+            [lambda - d, b]
+        };
+        let n = (model.m * (v[0] * v[0] + v[1] * v[1])).sqrt();
+        out.0[i] = lambda / model.m;
+        out.1[i] = [v[0] / n, v[1] / n];
+    }
+    out
+}
+
+/// Projected eigenvalues (Im >= 0) at mu.
+fn projected_eigenvalues(
+    petsc: &Petsc,
+    model: &TwoDof,
+    mu: f64,
+) -> Result<Vec<(f64, f64)>, String> {
+    let (omega2, phi) = real_modes(model);
+    let rank0 = petsc.rank() == 0;
+    let (rows, o, r) = contact_point(model, mu);
+    let points = usize::from(rank0);
+    // P_a = rows_a . phi_k (points x modes, column-major): the point lives on rank 0.
+    let channel = |c: Channel| -> Vec<f64> {
+        if !rank0 {
+            return Vec::new();
+        }
+        let row = rows.row(c);
+        (0..2)
+            .map(|k| row[0] * phi[k][0] + row[1] * phi[k][1])
+            .collect()
+    };
+    let channels = [
+        channel(Channel::Nor),
+        channel(Channel::Tan),
+        channel(Channel::Tan2),
+        channel(Channel::Conv),
+    ];
+    let terms = |parts: &[Part]| -> Vec<Vec<(f64, Channel, Channel)>> {
+        if !rank0 {
+            return Vec::new();
+        }
+        vec![parts
+            .iter()
+            .flat_map(|&p| kernel::tangent_terms(1.0, 0.0, &o, &r, p))
+            .collect()]
+    };
+    let projection = ModalProjection::new(
+        petsc.world(),
+        omega2.to_vec(),
+        channels,
+        points,
+        &terms(&[Part::Normal, Part::Stick]),
+    );
+    let (kp, cp) = projection.operators(
+        petsc.world(),
+        &terms(&[Part::Normal, Part::Stick, Part::Friction]),
+        &terms(&[Part::Damping]),
+        &Default::default(),
+    );
+    Ok(solve_dense(2, &kp, &cp)?.into_iter().map(|p| p.0).collect())
+}
+
+/// The eigenvalue with the largest real part, and its Re(s)/|s|.
+fn largest_real_part(petsc: &Petsc, model: &TwoDof, mu: f64) -> Result<((f64, f64), f64), String> {
+    let top = projected_eigenvalues(petsc, model, mu)?
+        .into_iter()
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .ok_or("no eigenvalue")?;
+    Ok((top, top.0 / top.0.hypot(top.1)))
+}
+
+/// A distributed 2 x 2 matrix (row i on rank i when there are two ranks).
+fn matrix_2x2<'p>(petsc: &'p Petsc, a: [f64; 4]) -> Result<SparseMatrix<'p>, String> {
+    let size = petsc.size() as usize;
+    let rank = petsc.rank() as usize;
+    let local = if size == 1 { 2 } else { usize::from(rank < 2) };
+    let (diag, off) = if size == 1 { (2, 0) } else { (1, 1) };
+    let p = Preallocation {
+        diag: vec![diag; local],
+        off: vec![off; local],
+        diag_upper: vec![diag; local],
+        off_upper: vec![off; local],
+    };
+    let mut m =
+        SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local, &p).map_err(|e| e.to_string())?;
+    if rank == 0 {
+        m.add_values(&[0, 1], &[0, 1], &a)
+            .map_err(|e| e.to_string())?;
+    }
+    m.assemble().map_err(|e| e.to_string())?;
+    Ok(m)
+}
+
+fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
+    if petsc.size() > 2 {
+        return Ok(());
+    }
+    let model = TwoDof::new();
+    let exact = model.mu_crit();
+    let threshold = 1e-9; // Re(s)/|s| above which the pair counts as unstable
+    let (mut lo, mut hi) = (0.0, 1.0);
+    if largest_real_part(petsc, &model, hi)?.1 <= threshold {
+        return Err(format!("mu = 1 is stable; closed-form mu_crit {exact}"));
+    }
+    while hi - lo > 1e-11 * hi {
+        let mid = 0.5 * (lo + hi);
+        if largest_real_part(petsc, &model, mid)?.1 > threshold {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let found = 0.5 * (lo + hi);
+    let (s, _) = largest_real_part(petsc, &model, found * (1.0 + 1e-9))?;
+    say(
+        petsc,
+        &format!(
+            "mu_crit {found:.12} (closed form {exact:.12}, rel. {:.1e}); coalescence {:.9} rad/s \
+             (closed form {:.9}, rel. {:.1e})",
+            rel(found, exact),
+            s.1,
+            model.omega_c(),
+            rel(s.1, model.omega_c())
+        ),
+    );
+    if rel(found, exact) > 1e-8 {
+        return Err(format!("mu_crit {found} vs closed form {exact}"));
+    }
+    if rel(s.1, model.omega_c()) > 1e-8 {
+        return Err(format!(
+            "coalescence frequency {} vs closed form {}",
+            s.1,
+            model.omega_c()
+        ));
+    }
+    // Below: both pairs on the imaginary axis; above: one pair unstable. Full route (SLEPc on
+    // the kernel's tangent) agrees with the projected one.
+    for (factor, unstable) in [(0.9, false), (1.1, true)] {
+        let mu = factor * exact;
+        let (top, ratio) = largest_real_part(petsc, &model, mu)?;
+        if (ratio > threshold) != unstable {
+            return Err(format!(
+                "mu = {factor} mu_crit: largest Re(s)/|s| = {ratio:e}, expected {}",
+                if unstable { "unstable" } else { "stable" }
+            ));
+        }
+        let k = matrix_2x2(petsc, tangent(&model, mu))?;
+        let c = matrix_2x2(petsc, [0.0; 4])?;
+        let m = matrix_2x2(petsc, [model.m, 0.0, 0.0, model.m])?;
+        let ops = Operators::new(&k, &c, &m).map_err(|e| e.to_string())?;
+        let settings = ComplexModeSettings {
+            tolerance: 1e-12,
+            ..Default::default()
+        };
+        let modes = full(petsc, &ops, &settings, 2).map_err(|e| e.to_string())?;
+        // Every full eigenvalue against the nearest projected one.
+        let projected = projected_eigenvalues(petsc, &model, mu)?;
+        let mut d = 0.0f64;
+        for m in &modes.modes {
+            let s = m.eigenvalue;
+            let nearest = projected
+                .iter()
+                .map(|p| (p.0 - s.0).hypot(p.1 - s.1) / s.0.hypot(s.1))
+                .fold(f64::INFINITY, f64::min);
+            d = d.max(nearest);
+        }
+        let worst_eta = modes
+            .modes
+            .iter()
+            .map(|m| m.backward_error)
+            .fold(0.0f64, f64::max);
+        say(
+            petsc,
+            &format!(
+                "mu = {factor} mu_crit: largest Re(s) {:.3e} at {:.6} rad/s; {} full modes vs \
+                 projected: rel. {d:.1e}, backward error <= {worst_eta:.1e}, unstable: {}",
+                top.0,
+                top.1,
+                modes.modes.len(),
+                modes.modes.iter().filter(|m| m.unstable).count()
+            ),
+        );
+        if modes.modes.len() != 2 || d > 1e-8 || worst_eta > 1e-12 {
+            return Err(format!(
+                "mu = {factor} mu_crit: {} full modes, off the projected ones by {d:e}, backward error {worst_eta:e}",
+                modes.modes.len()
+            ));
+        }
+        let flagged = modes.modes.iter().filter(|m| m.unstable).count();
+        if flagged != usize::from(unstable) {
+            return Err(format!(
+                "mu = {factor} mu_crit: {flagged} modes flagged unstable"
+            ));
+        }
+    }
+    Ok(())
+}
