@@ -466,11 +466,7 @@ pub fn project_operators(
 /// Eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m, column-major) with Im(s) >= 0; y has
 /// unit 2-norm. Solved on the companion matrix, scaled by omega_r = sqrt(max |K_p,ii|) so its
 /// blocks are of order one (LAPACK balances the rest).
-pub fn solve_dense(
-    m: usize,
-    kp: &[f64],
-    cp: &[f64],
-) -> Result<Vec<DenseEigenpair>, String> {
+pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpair>, String> {
     let n = 2 * m;
     let omega_r = (0..m)
         .map(|i| kp[i * m + i].abs())
