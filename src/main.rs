@@ -201,9 +201,37 @@ fn print_summary(s: &RunSummary) {
             println!("MUMPS factor: {entries:.3e} entries ({ordering} ordering)");
         }
     }
+    for c in &s.complex {
+        let unstable = c.modes.iter().filter(|m| m.unstable).count();
+        println!(
+            "complex modes ({}{}): {} modes, {} unstable",
+            c.route,
+            if c.basis > 0 {
+                format!(", {} real modes in the basis", c.basis)
+            } else {
+                String::new()
+            },
+            c.modes.len(),
+            unstable
+        );
+        println!("       name   frequency (Hz)   damping ratio        Re(s) (1/s)   backward error   real mode");
+        for m in &c.modes {
+            println!(
+                "    {:>7}   {:14.4}   {:13.4e}   {:16.6e}   {:14.3e}   {:>9}{}",
+                m.name,
+                m.frequency_hz,
+                m.damping_ratio,
+                m.eigenvalue.0,
+                m.backward_error,
+                m.dominant_real_mode
+                    .map_or(String::new(), |k| format!("R{}", k + 1)),
+                if m.unstable { "   UNSTABLE" } else { "" }
+            );
+        }
+    }
     println!("timings (s):");
     for (name, secs) in &s.timings.stages {
-        println!("    {name:18} {secs:9.3}");
+        println!("    {name:26} {secs:9.3}");
     }
     println!(
         "peak memory per rank: {:.1} MiB",

@@ -4,6 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::eigen::complex_modes::{
+    project_operators, ComplexMode, ComplexModeSettings, ComplexModes, DampingSettings,
+    ModalProjection, Operators, Route,
+};
 use crate::eigen::real_modes::{real_modes, RealModes};
 use crate::fem::system::{assemble_system_as, AssembledSystem, Clamp, SystemError};
 use crate::io::matrix_market::{self, MatrixMarketError};
@@ -82,6 +86,8 @@ pub struct RunSummary {
     pub output: PathBuf,
     /// The static preload, when the scene asked for one.
     pub statics: Option<StaticSummary>,
+    /// Complex modes per route.
+    pub complex: Vec<ComplexSummary>,
 }
 
 /// What the static preload found, for the summary.
@@ -242,6 +248,15 @@ fn load_balance(petsc: &Petsc, s: &AssembledSystem) -> LoadBalance {
     }
 }
 
+/// Complex modes of one route, for the summary.
+#[derive(Debug, Clone)]
+pub struct ComplexSummary {
+    pub route: &'static str,
+    pub modes: Vec<ComplexMode>,
+    pub basis: usize,
+    pub seconds: f64,
+}
+
 /// How evenly the ranks share the work.
 #[derive(Debug, Clone)]
 pub struct LoadBalance {
@@ -276,6 +291,7 @@ pub fn run(
     let mut model: Option<Model> = None;
     let mut system: Option<AssembledSystem> = None;
     let mut user: Option<(SparseMatrix, SparseMatrix)> = None;
+    let mut user_complex: Option<(SparseMatrix, Option<SparseMatrix>)> = None;
     let mut quality_stats = Vec::new();
     let mut balance = None;
     let mut unsupported = Vec::new();
@@ -305,15 +321,41 @@ pub fn run(
         balance = Some(load_balance(petsc, &s));
         model = Some(built);
         system = Some(s);
-    } else if let ModelSource::Matrices { stiffness, mass } = &scene.model {
+    } else if let ModelSource::Matrices {
+        stiffness,
+        mass,
+        circulatory,
+        damping,
+        disc_speed,
+    } = &scene.model
+    {
+        let at_speed = |terms: &[crate::io::user_matrices::MatrixTerm]| -> Vec<_> {
+            terms.iter().map(|t| t.at_speed(*disc_speed)).collect()
+        };
         let (k, m) = timings.time("read matrices", || -> Result<_, RunError> {
-            let k = load_sum(petsc, stiffness, scene_dir)?;
-            let m = load_sum(petsc, mass, scene_dir)?;
+            let k = load_sum(petsc, &at_speed(stiffness), scene_dir)?;
+            let m = load_sum(petsc, &at_speed(mass), scene_dir)?;
+            if scene.complex_modes.is_some() {
+                // The full operators: symmetric + circulatory stiffness, and the damping.
+                let mut all = at_speed(stiffness);
+                all.extend(at_speed(circulatory));
+                let k_full = if circulatory.is_empty() {
+                    k.matrix.try_clone()?
+                } else {
+                    load_sum(petsc, &all, scene_dir)?.matrix
+                };
+                let c = if damping.is_empty() {
+                    None
+                } else {
+                    Some(load_sum(petsc, &at_speed(damping), scene_dir)?.matrix)
+                };
+                user_complex = Some((k_full, c));
+            }
             Ok((k, m))
         })?;
         if k.asymmetry > 1e-12 || m.asymmetry > 1e-12 {
             return Err(LaError::Invalid(format!(
-                "real modes need symmetric K and M; the stiffness sum has relative asymmetry {:.2e} and the mass {:.2e}",
+                "real modes need symmetric K and M; the stiffness sum has relative asymmetry {:.2e} and the mass {:.2e} (unsymmetric terms go under model.circulatory)",
                 k.asymmetry, m.asymmetry
             ))
             .into());
@@ -396,6 +438,7 @@ pub fn run(
         tangent = Some(kt);
         preload = Some((contact, state));
     }
+    let k0 = k;
     let k = tangent.as_ref().unwrap_or(k);
 
     for format in &scene.output.export_matrices {
@@ -417,6 +460,24 @@ pub fn run(
             real_modes(petsc, k, m, free_free, request, "")
         })?),
         None => None,
+    };
+    let complex: Vec<ComplexModes> = match &scene.complex_modes {
+        Some(settings) => complex_stage(
+            petsc,
+            settings,
+            &scene.damping.unwrap_or_default(),
+            ComplexInputs {
+                k0,
+                k_symmetric: k,
+                m,
+                modes: modes.as_ref(),
+                preload: preload.as_ref().map(|(c, s)| (c, &s.contact)),
+                dofs: system.as_ref().map(|s| &s.dofs),
+                user: user_complex.as_ref().map(|(k, c)| (k, c.as_ref())),
+            },
+            &mut timings,
+        )?,
+        None => Vec::new(),
     };
 
     // Output.
@@ -474,6 +535,9 @@ pub fn run(
     if let Some(modes) = &modes {
         file.write_real_modes(modes, system.as_ref().map(|s| &s.dofs))?;
     }
+    for c in &complex {
+        write_complex(petsc, &file, c, system.as_ref().map(|s| &s.dofs), output)?;
+    }
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
             .iter()
@@ -487,6 +551,25 @@ pub fn run(
                         dataset: format!("/modes/real/shapes/mode_{:04}", i + 1),
                     })
             })
+            .chain(complex.iter().take(1).flat_map(|c| {
+                c.modes
+                    .iter()
+                    .take(c.shapes.len())
+                    .enumerate()
+                    .flat_map(move |(i, mode)| {
+                        ["re", "im"].map(|part| NodalField {
+                            label: format!(
+                                "{} {part} ({:.1} Hz, zeta {:.2e})",
+                                mode.name, mode.frequency_hz, mode.damping_ratio
+                            ),
+                            dataset: format!(
+                                "/modes/complex/{}/shapes/mode_{:04}_{part}",
+                                route_name(c.route),
+                                i + 1
+                            ),
+                        })
+                    })
+            }))
             .collect();
         let path = output.join("results.xdmf");
         xdmf::write(&path, "results.h5", mesh, &fields)
@@ -527,7 +610,252 @@ pub fn run(
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
         statics: static_summary,
+        complex: complex
+            .iter()
+            .map(|c| ComplexSummary {
+                route: route_name(c.route),
+                modes: c.modes.clone(),
+                basis: c.basis,
+                seconds: c.seconds,
+            })
+            .collect(),
     })
+}
+
+/// What the complex-mode stage needs from the earlier ones.
+struct ComplexInputs<'a, 'p> {
+    /// Elastic stiffness (Rayleigh damping, full operator).
+    k0: &'a SparseMatrix<'p>,
+    /// The symmetric tangent of the real modes (K0 + K_c + K_stick, or the user's stiffness).
+    k_symmetric: &'a SparseMatrix<'p>,
+    m: &'a SparseMatrix<'p>,
+    modes: Option<&'a RealModes<'p>>,
+    preload: Option<(
+        &'a crate::contact::ContactModel<'p>,
+        &'a crate::contact::ContactState,
+    )>,
+    dofs: Option<&'a crate::fem::dofmap::DofMap>,
+    /// User matrices: full stiffness (symmetric + circulatory) and damping.
+    user: Option<(&'a SparseMatrix<'p>, Option<&'a SparseMatrix<'p>>)>,
+}
+
+pub fn route_name(route: Route) -> &'static str {
+    match route {
+        Route::Projected => "projected",
+        Route::Full => "full",
+        Route::Both => "both",
+    }
+}
+
+/// Complex modes of the tangent state by the requested route(s).
+///
+/// # Collective
+fn complex_stage<'p>(
+    petsc: &'p Petsc,
+    settings: &ComplexModeSettings,
+    damping: &DampingSettings,
+    input: ComplexInputs<'_, 'p>,
+    timings: &mut Timings,
+) -> Result<Vec<ComplexModes<'p>>, RunError> {
+    use crate::contact::kernel::Part;
+    let (kf, cf) = timings.time(
+        "complex operators",
+        || -> Result<(SparseMatrix<'p>, SparseMatrix<'p>), RunError> {
+            match (input.preload, input.dofs, input.user) {
+                (Some((contact, state)), Some(dofs), _) => {
+                    let mut kf = contact.joined_matrix(petsc, input.k0, dofs)?;
+                    contact.add_tangent(
+                        state,
+                        &[Part::Normal, Part::Stick, Part::Friction],
+                        &mut kf,
+                    )?;
+                    kf.assemble()?;
+                    let mut cf = contact.joined_matrix(petsc, input.k0, dofs)?;
+                    cf.scale(damping.rayleigh_beta)?;
+                    if damping.rayleigh_alpha != 0.0 {
+                        cf.axpy(damping.rayleigh_alpha, input.m)?;
+                    }
+                    contact.add_tangent(state, &[Part::Damping], &mut cf)?;
+                    cf.assemble()?;
+                    Ok((kf, cf))
+                }
+                (_, _, Some((k_full, c))) => {
+                    let kf = k_full.try_clone()?;
+                    let mut cf = match c {
+                        Some(c) => c.try_clone()?,
+                        None => {
+                            let mut z = input.m.try_clone()?;
+                            z.zero_entries()?;
+                            z
+                        }
+                    };
+                    if damping.rayleigh_beta != 0.0 {
+                        cf.axpy(damping.rayleigh_beta, input.k_symmetric)?;
+                    }
+                    if damping.rayleigh_alpha != 0.0 {
+                        cf.axpy(damping.rayleigh_alpha, input.m)?;
+                    }
+                    Ok((kf, cf))
+                }
+                _ => Err(RunError::Model(
+                    "key 'complex_modes': no tangent state (add [statics]) and no user matrices"
+                        .into(),
+                )),
+            }
+        },
+    )?;
+    let ops = Operators::new(&kf, &cf, input.m)?;
+    let mut out = Vec::new();
+    if settings.method != Route::Full {
+        let modes = input.modes.ok_or_else(|| {
+            RunError::Model("key 'complex_modes': the projected route needs [real_modes]".into())
+        })?;
+        let (kp, cp) = timings.time(
+            "complex modes projection",
+            || -> Result<(Vec<f64>, Vec<f64>), RunError> {
+                match input.preload {
+                    Some((contact, state)) => {
+                        let world = petsc.world();
+                        let channels = contact.observe_shapes(&modes.shapes)?;
+                        let projection = ModalProjection::new(
+                            world,
+                            modes.eigenvalues.clone(),
+                            channels,
+                            contact.local.len(),
+                            &contact.tangent_terms(state, &[Part::Normal, Part::Stick]),
+                        );
+                        Ok(projection.operators(
+                            world,
+                            &contact.tangent_terms(
+                                state,
+                                &[Part::Normal, Part::Stick, Part::Friction],
+                            ),
+                            &contact.tangent_terms(state, &[Part::Damping]),
+                            damping,
+                        ))
+                    }
+                    None => {
+                        let (kp, cp, mp) = project_operators(&ops, &modes.shapes)?;
+                        let n = modes.shapes.len();
+                        let off = (0..n * n)
+                            .map(|i| (mp[i] - f64::from(u8::from(i % (n + 1) == 0))).abs())
+                            .fold(0.0f64, f64::max);
+                        if off > 1e-8 {
+                            return Err(RunError::Model(format!(
+                                "projected complex modes: the real modes are not M-orthonormal (|Phi^T M Phi - I| = {off:.1e})"
+                            )));
+                        }
+                        Ok((kp, cp))
+                    }
+                }
+            },
+        )?;
+        let projected = timings.time("complex modes (projected)", || {
+            crate::eigen::complex_modes::projected(&modes.shapes, &kp, &cp, Some(&ops), settings)
+        })?;
+        out.push(projected);
+    }
+    if settings.method != Route::Projected {
+        let default_count = input.modes.map_or(20, |m| m.shapes.len());
+        let full = timings.time("complex modes (full)", || {
+            crate::eigen::complex_modes::full(petsc, &ops, settings, default_count)
+        })?;
+        out.push(full);
+    }
+    Ok(out)
+}
+
+/// Writes one route's complex modes: /modes/complex/<route>/ tables and shapes (real and
+/// imaginary parts), `complex_modes_<route>.csv` and the stability diagram
+/// `stability_<route>.png`.
+///
+/// # Collective
+fn write_complex(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    c: &ComplexModes,
+    dofs: Option<&crate::fem::dofmap::DofMap>,
+    output: &Path,
+) -> Result<(), RunError> {
+    let route = route_name(c.route);
+    let group = format!("modes/complex/{route}");
+    let col = |f: &dyn Fn(&crate::eigen::complex_modes::ComplexMode) -> f64| -> Vec<f64> {
+        c.modes.iter().map(f).collect()
+    };
+    file.write_table(
+        &format!("{group}/eigenvalue_real"),
+        &col(&|m| m.eigenvalue.0),
+        "1/s",
+    )?;
+    file.write_table(
+        &format!("{group}/eigenvalue_imag"),
+        &col(&|m| m.eigenvalue.1),
+        "rad/s",
+    )?;
+    file.write_table(
+        &format!("{group}/frequency"),
+        &col(&|m| m.frequency_hz),
+        "Hz",
+    )?;
+    file.write_table(
+        &format!("{group}/damping_ratio"),
+        &col(&|m| m.damping_ratio),
+        "1",
+    )?;
+    file.write_table(
+        &format!("{group}/backward_error"),
+        &col(&|m| m.backward_error),
+        "1",
+    )?;
+    file.write_table(
+        &format!("{group}/unstable"),
+        &col(&|m| f64::from(u8::from(m.unstable))),
+        "1 = unstable",
+    )?;
+    file.write_table(
+        &format!("{group}/dominant_real_mode"),
+        &col(&|m| m.dominant_real_mode.map_or(0.0, |k| (k + 1) as f64)),
+        "real mode number (1-based; 0 = unknown)",
+    )?;
+    file.set_number(&group, "basis_size", c.basis as f64)?;
+    file.set_number(&group, "seconds", c.seconds)?;
+    for (i, (xr, xi)) in c.shapes.iter().enumerate() {
+        for (part, v) in [("re", xr), ("im", xi)] {
+            let name = format!("{group}/shapes/mode_{:04}_{part}", i + 1);
+            match dofs {
+                Some(dofs) => file.write_nodal(&name, dofs, &v.local()?, "m")?,
+                None => file.write_dof_vector(&name, v, "1")?,
+            }
+        }
+    }
+    if petsc.rank() == 0 {
+        let path = output.join(format!("complex_modes_{route}.csv"));
+        let mut text = String::from(
+            "name,frequency_hz,damping_ratio,re_s,im_s,backward_error,unstable,dominant_real_mode\n",
+        );
+        for m in &c.modes {
+            text.push_str(&format!(
+                "{},{:.10e},{:.10e},{:.10e},{:.10e},{:.3e},{},{}\n",
+                m.name,
+                m.frequency_hz,
+                m.damping_ratio,
+                m.eigenvalue.0,
+                m.eigenvalue.1,
+                m.backward_error,
+                u8::from(m.unstable),
+                m.dominant_real_mode
+                    .map_or(String::new(), |k| format!("R{}", k + 1))
+            ));
+        }
+        std::fs::write(&path, text).map_err(|source| RunError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let path = output.join(format!("stability_{route}.png"));
+        crate::io::stability::write_diagram(&path, &c.modes, &format!("complex modes ({route})"))
+            .map_err(|source| RunError::Io { path, source })?;
+    }
+    Ok(())
 }
 
 /// Writes the static state under /static: displacement, every contact point (point-id order)

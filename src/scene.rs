@@ -27,6 +27,12 @@ pub struct Scene {
     pub statics: Option<crate::statics::StaticSettings>,
     #[serde(default)]
     pub real_modes: Option<RealModeRequest>,
+    /// Complex modes of the tangent state (projected on the real modes and/or full).
+    #[serde(default)]
+    pub complex_modes: Option<crate::eigen::complex_modes::ComplexModeSettings>,
+    /// Rayleigh damping of the structure.
+    #[serde(default)]
+    pub damping: Option<crate::eigen::complex_modes::DampingSettings>,
     #[serde(default)]
     pub output: Output,
 }
@@ -68,10 +74,20 @@ pub enum ModelSource {
     /// The parametric disc brake (`mesh::brake`): components, size, element, geometry,
     /// materials, pressure.
     Brake(Box<BrakeSpec>),
-    /// Assembled matrices from another code, each a sum of Matrix Market files.
+    /// Assembled matrices from another code, each a sum of Matrix Market files. `stiffness`
+    /// is the symmetric part (real modes); `circulatory` (unsymmetric, e.g. friction) and
+    /// `damping` enter the complex modes. A term's coefficient is multiplied by
+    /// disc_speed^speed_power (gyroscopic terms: 1, centrifugal: 2).
     Matrices {
         stiffness: Vec<MatrixTerm>,
         mass: Vec<MatrixTerm>,
+        #[serde(default)]
+        circulatory: Vec<MatrixTerm>,
+        #[serde(default)]
+        damping: Vec<MatrixTerm>,
+        /// rad/s; needed by terms with a speed_power.
+        #[serde(default)]
+        disc_speed: Option<f64>,
     },
 }
 
@@ -211,15 +227,40 @@ impl Scene {
                     return Err("key 'model.file': name the .inp file".into());
                 }
             }
-            ModelSource::Matrices { stiffness, mass } => {
+            ModelSource::Matrices {
+                stiffness,
+                mass,
+                circulatory,
+                damping,
+                disc_speed,
+            } => {
                 if stiffness.is_empty() || mass.is_empty() {
                     return Err("keys 'model.stiffness' and 'model.mass' each need at least one { file, coefficient } term".into());
                 }
-                for t in stiffness.iter().chain(mass) {
+                if let Some(w) = disc_speed {
+                    if !(w.is_finite() && *w > 0.0) {
+                        return Err(format!(
+                            "key 'model.disc_speed' = {w}: must be positive (rad/s)"
+                        ));
+                    }
+                }
+                for t in stiffness
+                    .iter()
+                    .chain(mass)
+                    .chain(circulatory)
+                    .chain(damping)
+                {
                     if !t.coefficient.is_finite() {
                         return Err(format!(
                             "matrix term '{}': coefficient must be finite",
                             t.file.display()
+                        ));
+                    }
+                    if t.speed_power != 0 && disc_speed.is_none() {
+                        return Err(format!(
+                            "matrix term '{}' has speed_power {}: set key 'model.disc_speed' (rad/s)",
+                            t.file.display(),
+                            t.speed_power
                         ));
                     }
                 }
@@ -250,6 +291,26 @@ impl Scene {
             st.validate()?;
             if matches!(self.model, ModelSource::Matrices { .. }) {
                 return Err("key 'statics': a static preload needs a mesh with contact interfaces, not assembled matrices".into());
+            }
+        }
+        if let Some(d) = &self.damping {
+            d.validate()?;
+        }
+        if let Some(c) = &self.complex_modes {
+            c.validate()?;
+            let needs_basis = c.method != crate::eigen::complex_modes::Route::Full;
+            if needs_basis && self.real_modes.is_none() {
+                return Err("key 'complex_modes.method': the projected route needs a [real_modes] table (its basis); or set method = \"full\"".into());
+            }
+            if let ModelSource::Brake(_)
+            | ModelSource::Abaqus { .. }
+            | ModelSource::Gmsh { .. }
+            | ModelSource::Block { .. }
+            | ModelSource::Annulus { .. } = &self.model
+            {
+                if self.statics.is_none() {
+                    return Err("key 'complex_modes': complex modes of a mesh need the tangent state of a [statics] preload (contact and friction); add [statics]".into());
+                }
             }
         }
         for e in &self.output.export_matrices {

@@ -2,7 +2,9 @@
 
 pub mod contact_map;
 pub mod matrix_market;
+pub mod plot;
 pub mod preview;
 pub mod results;
+pub mod stability;
 pub mod user_matrices;
 pub mod xdmf;

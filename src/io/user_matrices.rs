@@ -17,6 +17,24 @@ pub struct MatrixTerm {
     pub file: PathBuf,
     #[serde(default = "one")]
     pub coefficient: f64,
+    /// The coefficient is multiplied by disc_speed^speed_power.
+    #[serde(default)]
+    pub speed_power: i32,
+}
+
+impl MatrixTerm {
+    /// The term with disc_speed^speed_power folded into its coefficient.
+    pub fn at_speed(&self, disc_speed: Option<f64>) -> MatrixTerm {
+        let factor = match (self.speed_power, disc_speed) {
+            (0, _) | (_, None) => 1.0,
+            (p, Some(w)) => w.powi(p),
+        };
+        MatrixTerm {
+            file: self.file.clone(),
+            coefficient: self.coefficient * factor,
+            speed_power: 0,
+        }
+    }
 }
 
 fn one() -> f64 {

@@ -221,6 +221,7 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
         vec![MatrixTerm {
             file: PathBuf::from(f),
             coefficient: 1.0,
+            speed_power: 0,
         }]
     };
     let k = load_sum(petsc, &term("K1.mtx.gz"), &data_dir()).map_err(|e| e.to_string())?;
@@ -310,6 +311,7 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
         &[MatrixTerm {
             file: path.clone(),
             coefficient: 1.0,
+            speed_power: 0,
         }],
         Path::new(""),
     )
