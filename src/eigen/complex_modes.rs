@@ -46,7 +46,8 @@ pub struct ComplexModeSettings {
     #[serde(default)]
     pub count: Option<usize>,
     /// Keep the modes below this frequency (Hz); the full route then widens its search until
-    /// it has every eigenvalue with |s| below 2 pi f_max x 1.1.
+    /// it has every eigenvalue with |s| below 2 pi f_max x 1.1, and reports those in the band
+    /// inside that disc (heavily damped eigenvalues with |Re(s)| beyond it are left out).
     #[serde(default)]
     pub f_max_hz: Option<f64>,
     /// Full route: PEP convergence tolerance.
@@ -274,9 +275,12 @@ pub fn full<'p>(
             prefix: "complex_".into(),
         };
         let sol = solve_quadratic(petsc, ops.k, ops.c, ops.m, &opts)?;
+        // The eigenvalues nearest 0 come first: the requested ones cover the disc up to the
+        // largest of them completely (the extra converged ones need not).
         let radius = sol
             .values
             .iter()
+            .take(2 * nev)
             .map(|&(r, i)| r.hypot(i))
             .fold(0.0f64, f64::max);
         match wanted_radius {
@@ -298,6 +302,11 @@ pub fn full<'p>(
             .f_max_hz
             .is_some_and(|f| frequency_hz((re, im)) > f)
         {
+            continue;
+        }
+        // With a band: only the disc searched completely (heavily damped eigenvalues with
+        // Im in the band but |s| beyond it would depend on the solver's settings).
+        if wanted_radius.is_some_and(|w| re.hypot(im) > w) {
             continue;
         }
         let (xr, xi) = &sol.vectors[i];
