@@ -229,6 +229,21 @@ fn print_summary(s: &RunSummary) {
             );
         }
     }
+    if let Some(sw) = &s.sweep {
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        println!(
+            "sweep over {}: {} points, {} tracked modes; per point {:.3} s static re-solve, {:.4} s re-projection + complex modes",
+            sw.parameter,
+            sw.points,
+            sw.tracks,
+            mean(&sw.statics_seconds),
+            mean(&sw.modal_seconds)
+        );
+        println!("    {:>14}   unstable modes", sw.parameter);
+        for (v, u) in sw.values.iter().zip(&sw.unstable_per_point) {
+            println!("    {v:14.6}   {u}");
+        }
+    }
     println!("timings (s):");
     for (name, secs) in &s.timings.stages {
         println!("    {name:26} {secs:9.3}");

@@ -9,6 +9,7 @@ use crate::eigen::complex_modes::{
     ModalProjection, Operators, Route,
 };
 use crate::eigen::real_modes::{real_modes, RealModes};
+use crate::eigen::sweep::{SweepParameter, SweepSettings};
 use crate::fem::system::{assemble_system_as, AssembledSystem, Clamp, SystemError};
 use crate::io::matrix_market::{self, MatrixMarketError};
 use crate::io::results::{ResultsError, ResultsFile};
@@ -88,6 +89,7 @@ pub struct RunSummary {
     pub statics: Option<StaticSummary>,
     /// Complex modes per route.
     pub complex: Vec<ComplexSummary>,
+    pub sweep: Option<SweepSummary>,
 }
 
 /// What the static preload found, for the summary.
@@ -248,6 +250,19 @@ fn load_balance(petsc: &Petsc, s: &AssembledSystem) -> LoadBalance {
     }
 }
 
+/// A parameter sweep, for the summary.
+#[derive(Debug, Clone)]
+pub struct SweepSummary {
+    pub parameter: &'static str,
+    pub points: usize,
+    pub tracks: usize,
+    pub values: Vec<f64>,
+    pub unstable_per_point: Vec<usize>,
+    /// Per point: static re-solve, and re-projection + dense complex modes.
+    pub statics_seconds: Vec<f64>,
+    pub modal_seconds: Vec<f64>,
+}
+
 /// Complex modes of one route, for the summary.
 #[derive(Debug, Clone)]
 pub struct ComplexSummary {
@@ -376,6 +391,7 @@ pub fn run(
 
     // Static preload with contact, and the tangent stiffness of that state.
     let mut preload: Option<(crate::contact::ContactModel, crate::statics::StaticState)> = None;
+    let mut static_load: Option<crate::la::Vector> = None;
     let mut tangent: Option<SparseMatrix> = None;
     if let (Some(settings), Some(model), Some(system)) = (&scene.statics, &model, &system) {
         let contact_settings = scene.contact.clone().unwrap_or_default();
@@ -406,7 +422,7 @@ pub fn run(
         .map_err(RunError::Model)?;
         let rank0 = petsc.rank() == 0;
         let state = timings.time("static preload", || {
-            crate::statics::solve(petsc, k, &system.dofs, &contact, &f_ext, settings, |r| {
+            crate::statics::solve(petsc, k, &system.dofs, &contact, &f_ext, settings, None, |r| {
                 if rank0 {
                     println!(
                         "  static step {} (pressure {:>3.0} %, friction {:>3.0} %) iteration {:>2}: residual {:.3e} N (of {:.3e}){}",
@@ -437,6 +453,7 @@ pub fn run(
         })?;
         tangent = Some(kt);
         preload = Some((contact, state));
+        static_load = Some(f_ext);
     }
     let k0 = k;
     let k = tangent.as_ref().unwrap_or(k);
@@ -479,6 +496,48 @@ pub fn run(
         )?,
         None => Vec::new(),
     };
+    let mut sweep_result = None;
+    if let Some(sweep) = &scene.sweep {
+        let settings = scene.complex_modes.clone().unwrap_or_default();
+        let (
+            Some((contact, state)),
+            Some(f_ext),
+            Some(system),
+            Some(modes),
+            Some(statics),
+            Some(model),
+        ) = (
+            preload.as_mut(),
+            static_load.as_ref(),
+            system.as_ref(),
+            modes.as_ref(),
+            scene.statics.as_ref(),
+            model.as_ref(),
+        )
+        else {
+            return Err(RunError::Model(
+                "key 'sweep': a sweep needs a brake (or mesh) model with [statics] and [real_modes]".into(),
+            ));
+        };
+        sweep_result = Some(timings.time("sweep", || {
+            sweep_stage(
+                petsc,
+                sweep,
+                &settings,
+                &scene.damping.unwrap_or_default(),
+                statics,
+                SweepInputs {
+                    k0,
+                    contact,
+                    nominal: state,
+                    f_ext,
+                    pressure_bar: model.pressure / 1e5,
+                    dofs: &system.dofs,
+                    modes,
+                },
+            )
+        })?);
+    }
 
     // Output.
     let start = Instant::now();
@@ -537,6 +596,9 @@ pub fn run(
     }
     for c in &complex {
         write_complex(petsc, &file, c, system.as_ref().map(|s| &s.dofs), output)?;
+    }
+    if let Some(sw) = &sweep_result {
+        write_sweep(petsc, &file, sw, output)?;
     }
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
@@ -610,6 +672,15 @@ pub fn run(
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
         statics: static_summary,
+        sweep: sweep_result.map(|s| SweepSummary {
+            parameter: s.parameter.name(),
+            points: s.values.len(),
+            tracks: s.tracks.tracks.len(),
+            unstable_per_point: s.unstable,
+            statics_seconds: s.statics_seconds,
+            modal_seconds: s.modal_seconds,
+            values: s.values,
+        }),
         complex: complex
             .iter()
             .map(|c| ComplexSummary {
@@ -1002,4 +1073,258 @@ fn write_static(
         piston_force,
         final_residual: last.residual,
     })
+}
+
+/// What a sweep needs from the earlier stages.
+struct SweepInputs<'a, 'p> {
+    k0: &'a SparseMatrix<'p>,
+    contact: &'a mut crate::contact::ContactModel<'p>,
+    nominal: &'a crate::statics::StaticState<'p>,
+    f_ext: &'a crate::la::Vector<'p>,
+    pressure_bar: f64,
+    dofs: &'a crate::fem::dofmap::DofMap,
+    modes: &'a RealModes<'p>,
+}
+
+/// The result of a sweep: tracked projected complex modes per parameter value.
+pub struct SweepOutput {
+    pub parameter: SweepParameter,
+    pub values: Vec<f64>,
+    pub tracks: crate::eigen::sweep::Tracks,
+    pub unstable: Vec<usize>,
+    pub statics_seconds: Vec<f64>,
+    pub modal_seconds: Vec<f64>,
+    pub newton_iterations: Vec<usize>,
+    pub margin: f64,
+}
+
+/// Sweeps one parameter: per value, the static state is re-solved (warm-started from the
+/// previous point; cold when that fails), the contact tangent re-projected on the fixed real
+/// modes of the nominal state (nothing of size n refactorized beyond the static solve), the
+/// dense complex modes solved, and modes tracked by MAC. The nominal laws are restored after.
+///
+/// # Collective
+fn sweep_stage<'p>(
+    petsc: &'p Petsc,
+    sweep: &SweepSettings,
+    settings: &ComplexModeSettings,
+    damping: &DampingSettings,
+    statics: &crate::statics::StaticSettings,
+    input: SweepInputs<'_, 'p>,
+) -> Result<SweepOutput, RunError> {
+    use crate::contact::kernel::Part;
+    let world = petsc.world();
+    let contact = input.contact;
+    let projection = ModalProjection::new(
+        world,
+        input.modes.eigenvalues.clone(),
+        contact.observe_shapes(&input.modes.shapes)?,
+        contact.local.len(),
+        &contact.tangent_terms(&input.nominal.contact, &[Part::Normal, Part::Stick]),
+    );
+    let nominal_laws = contact.interfaces.clone();
+    let nominal_speed = contact.disc_speed;
+    let values = sweep.values();
+    let f = input.f_ext.duplicate()?;
+    let mut q = input.nominal.displacement.try_clone()?;
+    let mut out = SweepOutput {
+        parameter: sweep.parameter,
+        values: values.clone(),
+        tracks: Default::default(),
+        unstable: Vec::new(),
+        statics_seconds: Vec::new(),
+        modal_seconds: Vec::new(),
+        newton_iterations: Vec::new(),
+        margin: settings.instability_margin,
+    };
+    let mut points = Vec::with_capacity(values.len());
+    let mut bar = crate::progress::Progress::new("sweep", values.len(), petsc.rank());
+    let result = (|| -> Result<(), RunError> {
+        for (i, &v) in values.iter().enumerate() {
+            contact.interfaces = nominal_laws.clone();
+            contact.disc_speed = nominal_speed;
+            f.copy_from(input.f_ext)?;
+            match sweep.parameter {
+                SweepParameter::PressureBar => f.scale(v / input.pressure_bar)?,
+                SweepParameter::DiscSpeed => contact.disc_speed = v,
+                p => crate::eigen::sweep::apply_to_laws(p, v, &mut contact.interfaces)
+                    .map_err(RunError::Model)?,
+            }
+            let t = Instant::now();
+            let state = match crate::statics::solve(
+                petsc,
+                input.k0,
+                input.dofs,
+                contact,
+                &f,
+                statics,
+                Some(&q),
+                |_| {},
+            ) {
+                Ok(s) => s,
+                Err(_) => crate::statics::solve(
+                    petsc,
+                    input.k0,
+                    input.dofs,
+                    contact,
+                    &f,
+                    statics,
+                    None,
+                    |_| {},
+                )
+                .map_err(|e| {
+                    RunError::Model(format!(
+                        "sweep point {} ({} = {v}): {e}",
+                        i + 1,
+                        sweep.parameter.name()
+                    ))
+                })?,
+            };
+            out.statics_seconds.push(t.elapsed().as_secs_f64());
+            out.newton_iterations
+                .push(state.log.iter().filter(|r| r.step_length > 0.0).count());
+            let t = Instant::now();
+            let (kp, cp) = projection.operators(
+                world,
+                &contact
+                    .tangent_terms(&state.contact, &[Part::Normal, Part::Stick, Part::Friction]),
+                &contact.tangent_terms(&state.contact, &[Part::Damping]),
+                damping,
+            );
+            // Every mode is tracked (a mode may cross f_max within the sweep); the tracks
+            // reported are those below f_max somewhere.
+            let pairs = crate::eigen::complex_modes::solve_dense(projection.size, &kp, &cp)
+                .map_err(RunError::Model)?;
+            out.modal_seconds.push(t.elapsed().as_secs_f64());
+            out.unstable.push(
+                pairs
+                    .iter()
+                    .filter(|(s, _)| {
+                        crate::eigen::complex_modes::damping_ratio(*s)
+                            < -settings.instability_margin
+                            && settings
+                                .f_max_hz
+                                .is_none_or(|f| crate::eigen::complex_modes::frequency_hz(*s) <= f)
+                    })
+                    .count(),
+            );
+            let mut sorted = pairs;
+            sorted.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1));
+            points.push(sorted);
+            q = state.displacement;
+            bar.update(i + 1, &format!("{} = {v:.4}", sweep.parameter.name()));
+        }
+        Ok(())
+    })();
+    bar.finish();
+    contact.interfaces = nominal_laws;
+    contact.disc_speed = nominal_speed;
+    result?;
+    let mut tracks = crate::eigen::sweep::track(&points);
+    if let Some(f_max) = settings.f_max_hz {
+        tracks.tracks.retain(|t| {
+            t.iter()
+                .flatten()
+                .any(|(s, _)| crate::eigen::complex_modes::frequency_hz(*s) <= f_max)
+        });
+    }
+    out.tracks = tracks;
+    Ok(out)
+}
+
+/// Writes a sweep: /sweep tables (parameter values; per track frequency, damping ratio, real
+/// part, MAC; NaN where a track is lost), `sweep.csv`, and the plots `sweep_frequency.png`
+/// and `sweep_real_part.png` (the coalescence picture; unstable points in red).
+///
+/// # Collective
+fn write_sweep(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    sw: &SweepOutput,
+    output: &Path,
+) -> Result<(), RunError> {
+    use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
+    file.write_table("sweep/values", &sw.values, sw.parameter.name())?;
+    file.set_text("sweep", "parameter", sw.parameter.name())?;
+    let per_point =
+        |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..sw.values.len()).map(f).collect() };
+    file.write_table(
+        "sweep/unstable_modes",
+        &per_point(&|i| sw.unstable[i] as f64),
+        "1",
+    )?;
+    file.write_table("sweep/statics_seconds", &sw.statics_seconds, "s")?;
+    file.write_table("sweep/modal_seconds", &sw.modal_seconds, "s")?;
+    file.write_table(
+        "sweep/newton_iterations",
+        &per_point(&|i| sw.newton_iterations[i] as f64),
+        "1",
+    )?;
+    let nan = f64::NAN;
+    for (t, track) in sw.tracks.tracks.iter().enumerate() {
+        let col = |f: &dyn Fn((f64, f64), f64) -> f64| -> Vec<f64> {
+            track
+                .iter()
+                .map(|p| p.map_or(nan, |(s, m)| f(s, m)))
+                .collect()
+        };
+        let g = format!("sweep/tracks/track_{:04}", t + 1);
+        file.write_table(
+            &format!("{g}/frequency"),
+            &col(&|s, _| frequency_hz(s)),
+            "Hz",
+        )?;
+        file.write_table(
+            &format!("{g}/damping_ratio"),
+            &col(&|s, _| damping_ratio(s)),
+            "1",
+        )?;
+        file.write_table(&format!("{g}/real_part"), &col(&|s, _| s.0), "1/s")?;
+        file.write_table(&format!("{g}/mac"), &col(&|_, m| m), "1")?;
+    }
+    if petsc.rank() != 0 {
+        return Ok(());
+    }
+    let mut text = format!(
+        "{},track,frequency_hz,damping_ratio,re_s,im_s,mac\n",
+        sw.parameter.name()
+    );
+    for (t, track) in sw.tracks.tracks.iter().enumerate() {
+        for (i, p) in track.iter().enumerate() {
+            if let Some((s, m)) = p {
+                text.push_str(&format!(
+                    "{},{},{:.10e},{:.10e},{:.10e},{:.10e},{:.6}\n",
+                    sw.values[i],
+                    t + 1,
+                    frequency_hz(*s),
+                    damping_ratio(*s),
+                    s.0,
+                    s.1,
+                    m
+                ));
+            }
+        }
+    }
+    let path = output.join("sweep.csv");
+    std::fs::write(&path, text).map_err(|source| RunError::Io {
+        path: path.clone(),
+        source,
+    })?;
+    for (name, y_of, y_label) in [
+        ("sweep_frequency.png", 0usize, "frequency (Hz)"),
+        ("sweep_real_part.png", 1, "Re(s) (1/s)"),
+    ] {
+        let path = output.join(name);
+        crate::io::stability::write_sweep_plot(
+            &path,
+            &sw.values,
+            &sw.tracks,
+            y_of == 1,
+            sw.margin,
+            sw.parameter.label(),
+            y_label,
+        )
+        .map_err(|source| RunError::Io { path, source })?;
+    }
+    Ok(())
 }

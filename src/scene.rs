@@ -33,6 +33,9 @@ pub struct Scene {
     /// Rayleigh damping of the structure.
     #[serde(default)]
     pub damping: Option<crate::eigen::complex_modes::DampingSettings>,
+    /// A parameter sweep of the projected complex modes (needs [statics], [real_modes]).
+    #[serde(default)]
+    pub sweep: Option<crate::eigen::sweep::SweepSettings>,
     #[serde(default)]
     pub output: Output,
 }
@@ -311,6 +314,12 @@ impl Scene {
                 if self.statics.is_none() {
                     return Err("key 'complex_modes': complex modes of a mesh need the tangent state of a [statics] preload (contact and friction); add [statics]".into());
                 }
+            }
+        }
+        if let Some(sw) = &self.sweep {
+            sw.validate()?;
+            if self.statics.is_none() || self.real_modes.is_none() {
+                return Err("key 'sweep': a sweep re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]".into());
             }
         }
         for e in &self.output.export_matrices {

@@ -128,8 +128,13 @@ pub enum Part {
     Normal,
     /// K_stick = C_TAN^T diag(w mu k_c) C_TAN over both stick directions (symmetric).
     Stick,
-    /// K_f: friction of sliding points and the stick-normal coupling (unsymmetric).
+    /// K_f: friction of sliding points (unsymmetric).
     Friction,
+    /// The joints' stick traction t = mu k_c(g) slip depends on the gap through k_c: its
+    /// consistent tangent couples slip rows to normal columns (unsymmetric, non-conservative).
+    /// The Newton solver needs it; the modal stages follow DESIGN.md and keep the joints
+    /// symmetric (this part alone destabilizes a joint mode of the brake even at mu = 0).
+    StickCoupling,
     /// C_f = C_TAN^T diag(w dt/dw) C_TAN, the friction damping (where the law has a slope).
     Damping,
 }
@@ -171,19 +176,19 @@ pub fn tangent_terms(
             let k = weight * r.stick * r.stiffness;
             vec![(k, Tan, Tan), (k, Tan2, Tan2)]
         }
-        Part::Friction => {
-            if r.stick != 0.0 {
-                // t_i = mu k_c(g) slip_i: the coupling through dk_c/dg.
-                let c = weight * r.stick * r.stiffness_slope;
-                vec![(c * o.slip[0], Tan, Nor), (c * o.slip[1], Tan2, Nor)]
-            } else {
-                // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
-                vec![
-                    (-weight * r.d_pressure * r.stiffness, Tan, Nor),
-                    (weight * r.d_speed * omega, Tan, Conv),
-                ]
-            }
+        Part::StickCoupling if r.stick != 0.0 => {
+            // t_i = mu k_c(g) slip_i: the coupling through dk_c/dg.
+            let c = weight * r.stick * r.stiffness_slope;
+            vec![(c * o.slip[0], Tan, Nor), (c * o.slip[1], Tan2, Nor)]
         }
+        Part::Friction if r.stick == 0.0 => {
+            // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
+            vec![
+                (-weight * r.d_pressure * r.stiffness, Tan, Nor),
+                (weight * r.d_speed * omega, Tan, Conv),
+            ]
+        }
+        Part::Friction | Part::StickCoupling => Vec::new(),
         Part::Damping => vec![(weight * r.d_speed, Tan, Tan)],
     };
     terms.into_iter().filter(|t| t.0 != 0.0).collect()
@@ -277,7 +282,12 @@ mod tests {
                     let (o, r, _) = eval(&u, &v);
                     let mut k = vec![0.0; n * n];
                     let mut c = vec![0.0; n * n];
-                    for part in [Part::Normal, Part::Stick, Part::Friction] {
+                    for part in [
+                        Part::Normal,
+                        Part::Stick,
+                        Part::Friction,
+                        Part::StickCoupling,
+                    ] {
                         add_tangent(&rows, weight, omega, &o, &r, part, &mut k);
                     }
                     add_tangent(&rows, weight, omega, &o, &r, Part::Damping, &mut c);

@@ -2,3 +2,4 @@
 
 pub mod complex_modes;
 pub mod real_modes;
+pub mod sweep;

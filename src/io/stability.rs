@@ -3,8 +3,10 @@
 
 use std::path::Path;
 
-use super::plot::{padded, Figure, BLACK, BLUE, RED};
+use super::plot::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::eigen::complex_modes::ComplexMode;
+use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
+use crate::eigen::sweep::Tracks;
 
 /// Writes the diagram of `modes` as a PNG.
 pub fn write_diagram(path: &Path, modes: &[ComplexMode], title: &str) -> std::io::Result<()> {
@@ -39,5 +41,68 @@ pub fn write_diagram(path: &Path, modes: &[ComplexMode], title: &str) -> std::io
     let unstable = modes.iter().filter(|m| m.unstable).count();
     fig.legend(0, &format!("stable ({})", modes.len() - unstable), BLUE);
     fig.legend(1, &format!("unstable ({unstable})"), RED);
+    fig.save(path)
+}
+
+/// A sweep plot: each track's frequency (or real part) against the parameter, one colour per
+/// track, points where the mode is unstable marked red.
+pub fn write_sweep_plot(
+    path: &Path,
+    values: &[f64],
+    tracks: &Tracks,
+    real_part: bool,
+    margin: f64,
+    x_label: &str,
+    y_label: &str,
+) -> std::io::Result<()> {
+    let y = |s: (f64, f64)| if real_part { s.0 } else { frequency_hz(s) };
+    let all = tracks.tracks.iter().flatten().flatten().map(|(s, _)| y(*s));
+    let (lo, hi) = all.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    let (x_lo, x_hi) = values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let title = if real_part {
+        "real part of the complex modes"
+    } else {
+        "frequency of the complex modes"
+    };
+    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (0.0, 1.0) };
+    let mut fig = Figure::new(
+        1000,
+        600,
+        padded(x_lo, x_hi, 0.02),
+        padded(lo, hi, 0.05),
+        title,
+        x_label,
+        y_label,
+    );
+    if real_part {
+        fig.hline(0.0, BLACK);
+    }
+    for (t, track) in tracks.tracks.iter().enumerate() {
+        let colour = PALETTE[t % PALETTE.len()];
+        let pts: Vec<(f64, f64)> = track
+            .iter()
+            .zip(values)
+            .filter_map(|(p, &x)| p.map(|(s, _)| (x, y(s))))
+            .collect();
+        fig.line(&pts, colour);
+        for (p, &x) in track.iter().zip(values) {
+            if let Some((s, _)) = p {
+                let unstable = damping_ratio(*s) < -margin;
+                fig.marker(
+                    x,
+                    y(*s),
+                    if unstable { RED } else { colour },
+                    if unstable { 3 } else { 1 },
+                );
+            }
+        }
+    }
+    fig.legend(0, "unstable", RED);
     fig.save(path)
 }

@@ -201,6 +201,7 @@ pub fn pressure_load<'p>(
 /// Solves for the preloaded state. `k0` must be AIJ (LU). `progress` receives each record.
 ///
 /// # Collective
+#[allow(clippy::too_many_arguments)] // the operators, the load, the settings, a start, a log
 pub fn solve<'p>(
     petsc: &'p Petsc,
     k0: &SparseMatrix<'p>,
@@ -208,6 +209,7 @@ pub fn solve<'p>(
     contact: &ContactModel<'p>,
     f_ext: &Vector<'p>,
     settings: &StaticSettings,
+    start_from: Option<&Vector<'p>>,
     mut progress: impl FnMut(&NewtonRecord),
 ) -> Result<StaticState<'p>, StaticError> {
     let start = Instant::now();
@@ -218,6 +220,9 @@ pub fn solve<'p>(
         && contact.disc_speed != 0.0;
     let mut jac = contact.joined_matrix(petsc, k0, dofs)?;
     let q = k0.new_vector()?;
+    if let Some(start) = start_from {
+        q.copy_from(start)?;
+    }
     let trial = q.duplicate()?;
     let dq = q.duplicate()?;
     let residual = q.duplicate()?;
@@ -246,7 +251,11 @@ pub fn solve<'p>(
     // Load steps; a step whose Newton iterations stall is retried from the last converged
     // state with half the increment (logged), at most `MAX_CUTS` times in a row.
     const MAX_CUTS: usize = 6;
-    let mut targets: std::collections::VecDeque<(f64, f64)> = settings.schedule(friction).into();
+    // Warm start (a sweep's next point): one step at the full load, cut if it stalls.
+    let mut targets: std::collections::VecDeque<(f64, f64)> = match start_from {
+        Some(_) => vec![(1.0, 1.0)].into(),
+        None => settings.schedule(friction).into(),
+    };
     let mut converged_at = (0.0, 0.0);
     let saved = q.duplicate()?;
     let mut cuts = 0;
@@ -290,7 +299,12 @@ pub fn solve<'p>(
                 jac.copy_values_from(k0)?;
                 contact.add_tangent(
                     &state,
-                    &[Part::Normal, Part::Stick, Part::Friction],
+                    &[
+                        Part::Normal,
+                        Part::Stick,
+                        Part::Friction,
+                        Part::StickCoupling,
+                    ],
                     &mut jac,
                 )?;
                 jac.assemble()?;
@@ -360,7 +374,9 @@ pub fn solve<'p>(
                 last_state = Some(state);
             }
             Err((iterations, r, target)) => {
-                if cuts >= MAX_CUTS || cut_steps >= 4 * MAX_CUTS {
+                // A warm start has no smaller load step to fall back to: the caller decides
+                // (a sweep restarts cold).
+                if cuts >= MAX_CUTS || cut_steps >= 4 * MAX_CUTS || start_from.is_some() {
                     return Err(StaticError::NotConverged {
                         step,
                         pressure: 100.0 * phi,

@@ -36,7 +36,64 @@ pub fn tests() -> Vec<super::NamedTest> {
             "graebner_m0_complex_modes_at_4pi_band_stable_under_settings",
             brake_m0_band,
         ),
+        (
+            "brake_mu_sweep_reproduces_the_nominal_projected_modes",
+            brake_sweep_nominal_point,
+        ),
     ]
+}
+
+/// A friction sweep whose last point is the scene's own mu (0.4): that point is re-solved from
+/// the previous one (warm start at mu 0.3) and re-projected on the nominal basis, so its
+/// tracked eigenvalues must equal the projected complex modes of the nominal stage to the
+/// static tolerance (asserted 1e-7 relative in s): every nominal mode is the end of a track.
+fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
+    let text =
+        brake_scene(40, "projected") + "[sweep]\nparameter = \"mu\"\nvalues = [0.3, 0.35, 0.4]\n";
+    let run = run_scene(petsc, &text, "complex-sweep")?;
+    let nominal = &run.complex.first().ok_or("no projected modes")?.modes;
+    let sweep = run.sweep.as_ref().ok_or("no sweep summary")?;
+    // The tracks at the last point, from the results file.
+    let h5 = super::common::suite_dir().join("complex-sweep/results.h5");
+    let file = hdf5::File::open(&h5).map_err(|e| e.to_string())?;
+    let mut ends = Vec::new();
+    for t in 0..sweep.tracks {
+        let g = format!("sweep/tracks/track_{:04}", t + 1);
+        let read = |name: &str| -> Result<Vec<f64>, String> {
+            file.dataset(&format!("{g}/{name}"))
+                .and_then(|d| d.read_raw::<f64>())
+                .map_err(|e| e.to_string())
+        };
+        let (re, f) = (read("real_part")?, read("frequency")?);
+        ends.push((re[2], 2.0 * std::f64::consts::PI * f[2]));
+    }
+    let mut worst = 0.0f64;
+    for m in nominal {
+        let s = m.eigenvalue;
+        let d = ends
+            .iter()
+            .filter(|e| e.0.is_finite())
+            .map(|e| (e.0 - s.0).hypot(e.1 - s.1) / s.0.hypot(s.1))
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(d);
+    }
+    say(
+        petsc,
+        &format!(
+            "sweep over mu: {} tracks, {} nominal modes; nominal point vs nominal stage: {worst:.1e}; unstable per point {:?}",
+            sweep.tracks,
+            nominal.len(),
+            sweep.unstable_per_point
+        ),
+    );
+    if sweep.tracks < nominal.len() || worst > 1e-7 {
+        return Err(format!(
+            "{} tracks vs {} nominal modes; nominal point off by {worst:e}",
+            sweep.tracks,
+            nominal.len()
+        ));
+    }
+    Ok(())
 }
 
 /// The M0 scene of jobs/brake-m0-complex-modes.toml with absolute paths and given settings.

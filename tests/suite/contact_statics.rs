@@ -284,6 +284,7 @@ fn preload<'p>(
         contact,
         f,
         settings,
+        None,
         |_| {},
     )
     .map_err(|e| e.to_string())
