@@ -69,10 +69,11 @@ fn route<'a>(s: &'a RunSummary, r: &str) -> &'a [ComplexMode] {
         .unwrap_or(&[])
 }
 
-/// Largest frequency (relative) and damping-ratio (absolute) error of the projected modes
-/// against every full mode, by nearest eigenvalue.
-fn errors(full: &[ComplexMode], projected: &[ComplexMode]) -> (f64, f64) {
+/// Largest and median frequency error (relative) and largest damping-ratio error (absolute)
+/// of the projected modes against every full mode, by nearest eigenvalue.
+fn errors(full: &[ComplexMode], projected: &[ComplexMode]) -> (f64, f64, f64) {
     let mut worst = (0.0f64, 0.0f64);
+    let mut all = Vec::new();
     for m in full {
         let Some(p) = projected.iter().min_by(|a, b| {
             let d = |x: &ComplexMode| {
@@ -80,14 +81,21 @@ fn errors(full: &[ComplexMode], projected: &[ComplexMode]) -> (f64, f64) {
             };
             d(a).total_cmp(&d(b))
         }) else {
-            return (f64::NAN, f64::NAN);
+            return (f64::NAN, f64::NAN, f64::NAN);
         };
+        all.push((p.frequency_hz - m.frequency_hz).abs() / m.frequency_hz);
         worst.0 = worst
             .0
             .max((p.frequency_hz - m.frequency_hz).abs() / m.frequency_hz);
         worst.1 = worst.1.max((p.damping_ratio - m.damping_ratio).abs());
     }
-    worst
+    all.sort_by(f64::total_cmp);
+    let median = all.get(all.len() / 2).copied().unwrap_or(f64::NAN);
+    (worst.0, median, worst.1)
+}
+
+fn route_summary<'a>(s: &'a RunSummary, r: &str) -> Option<&'a squeal::pipeline::ComplexSummary> {
+    s.complex.iter().find(|c| c.route == r)
 }
 
 fn main() {
@@ -125,13 +133,14 @@ fn main() {
             stage(&reference, "complex operators"),
         );
         println!(
-            "{:>12} {:>14} {:>16} {:>18} {:>16} {:>22}",
+            "{:>10} {:>13} {:>14} {:>14} {:>13} {:>15} {:>32}",
             "real modes",
             "top mode (Hz)",
             "real modes (s)",
             "projection (s)",
             "dense CEA (s)",
-            "max error f / zeta"
+            "residuals (s)",
+            "error f max / f median / zeta max"
         );
     }
     for &m in &bases {
@@ -144,15 +153,18 @@ fn main() {
             ))
         };
         let s = summary.as_ref().unwrap_or(&reference);
-        let (df, dz) = errors(&full, route(s, "projected"));
+        let (df, median, dz) = errors(&full, route(s, "projected"));
+        let solve = route_summary(s, "projected").map_or(f64::NAN, |c| c.solve_seconds);
         if rank0 {
             println!(
-                "{m:>12} {:>14.1} {:>16.2} {:>18.4} {:>16.4} {:>13.2e} / {:.2e}",
+                "{m:>10} {:>13.1} {:>14.2} {:>14.4} {:>13.4} {:>15.3} {:>12.2e} / {:.2e} / {:.2e}",
                 s.frequencies_hz.last().copied().unwrap_or(0.0),
                 stage(s, "real modes"),
                 stage(s, "complex modes projection"),
-                stage(s, "complex modes (projected)"),
+                solve,
+                stage(s, "complex modes (projected)") - solve,
                 df,
+                median,
                 dz
             );
         }

@@ -270,6 +270,7 @@ pub struct ComplexSummary {
     pub modes: Vec<ComplexMode>,
     pub basis: usize,
     pub seconds: f64,
+    pub solve_seconds: f64,
 }
 
 /// How evenly the ranks share the work.
@@ -688,6 +689,7 @@ pub fn run(
                 modes: c.modes.clone(),
                 basis: c.basis,
                 seconds: c.seconds,
+                solve_seconds: c.solve_seconds,
             })
             .collect(),
     })
