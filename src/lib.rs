@@ -17,3 +17,4 @@ pub mod pipeline;
 pub mod progress;
 pub mod scene;
 pub mod statics;
+pub mod time;

@@ -7,6 +7,7 @@ pub mod convergence;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
 pub mod static_solve;
+pub mod time_integration;
 
 use squeal::la::Petsc;
 
@@ -21,5 +22,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(static_solve::tests());
     v.extend(contact_statics::tests());
     v.extend(complex_modes::tests());
+    v.extend(time_integration::tests());
     v
 }

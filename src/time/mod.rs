@@ -1,0 +1,3 @@
+//! Nonlinear time integration (Newmark with a fixed Jacobian).
+
+pub mod newmark;

@@ -1,0 +1,357 @@
+//! Newmark time integration (DESIGN.md §2, §6 rung 4):
+//!
+//! - linear oscillator: the average-acceleration rule reproduces q_n = cos(n theta) with
+//!   theta = 2 atan(omega h / 2) exactly, i.e. the period elongation omega h / (2 atan(omega h
+//!   / 2)) (Hughes, The Finite Element Method, §9.1), asserted to 1e-12 over 2,000 steps at
+//!   omega h = 0.5;
+//! - second-order convergence: the error at t = 3 of an oscillator (omega = 2) for h, h/2,
+//!   h/4 falls with rate 2 (asserted within 0.05; not at a whole number of periods, where the
+//!   phase error enters squared and the rate is 4);
+//! - energy: a 12-DOF spring chain (fixed-free, unequal masses) keeps
+//!   E = v^T M v / 2 + q^T K q / 2 to 1e-10 relative over 10,000 steps;
+//! - 1-DOF mass on an exponential contact released from rest at gap g0 (m = 1, external force
+//!   1, p0 A = 1, lambda = 1; the reference periods 6.28571843, 6.33908502,
+//!   6.47714219, 6.88757415 for g0 = 0.1, 0.5, 1, 2, which quadrature of
+//!   T = 2 int dg / sqrt(2 (E - g - exp(-g))) confirms): the fixed Jacobian uses the
+//!   equilibrium contact stiffness (1); periods from velocity sign changes agree to 1e-5
+//!   with h = 2e-3 (measured 3.4e-7, the Newmark period error (omega h)^2 / 12; 8.5e-8 at
+//!   h = 1e-3), energy stays within 1e-5 of its initial value (measured <= 7e-7), at most 2
+//!   fixed-Jacobian iterations per step.
+
+use squeal::la::{
+    DirectSolver, Factorization, MatrixFormat, Petsc, Preallocation, SparseMatrix, Vector,
+};
+use squeal::time::newmark::{jacobian, Forces, Newmark, NewmarkSettings, State};
+
+use super::common::{rel, say};
+
+pub fn tests() -> Vec<super::NamedTest> {
+    vec![
+        (
+            "newmark_linear_oscillator_period_elongation_hughes",
+            linear_oscillator_period,
+        ),
+        (
+            "newmark_second_order_convergence_in_h",
+            second_order_convergence,
+        ),
+        ("newmark_spring_chain_energy_conserved", chain_energy),
+        (
+            "newmark_exponential_contact_oscillator_periods",
+            exponential_contact_periods,
+        ),
+    ]
+}
+
+/// Rows of this rank for an n x n tridiagonal operator (even split).
+fn rows(petsc: &Petsc, n: usize) -> std::ops::Range<usize> {
+    let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    rank * n / size..(rank + 1) * n / size
+}
+
+/// A symmetric tridiagonal matrix from its diagonal and off-diagonal.
+fn tridiagonal<'p>(
+    petsc: &'p Petsc,
+    diag: &[f64],
+    off: &[f64],
+) -> Result<SparseMatrix<'p>, String> {
+    let n = diag.len();
+    let local = rows(petsc, n);
+    let p = Preallocation {
+        diag: vec![3; local.len()],
+        off: vec![2; local.len()],
+        diag_upper: vec![3; local.len()],
+        off_upper: vec![2; local.len()],
+    };
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p)
+        .map_err(|e| e.to_string())?;
+    for i in local {
+        let mut cols = vec![i as i32];
+        let mut vals = vec![diag[i]];
+        if i > 0 {
+            cols.push(i as i32 - 1);
+            vals.push(off[i - 1]);
+        }
+        if i + 1 < n {
+            cols.push(i as i32 + 1);
+            vals.push(off[i]);
+        }
+        a.add_values(&[i as i32], &cols, &vals)
+            .map_err(|e| e.to_string())?;
+    }
+    a.assemble().map_err(|e| e.to_string())?;
+    Ok(a)
+}
+
+fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> Result<Vector<'p>, String> {
+    let local = rows(petsc, values.len());
+    Vector::from_local(petsc, &values[local]).map_err(|e| e.to_string())
+}
+
+/// Integrates M q'' + K q = f(t, q) for `steps` steps from (q0, v0); `observe` sees every
+/// state. Returns the largest number of iterations of a step.
+#[allow(clippy::too_many_arguments)]
+fn integrate<'p>(
+    petsc: &'p Petsc,
+    m: &SparseMatrix<'p>,
+    k: &SparseMatrix<'p>,
+    mock: Option<&SparseMatrix<'p>>,
+    settings: NewmarkSettings,
+    q0: &[f64],
+    steps: usize,
+    forces: &mut Forces<'_, 'p>,
+    mut observe: impl FnMut(&State<'p>) -> Result<(), String>,
+) -> Result<usize, String> {
+    let e = |e: squeal::la::LaError| e.to_string();
+    let j = jacobian(&settings, m, None, k, mock).map_err(e)?;
+    let factor = DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, m, Factorization::Lu, "mass_").map_err(e)?;
+    let mut integrator = Newmark::new(settings, m, None, k, &factor).map_err(e)?;
+    let zeros = vec![0.0; q0.len()];
+    let mut state = State {
+        time: 0.0,
+        step: 0,
+        q: vector(petsc, q0)?,
+        v: vector(petsc, &zeros)?,
+        a: vector(petsc, &zeros)?,
+    };
+    integrator
+        .initial_acceleration(&mut state, forces, &mass)
+        .map_err(e)?;
+    observe(&state)?;
+    let mut most = 0;
+    for _ in 0..steps {
+        let report = integrator
+            .step(&mut state, forces)
+            .map_err(|e| e.to_string())?;
+        most = most.max(report.iterations);
+        observe(&state)?;
+    }
+    Ok(most)
+}
+
+fn no_force<'f, 'p>() -> Box<Forces<'f, 'p>> {
+    Box::new(|_, _, _, f: &Vector| f.set_all(0.0))
+}
+
+/// First component of a distributed vector (row 0 lives on rank 0), broadcast to all ranks.
+fn first(petsc: &Petsc, v: &Vector) -> Result<f64, String> {
+    let all = v.gather_all().map_err(|e| e.to_string())?;
+    let _ = petsc;
+    Ok(all[0])
+}
+
+fn linear_oscillator_period(petsc: &Petsc) -> Result<(), String> {
+    let (omega, h) = (1.0f64, 0.5f64);
+    let m = tridiagonal(petsc, &[1.0], &[])?;
+    let k = tridiagonal(petsc, &[omega * omega], &[])?;
+    let settings = NewmarkSettings {
+        step: h,
+        tolerance: 1e-13,
+        ..Default::default()
+    };
+    let theta = 2.0 * (omega * h / 2.0).atan();
+    let mut worst = 0.0f64;
+    let mut n = 0usize;
+    integrate(
+        petsc,
+        &m,
+        &k,
+        None,
+        settings,
+        &[1.0],
+        2000,
+        &mut *no_force(),
+        |s| {
+            let q = first(petsc, &s.q)?;
+            worst = worst.max((q - (n as f64 * theta).cos()).abs());
+            n += 1;
+            Ok(())
+        },
+    )?;
+    let elongation = omega * h / (2.0 * (omega * h / 2.0).atan());
+    say(
+        petsc,
+        &format!(
+            "omega h = 0.5: period elongation omega h / (2 atan(omega h / 2)) = {elongation:.10} = discrete period / (2 pi / omega) = {:.10}; max |q_n - cos(n theta)| over 2,000 steps {worst:.1e}",
+            omega * h / theta
+        ),
+    );
+    if worst > 1e-12 {
+        return Err(format!("discrete solution off cos(n theta) by {worst:e}"));
+    }
+    Ok(())
+}
+
+fn second_order_convergence(petsc: &Petsc) -> Result<(), String> {
+    let m = tridiagonal(petsc, &[2.0], &[])?;
+    let k = tridiagonal(petsc, &[8.0], &[])?; // omega = 2
+    let t_end = 3.0;
+    let mut errors = Vec::new();
+    for steps in [100usize, 200, 400] {
+        let settings = NewmarkSettings {
+            step: t_end / steps as f64,
+            tolerance: 1e-13,
+            ..Default::default()
+        };
+        let mut last = 0.0;
+        integrate(
+            petsc,
+            &m,
+            &k,
+            None,
+            settings,
+            &[1.0],
+            steps,
+            &mut *no_force(),
+            |s| {
+                last = first(petsc, &s.q)?;
+                Ok(())
+            },
+        )?;
+        errors.push((last - (2.0 * t_end).cos()).abs());
+    }
+    let rates: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    say(
+        petsc,
+        &format!(
+            "errors at t = 3 for h, h/2, h/4: {}; rates {rates:.4?}",
+            errors
+                .iter()
+                .map(|e| format!("{e:.3e}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    );
+    if rates.iter().any(|r| (r - 2.0).abs() > 0.05) {
+        return Err(format!("convergence rates {rates:?}, expected 2"));
+    }
+    Ok(())
+}
+
+fn chain_energy(petsc: &Petsc) -> Result<(), String> {
+    let n = 12;
+    let masses: Vec<f64> = (0..n).map(|i| 1.0 + 0.3 * (i % 4) as f64).collect();
+    let springs: Vec<f64> = (0..n).map(|i| 1e4 * (1.0 + 0.5 * (i % 3) as f64)).collect();
+    // Spring i joins mass i-1 (or the wall) and mass i.
+    let diag: Vec<f64> = (0..n)
+        .map(|i| springs[i] + if i + 1 < n { springs[i + 1] } else { 0.0 })
+        .collect();
+    let off: Vec<f64> = (1..n).map(|i| -springs[i]).collect();
+    let k = tridiagonal(petsc, &diag, &off)?;
+    let m = tridiagonal(petsc, &masses, &vec![0.0; n - 1])?;
+    let q0: Vec<f64> = (0..n).map(|i| 1e-3 * ((i as f64) * 0.7).sin()).collect();
+    let settings = NewmarkSettings {
+        step: 2e-3,
+        tolerance: 1e-12,
+        ..Default::default()
+    };
+    let (kq, mv) = (
+        k.new_vector().map_err(|e| e.to_string())?,
+        k.new_vector().map_err(|e| e.to_string())?,
+    );
+    let energy = |s: &State| -> Result<f64, String> {
+        let e = |e: squeal::la::LaError| e.to_string();
+        k.mult(&s.q, &kq).map_err(e)?;
+        m.mult(&s.v, &mv).map_err(e)?;
+        Ok(0.5 * (kq.dot(&s.q).map_err(e)? + mv.dot(&s.v).map_err(e)?))
+    };
+    let mut e0 = None;
+    let mut drift = 0.0f64;
+    integrate(
+        petsc,
+        &m,
+        &k,
+        None,
+        settings,
+        &q0,
+        10_000,
+        &mut *no_force(),
+        |s| {
+            let e = energy(s)?;
+            let e0 = *e0.get_or_insert(e);
+            drift = drift.max(rel(e, e0));
+            Ok(())
+        },
+    )?;
+    say(
+        petsc,
+        &format!("12-DOF chain, 10,000 steps: max relative energy change {drift:.1e}"),
+    );
+    if drift > 1e-10 {
+        return Err(format!("energy drift {drift:e}"));
+    }
+    Ok(())
+}
+
+fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
+    let references: [(f64, f64); 4] = [
+        (0.1, 6.28571843),
+        (0.5, 6.33908502),
+        (1.0, 6.47714219),
+        (2.0, 6.88757415),
+    ];
+    let m = tridiagonal(petsc, &[1.0], &[])?;
+    let k = tridiagonal(petsc, &[0.0], &[])?;
+    // The equilibrium contact stiffness lambda p0 A exp(0) = 1 in the fixed Jacobian.
+    let mock = tridiagonal(petsc, &[1.0], &[])?;
+    let h = 2e-3;
+    let mut report = Vec::new();
+    for (g0, reference) in references {
+        let settings = NewmarkSettings {
+            step: h,
+            tolerance: 1e-12,
+            ..Default::default()
+        };
+        // f = -1 (external, towards the wall) + exp(-g) (contact), q = g.
+        let mut forces = |_t: f64, q: &Vector, _v: &Vector, f: &Vector| {
+            let g = q.local()?.to_vec();
+            let mut out = f.local_mut()?;
+            for (o, g) in out.iter_mut().zip(g) {
+                *o = -1.0 + (-g).exp();
+            }
+            Ok(())
+        };
+        let (mut crossings, mut previous) = (Vec::new(), None::<(f64, f64)>);
+        let energy0 = g0 + (-g0).exp();
+        let mut energy_error = 0.0f64;
+        let steps = (3.2 * reference / h) as usize;
+        let iterations = integrate(
+            petsc,
+            &m,
+            &k,
+            Some(&mock),
+            settings,
+            &[g0],
+            steps,
+            &mut forces,
+            |s| {
+                let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
+                energy_error = energy_error.max(rel(0.5 * v * v + g + (-g).exp(), energy0));
+                // Maxima of g: v changes sign from + to -.
+                if let Some((t0, v0)) = previous {
+                    if v0 > 0.0 && v <= 0.0 {
+                        crossings.push(t0 + (s.time - t0) * v0 / (v0 - v));
+                    }
+                }
+                previous = Some((s.time, v));
+                Ok(())
+            },
+        )?;
+        if crossings.len() < 2 {
+            return Err(format!("g0 = {g0}: fewer than two maxima in three periods"));
+        }
+        let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+        report.push(format!(
+            "g0 = {g0}: T = {period:.8} (ref. {reference}, rel. {:.1e}), energy {energy_error:.1e}, <= {iterations} iterations/step",
+            rel(period, reference)
+        ));
+        if rel(period, reference) > 1e-5 || energy_error > 1e-5 {
+            return Err(report.join("; "));
+        }
+    }
+    for line in report {
+        say(petsc, &line);
+    }
+    Ok(())
+}
