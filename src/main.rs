@@ -229,6 +229,18 @@ fn print_summary(s: &RunSummary) {
             );
         }
     }
+    if let Some(t) = &s.transient {
+        println!(
+            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; Jacobian factor {:.3e} entries ({:.2} s)",
+            t.steps,
+            t.simulated,
+            t.mean_iterations,
+            t.max_iterations,
+            1e3 * t.seconds_per_step,
+            t.factor_entries,
+            t.seconds_factorizing
+        );
+    }
     if let Some(sw) = &s.sweep {
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
         println!(

@@ -44,6 +44,8 @@ pub enum RunError {
     Contact(#[from] crate::contact::ContactError),
     #[error("{0}")]
     Statics(#[from] crate::statics::StaticError),
+    #[error("transient: {0}")]
+    Time(#[from] crate::time::newmark::TimeError),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -90,6 +92,7 @@ pub struct RunSummary {
     /// Complex modes per route.
     pub complex: Vec<ComplexSummary>,
     pub sweep: Option<SweepSummary>,
+    pub transient: Option<TransientSummary>,
 }
 
 /// What the static preload found, for the summary.
@@ -248,6 +251,18 @@ fn load_balance(petsc: &Petsc, s: &AssembledSystem) -> LoadBalance {
         rows,
         elements,
     }
+}
+
+/// A transient run, for the summary.
+#[derive(Debug, Clone)]
+pub struct TransientSummary {
+    pub steps: usize,
+    pub simulated: f64,
+    pub mean_iterations: f64,
+    pub max_iterations: usize,
+    pub seconds_per_step: f64,
+    pub factor_entries: f64,
+    pub seconds_factorizing: f64,
 }
 
 /// A parameter sweep, for the summary.
@@ -540,6 +555,59 @@ pub fn run(
         })?);
     }
 
+    let mut transient = None;
+    let mut transient_error = None;
+    if let Some(settings) = &scene.transient {
+        let (Some((contact, state)), Some(f_ext), Some(system), Some(modes)) = (
+            preload.as_ref(),
+            static_load.as_ref(),
+            system.as_ref(),
+            modes.as_ref(),
+        ) else {
+            return Err(RunError::Model(
+                "key 'transient': a transient needs a brake (or mesh) model with [statics] and [real_modes] (its start)".into(),
+            ));
+        };
+        let shape = modes.shapes.get(settings.mode - 1).ok_or_else(|| {
+            RunError::Model(format!(
+                "key 'transient.mode' = {}: only {} real modes were computed",
+                settings.mode,
+                modes.shapes.len()
+            ))
+        })?;
+        let damping = scene.damping.unwrap_or_default();
+        let c = if damping.rayleigh_alpha != 0.0 || damping.rayleigh_beta != 0.0 {
+            let mut c = k0.try_clone()?;
+            c.scale(damping.rayleigh_beta)?;
+            if damping.rayleigh_alpha != 0.0 {
+                c.axpy(damping.rayleigh_alpha, m)?;
+            }
+            Some(c)
+        } else {
+            None
+        };
+        let (signals, failure) = timings.time("transient", || {
+            crate::time::transient::run(
+                petsc,
+                settings,
+                crate::time::transient::TransientInputs {
+                    k0,
+                    m,
+                    c: c.as_ref(),
+                    contact,
+                    dofs: &system.dofs,
+                    f_ext,
+                    q_static: &state.displacement,
+                    static_state: &state.contact,
+                    shape,
+                },
+            )
+        })?;
+        transient = Some(signals);
+        // Reported after the results are written: the steps before the failure are kept.
+        transient_error = failure;
+    }
+
     // Output.
     let start = Instant::now();
     let h5 = output.join("results.h5");
@@ -601,6 +669,9 @@ pub fn run(
     if let Some(sw) = &sweep_result {
         write_sweep(petsc, &file, sw, output)?;
     }
+    if let (Some(tr), Some((contact, _))) = (&transient, &preload) {
+        write_transient(petsc, &file, tr, contact, output)?;
+    }
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
             .iter()
@@ -648,6 +719,9 @@ pub fn run(
         file.set_number("timings", &name.replace(' ', "_"), *secs)?;
     }
     drop(file);
+    if let Some(e) = transient_error {
+        return Err(RunError::Time(e));
+    }
 
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
     let modes_ref = modes.as_ref();
@@ -673,6 +747,16 @@ pub fn run(
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
         statics: static_summary,
+        transient: transient.as_ref().map(|t| TransientSummary {
+            steps: t.iterations.len(),
+            simulated: t.time.last().copied().unwrap_or(0.0),
+            mean_iterations: t.iterations.iter().sum::<usize>() as f64
+                / t.iterations.len().max(1) as f64,
+            max_iterations: t.iterations.iter().copied().max().unwrap_or(0),
+            seconds_per_step: t.seconds_stepping / t.iterations.len().max(1) as f64,
+            factor_entries: t.factor_entries,
+            seconds_factorizing: t.seconds_factorizing,
+        }),
         sweep: sweep_result.map(|s| SweepSummary {
             parameter: s.parameter.name(),
             points: s.values.len(),
@@ -1327,6 +1411,59 @@ fn write_sweep(
             y_label,
         )
         .map_err(|source| RunError::Io { path, source })?;
+    }
+    Ok(())
+}
+
+/// Writes the transient signals under /transient (time; per interface normal force, friction
+/// force, torque; iterations per step) and `torque.png` (braking torque against time).
+///
+/// # Collective
+fn write_transient(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    tr: &crate::time::transient::Transient,
+    contact: &crate::contact::ContactModel,
+    output: &Path,
+) -> Result<(), RunError> {
+    file.write_table("transient/time", &tr.time, "s")?;
+    let its: Vec<f64> = tr.iterations.iter().map(|&i| i as f64).collect();
+    file.write_table("transient/iterations", &its, "1")?;
+    for (i, itf) in contact.interfaces.iter().enumerate() {
+        let g = format!("transient/interfaces/{}", itf.name);
+        file.write_table(&format!("{g}/normal_force"), &tr.normal_force[i], "N")?;
+        file.write_table(&format!("{g}/friction_force"), &tr.friction_force[i], "N")?;
+        file.write_table(&format!("{g}/torque"), &tr.torque[i], "N m")?;
+    }
+    let torque: Vec<f64> = (0..tr.time.len())
+        .map(|k| tr.torque.iter().map(|t| t[k]).sum())
+        .collect();
+    file.write_table("transient/braking_torque", &torque, "N m")?;
+    if petsc.rank() == 0 {
+        let path = output.join("torque.png");
+        let (lo, hi) = torque
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        let mut fig = crate::io::plot::Figure::new(
+            1000,
+            500,
+            crate::io::plot::padded(0.0, tr.time.last().copied().unwrap_or(1.0), 0.0),
+            crate::io::plot::padded(lo, hi, 0.05),
+            "braking torque",
+            "time (s)",
+            "torque (N m)",
+        );
+        let points: Vec<(f64, f64)> = tr
+            .time
+            .iter()
+            .copied()
+            .zip(torque.iter().copied())
+            .collect();
+        fig.line(&points, crate::io::plot::BLUE);
+        fig.save(&path)
+            .map_err(|source| RunError::Io { path, source })?;
     }
     Ok(())
 }

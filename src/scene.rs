@@ -36,6 +36,9 @@ pub struct Scene {
     /// A parameter sweep of the projected complex modes (needs [statics], [real_modes]).
     #[serde(default)]
     pub sweep: Option<crate::eigen::sweep::SweepSettings>,
+    /// Nonlinear time response from the static state (needs [statics], [real_modes]).
+    #[serde(default)]
+    pub transient: Option<crate::time::transient::TransientSettings>,
     #[serde(default)]
     pub output: Output,
 }
@@ -314,6 +317,12 @@ impl Scene {
                 if self.statics.is_none() {
                     return Err("key 'complex_modes': complex modes of a mesh need the tangent state of a [statics] preload (contact and friction); add [statics]".into());
                 }
+            }
+        }
+        if let Some(t) = &self.transient {
+            t.validate()?;
+            if self.statics.is_none() || self.real_modes.is_none() {
+                return Err("key 'transient': the time response starts from the static state plus a real mode: it needs [statics] and [real_modes]".into());
             }
         }
         if let Some(sw) = &self.sweep {

@@ -1,3 +1,4 @@
-//! Nonlinear time integration (Newmark with a fixed Jacobian).
+//! Nonlinear time integration (Newmark with a fixed Jacobian) and the transient stage.
 
 pub mod newmark;
+pub mod transient;

@@ -40,7 +40,67 @@ pub fn tests() -> Vec<super::NamedTest> {
             "newmark_exponential_contact_oscillator_periods",
             exponential_contact_periods,
         ),
+        (
+            "brake_transient_from_the_static_state_stays_there",
+            brake_transient_at_rest,
+        ),
     ]
+}
+
+/// The preloaded 12k brake (mu 0.4, disc turning) started exactly at its static state: the
+/// static equilibrium K0 q = f_ext + f_c(q, v = 0) with steady sliding is an equilibrium of the
+/// dynamics, so 200 steps of 2 us keep the braking torque and every interface's normal force
+/// to 1e-8 relative (any inconsistency between the static and dynamic force paths, the
+/// Newmark start or the fixed-Jacobian iterations would show), in at most 2 iterations a step.
+fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
+    let text = "[model]\nsource = \"brake\"\ntarget_dofs = 12000\npressure_bar = 20.0\n\
+        [contact]\ndisc_speed = 6.2832\n\
+        [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
+        friction = { law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }\n\
+        [statics]\n[real_modes]\ncount = 4\n\
+        [transient]\nstep = 2.0e-6\nsteps = 200\nmode = 2\namplitude = 0.0\n";
+    let scene = squeal::scene::Scene::parse(text, "transient-rest").map_err(|e| e.to_string())?;
+    let out = super::common::suite_dir().join("transient-rest");
+    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
+        .map_err(|e| e.to_string())?;
+    let t = run.transient.as_ref().ok_or("no transient summary")?;
+    let file = hdf5::File::open(out.join("results.h5")).map_err(|e| e.to_string())?;
+    let read = |name: &str| -> Result<Vec<f64>, String> {
+        file.dataset(name)
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|e| e.to_string())
+    };
+    let mut worst = 0.0f64;
+    let mut signals = vec!["transient/braking_torque".to_string()];
+    for (name, _) in &run.statics.as_ref().ok_or("no statics")?.interfaces {
+        signals.push(format!("transient/interfaces/{name}/normal_force"));
+    }
+    for s in &signals {
+        let v = read(s)?;
+        let scale = v[0].abs().max(1.0);
+        worst = worst.max(
+            v.iter()
+                .map(|x| (x - v[0]).abs() / scale)
+                .fold(0.0, f64::max),
+        );
+    }
+    say(
+        petsc,
+        &format!(
+            "{} steps, {:.2} iterations per step (max {}), {:.1} ms per step: largest relative change of torque and normal forces {worst:.1e}",
+            t.steps,
+            t.mean_iterations,
+            t.max_iterations,
+            1e3 * t.seconds_per_step
+        ),
+    );
+    if worst > 1e-8 || t.max_iterations > 2 || t.steps != 200 {
+        return Err(format!(
+            "signals drift by {worst:e}; max iterations {}; steps {}",
+            t.max_iterations, t.steps
+        ));
+    }
+    Ok(())
 }
 
 /// Rows of this rank for an n x n tridiagonal operator (even split).

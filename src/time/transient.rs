@@ -1,0 +1,213 @@
+//! The transient stage: nonlinear time response of the full model (small models; the reduced
+//! model of the superelement reduction is the next step) from the static state plus a small
+//! perturbation, with the contact and friction forces of the contact stage, and observation
+//! signals (braking torque, normal and friction force per interface) at every step.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::newmark::{jacobian, Forces, Newmark, NewmarkSettings, State, StepReport, TimeError};
+use crate::contact::kernel::Part;
+use crate::contact::{ContactModel, InterfaceSummary};
+use crate::fem::dofmap::DofMap;
+use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+
+/// The `[transient]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransientSettings {
+    /// Time step (s).
+    #[serde(default = "default_step")]
+    pub step: f64,
+    /// Number of steps.
+    pub steps: usize,
+    /// Relative tolerance of the fixed-Jacobian iterations.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// Start: the static state plus `amplitude` (m, largest nodal displacement) times a real
+    /// mode shape (`mode`, 1-based).
+    #[serde(default = "default_mode")]
+    pub mode: usize,
+    #[serde(default = "default_amplitude")]
+    pub amplitude: f64,
+}
+
+fn default_step() -> f64 {
+    1e-6
+}
+fn default_tolerance() -> f64 {
+    1e-8
+}
+fn default_max_iterations() -> usize {
+    30
+}
+fn default_mode() -> usize {
+    1
+}
+fn default_amplitude() -> f64 {
+    1e-7
+}
+
+impl TransientSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.step > 0.0 && self.step.is_finite()) {
+            return Err(format!(
+                "key 'transient.step' = {}: must be a positive time step (s)",
+                self.step
+            ));
+        }
+        if self.steps == 0 {
+            return Err("key 'transient.steps' must be at least 1".into());
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
+            return Err(format!(
+                "key 'transient.tolerance' = {}: must be in (0, 0.01)",
+                self.tolerance
+            ));
+        }
+        if self.mode == 0 {
+            return Err("key 'transient.mode' is 1-based: the first real mode is 1".into());
+        }
+        if !self.amplitude.is_finite() {
+            return Err("key 'transient.amplitude' must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// The time response: signals at every step (index 0 = start).
+pub struct Transient {
+    pub time: Vec<f64>,
+    /// Per interface (in the contact model's order): normal force, friction force, torque.
+    pub normal_force: Vec<Vec<f64>>,
+    pub friction_force: Vec<Vec<f64>>,
+    pub torque: Vec<Vec<f64>>,
+    pub iterations: Vec<usize>,
+    pub factor_entries: f64,
+    pub seconds_factorizing: f64,
+    pub seconds_stepping: f64,
+}
+
+/// Everything the stage needs.
+pub struct TransientInputs<'a, 'p> {
+    pub k0: &'a SparseMatrix<'p>,
+    pub m: &'a SparseMatrix<'p>,
+    pub c: Option<&'a SparseMatrix<'p>>,
+    pub contact: &'a ContactModel<'p>,
+    pub dofs: &'a DofMap,
+    pub f_ext: &'a Vector<'p>,
+    pub q_static: &'a Vector<'p>,
+    pub static_state: &'a crate::contact::ContactState,
+    pub shape: &'a Vector<'p>,
+}
+
+/// Runs the transient. A step that fails ends the run: the signals up to the last converged
+/// step come back with the error, so the caller can write them before reporting it.
+///
+/// # Collective
+pub fn run<'p>(
+    petsc: &'p Petsc,
+    settings: &TransientSettings,
+    input: TransientInputs<'_, 'p>,
+) -> Result<(Transient, Option<TimeError>), TimeError> {
+    let newmark = NewmarkSettings {
+        step: settings.step,
+        tolerance: settings.tolerance,
+        max_iterations: settings.max_iterations,
+        ..Default::default()
+    };
+    // The fixed Jacobian: the static state's contact stiffness (normal and stick) stands for
+    // the mock contact stiffness of DESIGN.md.
+    let t = Instant::now();
+    let mut mock = input.contact.joined_matrix(petsc, input.k0, input.dofs)?;
+    mock.zero_entries()?;
+    input
+        .contact
+        .add_tangent(input.static_state, &[Part::Normal, Part::Stick], &mut mock)?;
+    mock.assemble()?;
+    let k0 = input.contact.joined_matrix(petsc, input.k0, input.dofs)?;
+    let j = jacobian(&newmark, input.m, input.c, &k0, Some(&mock))?;
+    j.set_symmetric(true)?;
+    let factor = DirectSolver::factorize(petsc, &j, Factorization::Cholesky, "time_")?;
+    drop(j);
+    let mass = DirectSolver::factorize(petsc, input.m, Factorization::Lu, "time_mass_")?;
+    let seconds_factorizing = t.elapsed().as_secs_f64();
+
+    let contact = input.contact;
+    let fc = input.f_ext.duplicate()?;
+    let mut forces =
+        |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| -> Result<(), LaError> {
+            let state = contact.evaluate(q, Some(v), 1.0)?;
+            contact.force(&state, &fc)?;
+            f.copy_from(input.f_ext)?;
+            f.axpy(1.0, &fc)
+        };
+    let forces: &mut Forces<'_, 'p> = &mut forces;
+
+    // Start: static state + amplitude x shape (scaled to its largest entry).
+    let q = input.q_static.try_clone()?;
+    let largest = input.shape.norm_inf()?;
+    if largest > 0.0 {
+        q.axpy(settings.amplitude / largest, input.shape)?;
+    }
+    let v = q.duplicate()?;
+    v.set_all(0.0)?;
+    let a = q.duplicate()?;
+    let mut state = State {
+        time: 0.0,
+        step: 0,
+        q,
+        v,
+        a,
+    };
+    let mut integrator = Newmark::new(newmark, input.m, input.c, &k0, &factor)?;
+    integrator.initial_acceleration(&mut state, forces, &mass)?;
+
+    let n_if = contact.interfaces.len();
+    let mut out = Transient {
+        time: Vec::with_capacity(settings.steps + 1),
+        normal_force: vec![Vec::with_capacity(settings.steps + 1); n_if],
+        friction_force: vec![Vec::with_capacity(settings.steps + 1); n_if],
+        torque: vec![Vec::with_capacity(settings.steps + 1); n_if],
+        iterations: Vec::with_capacity(settings.steps),
+        factor_entries: factor.report().factor_entries,
+        seconds_factorizing,
+        seconds_stepping: 0.0,
+    };
+    let record = |out: &mut Transient, s: &State<'p>| -> Result<(), LaError> {
+        let cs = contact.evaluate(&s.q, Some(&s.v), 1.0)?;
+        let sums: Vec<InterfaceSummary> = contact.summarize(petsc, &cs);
+        out.time.push(s.time);
+        for (i, sum) in sums.iter().enumerate() {
+            out.normal_force[i].push(sum.normal_force);
+            out.friction_force[i].push(sum.friction_force);
+            out.torque[i].push(sum.torque);
+        }
+        Ok(())
+    };
+    record(&mut out, &state)?;
+    let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
+    let t = Instant::now();
+    let result = (|| -> Result<(), TimeError> {
+        for i in 0..settings.steps {
+            let report: StepReport = integrator.step(&mut state, forces)?;
+            out.iterations.push(report.iterations);
+            record(&mut out, &state)?;
+            if i % 50 == 0 || i + 1 == settings.steps {
+                let mean =
+                    out.iterations.iter().sum::<usize>() as f64 / out.iterations.len() as f64;
+                bar.update(
+                    i + 1,
+                    &format!("t = {:.3e} s, {mean:.2} iterations/step", state.time),
+                );
+            }
+        }
+        Ok(())
+    })();
+    bar.finish();
+    out.seconds_stepping = t.elapsed().as_secs_f64();
+    Ok((out, result.err()))
+}
