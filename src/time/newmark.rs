@@ -201,17 +201,14 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.kinematics(state)?;
             let (r, reference) = self.residual(t1, forces)?;
             let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
+            let report = StepReport {
+                iterations,
+                residual: r,
+                reference,
+            };
             if r <= target {
-                state.q.copy_from(&self.q1)?;
-                state.v.copy_from(&self.v1)?;
-                state.a.copy_from(&self.a1)?;
-                state.time = t1;
-                state.step += 1;
-                return Ok(StepReport {
-                    iterations,
-                    residual: r,
-                    reference,
-                });
+                self.accept(state, t1)?;
+                return Ok(report);
             }
             if iterations >= self.settings.max_iterations || !r.is_finite() {
                 return Err(TimeError::NotConverged {
@@ -233,18 +230,23 @@ impl<'a, 'p> Newmark<'a, 'p> {
             let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
             if correction <= self.settings.tolerance * self.tmp.norm2()? + floor {
                 self.kinematics(state)?;
-                state.q.copy_from(&self.q1)?;
-                state.v.copy_from(&self.v1)?;
-                state.a.copy_from(&self.a1)?;
-                state.time = t1;
-                state.step += 1;
+                self.accept(state, t1)?;
                 return Ok(StepReport {
                     iterations,
-                    residual: r,
-                    reference,
+                    ..report
                 });
             }
         }
+    }
+
+    /// The state becomes (q1, v1, a1) at t1.
+    fn accept(&self, state: &mut State<'p>, t1: f64) -> Result<(), LaError> {
+        state.q.copy_from(&self.q1)?;
+        state.v.copy_from(&self.v1)?;
+        state.a.copy_from(&self.a1)?;
+        state.time = t1;
+        state.step += 1;
+        Ok(())
     }
 }
 
