@@ -231,12 +231,14 @@ fn print_summary(s: &RunSummary) {
     }
     if let Some(t) = &s.transient {
         println!(
-            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; Jacobian factor {:.3e} entries ({:.2} s)",
+            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts; {} Jacobian factorizations ({:.3e} entries, {:.2} s)",
             t.steps,
             t.simulated,
             t.mean_iterations,
             t.max_iterations,
             1e3 * t.seconds_per_step,
+            t.cuts,
+            t.factorizations,
             t.factor_entries,
             t.seconds_factorizing
         );

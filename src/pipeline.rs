@@ -263,6 +263,8 @@ pub struct TransientSummary {
     pub seconds_per_step: f64,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
+    pub cuts: usize,
+    pub factorizations: usize,
 }
 
 /// A parameter sweep, for the summary.
@@ -756,6 +758,8 @@ pub fn run(
             seconds_per_step: t.seconds_stepping / t.iterations.len().max(1) as f64,
             factor_entries: t.factor_entries,
             seconds_factorizing: t.seconds_factorizing,
+            cuts: t.cuts,
+            factorizations: t.factorizations,
         }),
         sweep: sweep_result.map(|s| SweepSummary {
             parameter: s.parameter.name(),

@@ -125,26 +125,6 @@ impl<'a, 'p> Newmark<'a, 'p> {
         })
     }
 
-    /// The initial acceleration M a0 = f(t0, q0, v0) - C v0 - K q0, solved with `mass_solver`
-    /// (a factor of M).
-    ///
-    /// # Collective
-    pub fn initial_acceleration(
-        &mut self,
-        state: &mut State<'p>,
-        forces: &mut Forces<'_, 'p>,
-        mass_solver: &DirectSolver<'p>,
-    ) -> Result<(), LaError> {
-        forces(state.time, &state.q, &state.v, &self.f)?;
-        self.k.mult(&state.q, &self.tmp)?;
-        self.f.axpy(-1.0, &self.tmp)?;
-        if let Some(c) = self.c {
-            c.mult(&state.v, &self.tmp)?;
-            self.f.axpy(-1.0, &self.tmp)?;
-        }
-        mass_solver.solve(&self.f, &state.a)
-    }
-
     /// Sets a1 and v1 from q1 (the Newmark relations).
     fn kinematics(&self, s: &State<'p>) -> Result<(), LaError> {
         let NewmarkSettings {
@@ -276,4 +256,111 @@ pub fn jacobian<'p>(
         j.axpy(1.0, mock)?;
     }
     Ok(j)
+}
+
+/// The initial acceleration M a0 = f(t0, q0, v0) - C v0 - K q0, solved with `mass_solver`
+/// (a factor of M).
+///
+/// # Collective
+pub fn initial_acceleration<'p>(
+    m: &SparseMatrix<'p>,
+    c: Option<&SparseMatrix<'p>>,
+    k: &SparseMatrix<'p>,
+    state: &mut State<'p>,
+    forces: &mut Forces<'_, 'p>,
+    mass_solver: &DirectSolver<'p>,
+) -> Result<(), LaError> {
+    let f = m.new_vector()?;
+    let tmp = f.duplicate()?;
+    forces(state.time, &state.q, &state.v, &f)?;
+    k.mult(&state.q, &tmp)?;
+    f.axpy(-1.0, &tmp)?;
+    if let Some(c) = c {
+        c.mult(&state.v, &tmp)?;
+        f.axpy(-1.0, &tmp)?;
+    }
+    mass_solver.solve(&f, &state.a)
+}
+
+/// What an adaptive run did besides stepping.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct StepControl {
+    pub steps: usize,
+    /// Steps halved after a failed step (each with a new factor), and doublings back.
+    pub cuts: usize,
+    pub restores: usize,
+    pub factorizations: usize,
+}
+
+/// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's
+/// fixed-Jacobian iterations fail, the step is halved (J refactorized for it) and retried from
+/// the same state, at most `max_cuts` levels deep; after `restore_after` good steps the step is
+/// doubled back towards the nominal one. Every change goes to `log`. Only when the smallest step
+/// fails too is the error returned.
+///
+/// # Collective
+#[allow(clippy::too_many_arguments)] // operators, factor builder, state, forces, controls, sinks
+pub fn integrate_adaptive<'p>(
+    settings: NewmarkSettings,
+    m: &SparseMatrix<'p>,
+    c: Option<&SparseMatrix<'p>>,
+    k: &SparseMatrix<'p>,
+    factorize: &mut dyn FnMut(&NewmarkSettings) -> Result<DirectSolver<'p>, LaError>,
+    state: &mut State<'p>,
+    forces: &mut Forces<'_, 'p>,
+    end_time: f64,
+    max_cuts: usize,
+    restore_after: usize,
+    on_step: &mut dyn FnMut(&State<'p>, &StepReport) -> Result<(), TimeError>,
+    log: &mut dyn FnMut(&str),
+) -> Result<StepControl, TimeError> {
+    let mut control = StepControl::default();
+    let mut level = 0u32;
+    let nominal = settings.step;
+    while state.time < end_time - 0.25 * nominal / f64::from(1u32 << level) {
+        let step_settings = NewmarkSettings {
+            step: nominal / f64::from(1u32 << level),
+            ..settings
+        };
+        let factor = factorize(&step_settings)?;
+        control.factorizations += 1;
+        let mut integrator = Newmark::new(step_settings, m, c, k, &factor)?;
+        let mut good = 0usize;
+        loop {
+            if state.time >= end_time - 0.25 * step_settings.step {
+                break;
+            }
+            match integrator.step(state, forces) {
+                Ok(report) => {
+                    control.steps += 1;
+                    on_step(state, &report)?;
+                    good += 1;
+                    if level > 0 && good >= restore_after {
+                        level -= 1;
+                        control.restores += 1;
+                        log(&format!(
+                            "t = {:.6e} s: {good} steps converged, step back to {:.3e} s",
+                            state.time,
+                            nominal / f64::from(1u32 << level)
+                        ));
+                        break;
+                    }
+                }
+                Err(TimeError::NotConverged {
+                    residual, target, ..
+                }) if (level as usize) < max_cuts => {
+                    level += 1;
+                    control.cuts += 1;
+                    log(&format!(
+                        "t = {:.6e} s: fixed-Jacobian iterations stalled (residual {residual:.3e} vs {target:.3e}); step cut to {:.3e} s, Jacobian refactorized",
+                        state.time,
+                        nominal / f64::from(1u32 << level)
+                    ));
+                    break;
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+    Ok(control)
 }

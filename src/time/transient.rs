@@ -7,7 +7,10 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::newmark::{jacobian, Forces, Newmark, NewmarkSettings, State, StepReport, TimeError};
+use super::newmark::{
+    initial_acceleration, integrate_adaptive, jacobian, Forces, NewmarkSettings, State, StepReport,
+    TimeError,
+};
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, InterfaceSummary};
 use crate::fem::dofmap::DofMap;
@@ -33,6 +36,13 @@ pub struct TransientSettings {
     pub mode: usize,
     #[serde(default = "default_amplitude")]
     pub amplitude: f64,
+    /// A failed step is halved (Jacobian refactorized) at most this many levels deep.
+    #[serde(default = "default_max_cuts")]
+    pub max_cuts: usize,
+}
+
+fn default_max_cuts() -> usize {
+    6
 }
 
 fn default_step() -> f64 {
@@ -86,6 +96,9 @@ pub struct Transient {
     pub friction_force: Vec<Vec<f64>>,
     pub torque: Vec<Vec<f64>>,
     pub iterations: Vec<usize>,
+    /// Step cuts after failed steps, and Jacobian factorizations in all.
+    pub cuts: usize,
+    pub factorizations: usize,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
     pub seconds_stepping: f64,
@@ -129,10 +142,6 @@ pub fn run<'p>(
         .add_tangent(input.static_state, &[Part::Normal, Part::Stick], &mut mock)?;
     mock.assemble()?;
     let k0 = input.contact.joined_matrix(petsc, input.k0, input.dofs)?;
-    let j = jacobian(&newmark, input.m, input.c, &k0, Some(&mock))?;
-    j.set_symmetric(true)?;
-    let factor = DirectSolver::factorize(petsc, &j, Factorization::Cholesky, "time_")?;
-    drop(j);
     let mass = DirectSolver::factorize(petsc, input.m, Factorization::Lu, "time_mass_")?;
     let seconds_factorizing = t.elapsed().as_secs_f64();
 
@@ -163,8 +172,8 @@ pub fn run<'p>(
         v,
         a,
     };
-    let mut integrator = Newmark::new(newmark, input.m, input.c, &k0, &factor)?;
-    integrator.initial_acceleration(&mut state, forces, &mass)?;
+    initial_acceleration(input.m, input.c, &k0, &mut state, forces, &mass)?;
+    drop(mass);
 
     let n_if = contact.interfaces.len();
     let mut out = Transient {
@@ -173,7 +182,9 @@ pub fn run<'p>(
         friction_force: vec![Vec::with_capacity(settings.steps + 1); n_if],
         torque: vec![Vec::with_capacity(settings.steps + 1); n_if],
         iterations: Vec::with_capacity(settings.steps),
-        factor_entries: factor.report().factor_entries,
+        cuts: 0,
+        factorizations: 0,
+        factor_entries: 0.0,
         seconds_factorizing,
         seconds_stepping: 0.0,
     };
@@ -191,23 +202,61 @@ pub fn run<'p>(
     record(&mut out, &state)?;
     let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
     let t = Instant::now();
-    let result = (|| -> Result<(), TimeError> {
-        for i in 0..settings.steps {
-            let report: StepReport = integrator.step(&mut state, forces)?;
-            out.iterations.push(report.iterations);
-            record(&mut out, &state)?;
-            if i % 50 == 0 || i + 1 == settings.steps {
-                let mean =
-                    out.iterations.iter().sum::<usize>() as f64 / out.iterations.len() as f64;
-                bar.update(
-                    i + 1,
-                    &format!("t = {:.3e} s, {mean:.2} iterations/step", state.time),
-                );
-            }
+    let end_time = settings.steps as f64 * settings.step;
+    let mut factor_entries = 0.0;
+    let mut seconds_factorizing = seconds_factorizing;
+    let mut factorize = |ns: &NewmarkSettings| -> Result<DirectSolver<'p>, LaError> {
+        let t = Instant::now();
+        let j = jacobian(ns, input.m, input.c, &k0, Some(&mock))?;
+        j.set_symmetric(true)?;
+        let factor = DirectSolver::factorize(petsc, &j, Factorization::Cholesky, "time_")?;
+        factor_entries = factor.report().factor_entries;
+        seconds_factorizing += t.elapsed().as_secs_f64();
+        Ok(factor)
+    };
+    let rank0 = petsc.rank() == 0;
+    let mut on_step = |s: &State<'p>, report: &StepReport| -> Result<(), TimeError> {
+        out.iterations.push(report.iterations);
+        record(&mut out, s)?;
+        let done = ((s.time / settings.step).round() as usize).min(settings.steps);
+        if out.iterations.len().is_multiple_of(50) || done == settings.steps {
+            let mean = out.iterations.iter().sum::<usize>() as f64 / out.iterations.len() as f64;
+            bar.update(
+                done,
+                &format!("t = {:.3e} s, {mean:.2} iterations/step", s.time),
+            );
         }
         Ok(())
-    })();
+    };
+    let mut log = |line: &str| {
+        if rank0 {
+            println!("  transient: {line}");
+        }
+    };
+    let result = integrate_adaptive(
+        newmark,
+        input.m,
+        input.c,
+        &k0,
+        &mut factorize,
+        &mut state,
+        forces,
+        end_time,
+        settings.max_cuts,
+        100,
+        &mut on_step,
+        &mut log,
+    );
     bar.finish();
     out.seconds_stepping = t.elapsed().as_secs_f64();
-    Ok((out, result.err()))
+    out.factor_entries = factor_entries;
+    out.seconds_factorizing = seconds_factorizing;
+    match result {
+        Ok(control) => {
+            out.cuts = control.cuts;
+            out.factorizations = control.factorizations;
+            Ok((out, None))
+        }
+        Err(e) => Ok((out, Some(e))),
+    }
 }
