@@ -1,18 +1,27 @@
 //! Complex-mode benchmark, speed against error (run under mpirun by scripts/bench): on the
-//! preloaded brake, the time of the real modes, of the projected and of the full complex
-//! modes, and a table of projected-vs-full frequency and damping error against the number of
-//! real modes in the basis, with the time of each; then the cost of one sweep point
-//! (re-projection of a new tangent state + dense complex modes, static re-solve apart).
+//! preloaded brake (one preload, one set of real modes; the smaller bases are its leading
+//! subsets), the time of the real modes, of the projected and of the full complex modes, and a
+//! table of projected-vs-full frequency and damping error against the number of real modes in
+//! the basis, with the time of each; then the cost of one sweep point (re-projection of a new
+//! tangent state + dense complex modes, static re-solve apart).
 //!
 //!   mpirun -n 2 target/release/deps/complex_modes-* --dofs 30000 --bases 50,100,250,400
 
 use std::path::Path;
+use std::time::Instant;
 
 use clap::Parser;
-use squeal::eigen::complex_modes::ComplexMode;
-use squeal::la::Petsc;
-use squeal::pipeline::{run, RunSummary};
+use squeal::contact::kernel::Part;
+use squeal::contact::ContactModel;
+use squeal::eigen::complex_modes::{
+    full, projected, ComplexMode, ComplexModeSettings, ModalProjection, Operators,
+};
+use squeal::eigen::real_modes::{real_modes, RealModeRequest};
+use squeal::fem::system::assemble_system_as;
+use squeal::la::{MatrixFormat, Petsc};
+use squeal::pipeline::build_model;
 use squeal::scene::Scene;
+use squeal::statics::{pressure_load, solve as solve_statics};
 
 #[derive(Parser)]
 struct Args {
@@ -26,47 +35,22 @@ struct Args {
     /// Modes compared: those of the full route below this frequency (Hz).
     #[arg(long, default_value_t = 2500.0)]
     f_max: f64,
-    /// Points of the timed friction sweep (basis: 250 modes or the largest below it).
+    /// Repetitions of the timed sweep point (basis: 250 modes or the largest below it).
     #[arg(long, default_value_t = 20)]
     sweep_points: usize,
-    /// Output folder of the runs.
-    #[arg(long, default_value = "target/bench/complex")]
-    out: String,
     /// cargo bench passes --bench; ignored.
     #[arg(long, hide = true)]
     bench: bool,
 }
 
-fn scene(dofs: usize, modes: usize, method: &str, f_max: f64, sweep: Option<usize>) -> String {
-    let mut s = format!(
+fn scene(dofs: usize) -> String {
+    format!(
         "[model]\nsource = \"brake\"\ntarget_dofs = {dofs}\npressure_bar = 20.0\n\
          [contact]\ndisc_speed = 6.2832\n\
          [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
          friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
-         [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = {modes}\n\
-         [complex_modes]\nmethod = \"{method}\"\nf_max_hz = {f_max}\ncount = 40\n"
-    );
-    if let Some(n) = sweep {
-        s += &format!("[sweep]\nparameter = \"mu\"\nfrom = 0.3\nto = 0.5\npoints = {n}\n");
-    }
-    s
-}
-
-fn stage(s: &RunSummary, name: &str) -> f64 {
-    s.timings
-        .stages
-        .iter()
-        .filter(|(n, _)| n == name)
-        .map(|(_, t)| t)
-        .sum()
-}
-
-fn route<'a>(s: &'a RunSummary, r: &str) -> &'a [ComplexMode] {
-    s.complex
-        .iter()
-        .find(|c| c.route == r)
-        .map(|c| c.modes.as_slice())
-        .unwrap_or(&[])
+         [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n"
+    )
 }
 
 /// Largest and median frequency error (relative) and largest damping-ratio error (absolute)
@@ -94,110 +78,188 @@ fn errors(full: &[ComplexMode], projected: &[ComplexMode]) -> (f64, f64, f64) {
     (worst.0, median, worst.1)
 }
 
-fn route_summary<'a>(s: &'a RunSummary, r: &str) -> Option<&'a squeal::pipeline::ComplexSummary> {
-    s.complex.iter().find(|c| c.route == r)
-}
-
 fn main() {
     let args = Args::parse();
     let universe = mpi::initialize().expect("MPI");
     squeal::la::install_panic_hook();
     let petsc = Petsc::initialize(&universe, &[]).expect("PETSc");
     let rank0 = petsc.rank() == 0;
-    let go = |text: String, name: &str| -> RunSummary {
-        let scene = Scene::parse(&text, name).expect("bench scene");
-        let out = Path::new(&args.out).join(name);
-        run(&petsc, &scene, &text, Path::new("."), &out, &[]).expect("bench run")
-    };
+    let world = petsc.world();
     let mut bases = args.bases.clone();
     bases.sort_unstable();
     let largest = *bases.last().expect("at least one basis size");
-    let reference = go(
-        scene(args.dofs, largest, "both", args.f_max, None),
-        "reference",
-    );
-    let full = route(&reference, "full").to_vec();
+
+    // One model, one preload, one set of real modes (the largest basis); the smaller bases
+    // are its leading subsets.
+    let text = scene(args.dofs);
+    let scene = Scene::parse(&text, "bench").expect("bench scene");
+    let t = Instant::now();
+    let model = build_model(&scene.model, Path::new("."))
+        .expect("brake model")
+        .expect("a mesh model");
+    let system = assemble_system_as(&petsc, &model.mesh, &model.clamps, Some(MatrixFormat::Aij))
+        .expect("assembly");
+    let contact_settings = scene.contact.clone().unwrap_or_default();
+    let interfaces = contact_settings
+        .resolve(&model.interfaces)
+        .expect("interfaces");
+    let contact = ContactModel::new(
+        &petsc,
+        &model.mesh,
+        &system.dofs,
+        interfaces,
+        &contact_settings,
+    )
+    .expect("pairing");
+    let f_ext = pressure_load(
+        &petsc,
+        &model.mesh,
+        &system.dofs,
+        &model.loads,
+        model.pressure,
+    )
+    .expect("load");
+    let setup = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let statics = scene.statics.clone().unwrap_or_default();
+    let state = solve_statics(
+        &petsc,
+        &system.stiffness,
+        &system.dofs,
+        &contact,
+        &f_ext,
+        &statics,
+        None,
+        |_| {},
+    )
+    .expect("static preload");
+    let preload = t.elapsed().as_secs_f64();
+    let terms = |parts: &[Part]| contact.tangent_terms(&state.contact, parts);
+    let mut ks = contact
+        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
+        .expect("tangent");
+    contact
+        .add_tangent(&state.contact, &[Part::Normal, Part::Stick], &mut ks)
+        .expect("tangent");
+    ks.assemble().expect("tangent");
+    ks.set_symmetric(true).expect("tangent");
+    let request = RealModeRequest {
+        count: largest,
+        ..Default::default()
+    };
+    let t = Instant::now();
+    let modes = real_modes(&petsc, &ks, &system.mass, false, &request, "").expect("real modes");
+    let real_seconds = t.elapsed().as_secs_f64();
+    drop(ks);
+    // The full operators.
+    let damping = scene.damping.unwrap_or_default();
+    let mut kf = contact
+        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
+        .expect("K");
+    contact
+        .add_tangent(
+            &state.contact,
+            &[Part::Normal, Part::Stick, Part::Friction],
+            &mut kf,
+        )
+        .expect("K");
+    kf.assemble().expect("K");
+    let mut cf = contact
+        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
+        .expect("C");
+    cf.scale(damping.rayleigh_beta).expect("C");
+    contact
+        .add_tangent(&state.contact, &[Part::Damping], &mut cf)
+        .expect("C");
+    cf.assemble().expect("C");
+    let ops = Operators::new(&kf, &cf, &system.mass).expect("operators");
+    let settings = ComplexModeSettings {
+        f_max_hz: Some(args.f_max),
+        count: Some(40),
+        ..Default::default()
+    };
+    let full_modes = full(&petsc, &ops, &settings, 40).expect("full complex modes");
+    let full_list = full_modes.modes.clone();
     if rank0 {
         println!(
-            "brake: {} DOF on {} ranks; static preload {:.1} s; {largest} real modes {:.1} s; \
-             full complex modes (SLEPc PEP, {} modes below {} Hz, {} unstable) {:.1} s \
-             (+ operators {:.1} s)",
-            reference.dofs,
+            "brake: {} DOF on {} ranks; model + pairing {setup:.1} s; static preload {preload:.1} s; \
+             {largest} real modes {real_seconds:.1} s; full complex modes (SLEPc PEP, {} modes \
+             below {} Hz, {} unstable) {:.1} s",
+            system.stiffness.global_rows(),
             petsc.size(),
-            stage(&reference, "static preload"),
-            stage(&reference, "real modes"),
-            full.len(),
+            full_list.len(),
             args.f_max,
-            full.iter().filter(|m| m.unstable).count(),
-            stage(&reference, "complex modes (full)"),
-            stage(&reference, "complex operators"),
+            full_list.iter().filter(|m| m.unstable).count(),
+            full_modes.seconds,
         );
         println!(
-            "{:>10} {:>13} {:>14} {:>14} {:>13} {:>15} {:>32}",
+            "{:>10} {:>13} {:>14} {:>13} {:>15} {:>32}",
             "real modes",
             "top mode (Hz)",
-            "real modes (s)",
             "projection (s)",
             "dense CEA (s)",
             "residuals (s)",
             "error f max / f median / zeta max"
         );
     }
+    let mut sweep_point = None;
     for &m in &bases {
-        let summary = if m == largest {
-            None
-        } else {
-            Some(go(
-                scene(args.dofs, m, "projected", args.f_max, None),
-                &format!("basis-{m}"),
-            ))
-        };
-        let s = summary.as_ref().unwrap_or(&reference);
-        let (df, median, dz) = errors(&full, route(s, "projected"));
-        let solve = route_summary(s, "projected").map_or(f64::NAN, |c| c.solve_seconds);
+        let m = m.min(modes.shapes.len());
+        let shapes = &modes.shapes[..m];
+        let t = Instant::now();
+        let projection = ModalProjection::new(
+            world,
+            modes.eigenvalues[..m].to_vec(),
+            contact.observe_shapes(shapes).expect("observe"),
+            contact.local.len(),
+            &terms(&[Part::Normal, Part::Stick]),
+        );
+        let (kp, cp) = projection.operators(
+            world,
+            &terms(&[Part::Normal, Part::Stick, Part::Friction]),
+            &terms(&[Part::Damping]),
+            &damping,
+        );
+        let projection_seconds = t.elapsed().as_secs_f64();
+        let with_residuals = projected(shapes, &kp, &cp, Some(&ops), &settings).expect("projected");
+        let (df, median, dz) = errors(&full_list, &with_residuals.modes);
         if rank0 {
             println!(
-                "{m:>10} {:>13.1} {:>14.2} {:>14.4} {:>13.4} {:>15.3} {:>12.2e} / {:.2e} / {:.2e}",
-                s.frequencies_hz.last().copied().unwrap_or(0.0),
-                stage(s, "real modes"),
-                stage(s, "complex modes projection"),
-                solve,
-                stage(s, "complex modes (projected)") - solve,
+                "{m:>10} {:>13.1} {:>14.4} {:>13.4} {:>15.3} {:>12.2e} / {:.2e} / {:.2e}",
+                modes.frequencies_hz[m - 1],
+                projection_seconds,
+                with_residuals.solve_seconds,
+                with_residuals.seconds - with_residuals.solve_seconds,
                 df,
                 median,
                 dz
             );
         }
+        if m <= 250 {
+            // One sweep point: a new tangent state re-projected (observation of the basis
+            // kept) + the dense complex modes, no residuals.
+            let t = Instant::now();
+            for _ in 0..args.sweep_points {
+                let (kp, cp) = projection.operators(
+                    world,
+                    &terms(&[Part::Normal, Part::Stick, Part::Friction]),
+                    &terms(&[Part::Damping]),
+                    &damping,
+                );
+                projected(shapes, &kp, &cp, None, &settings).expect("projected");
+            }
+            sweep_point = Some((
+                m,
+                t.elapsed().as_secs_f64() / args.sweep_points.max(1) as f64,
+            ));
+        }
     }
-    let sweep_basis = bases
-        .iter()
-        .copied()
-        .filter(|&m| m <= 250)
-        .max()
-        .unwrap_or(largest);
-    let sw = go(
-        scene(
-            args.dofs,
-            sweep_basis,
-            "projected",
-            args.f_max,
-            Some(args.sweep_points),
-        ),
-        "sweep",
-    );
-    if let (true, Some(sweep)) = (rank0, &sw.sweep) {
-        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-        let modal = mean(&sweep.modal_seconds);
+    if let (true, Some((m, seconds))) = (rank0, sweep_point) {
         println!(
-            "sweep over mu ({} points, basis {sweep_basis}): per point {:.4} s re-projection + \
-             dense complex modes (target < 1 s: {}), {:.2} s static re-solve (warm start); \
-             100 points: {:.1} s modal + {:.0} s statics",
-            sweep.points,
-            modal,
-            if modal < 1.0 { "met" } else { "missed" },
-            mean(&sweep.statics_seconds),
-            100.0 * modal,
-            100.0 * mean(&sweep.statics_seconds)
+            "sweep point (basis {m}): {seconds:.4} s re-projection + dense complex modes (target \
+             < 1 s: {}); 100 points: {:.1} s plus the static re-solves",
+            if seconds < 1.0 { "met" } else { "missed" },
+            100.0 * seconds
         );
     }
 }
