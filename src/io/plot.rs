@@ -215,21 +215,10 @@ impl Figure {
     /// Text at pixel position (top-left), scaled `scale` times.
     pub fn text(&mut self, px: f64, py: f64, s: &str, c: Rgb, scale: i64) {
         let (x0, y0) = (px.round() as i64, py.round() as i64);
-        for (k, ch) in s.chars().enumerate() {
-            let glyph = BASIC_FONTS.get(ch).unwrap_or([0; 8]);
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits >> col & 1 == 1 {
-                        for sy in 0..scale {
-                            for sx in 0..scale {
-                                self.put(
-                                    x0 + (k as i64 * 8 + col) * scale + sx,
-                                    y0 + row as i64 * scale + sy,
-                                    c,
-                                );
-                            }
-                        }
-                    }
+        for (x, y) in glyph_pixels(s) {
+            for sy in 0..scale {
+                for sx in 0..scale {
+                    self.put(x0 + x * scale + sx, y0 + y * scale + sy, c);
                 }
             }
         }
@@ -248,15 +237,8 @@ impl Figure {
     /// Text rotated 90 degrees (reading upwards), starting at the bottom pixel (px, py).
     fn vertical_text(&mut self, px: f64, py: f64, s: &str, c: Rgb) {
         let (x0, y0) = (px.round() as i64, py.round() as i64);
-        for (k, ch) in s.chars().enumerate() {
-            let glyph = BASIC_FONTS.get(ch).unwrap_or([0; 8]);
-            for (row, bits) in glyph.iter().enumerate() {
-                for col in 0..8 {
-                    if bits >> col & 1 == 1 {
-                        self.put(x0 + row as i64, y0 - (k as i64 * 8 + col), c);
-                    }
-                }
-            }
+        for (x, y) in glyph_pixels(s) {
+            self.put(x0 + y, y0 - x, c);
         }
     }
 
@@ -292,6 +274,18 @@ impl Figure {
     pub fn inked(&self) -> usize {
         self.rgb.chunks(3).filter(|p| p != &[255, 255, 255]).count()
     }
+}
+
+/// The set pixels (x along the line, y down) of a line of text in the 8x8 font.
+fn glyph_pixels(s: &str) -> impl Iterator<Item = (i64, i64)> + '_ {
+    s.chars().enumerate().flat_map(|(k, ch)| {
+        let glyph = BASIC_FONTS.get(ch).unwrap_or([0; 8]);
+        (0..8i64).flat_map(move |row| {
+            (0..8i64)
+                .filter(move |&col| glyph[row as usize] >> col & 1 == 1)
+                .map(move |col| (k as i64 * 8 + col, row))
+        })
+    })
 }
 
 fn nice_step(range: (f64, f64)) -> f64 {

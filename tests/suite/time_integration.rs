@@ -73,14 +73,7 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
         ..Default::default()
     };
     let g0: f64 = 2.0;
-    let mut forces = |_t: f64, q: &Vector, _v: &Vector, f: &Vector| {
-        let g = q.local()?.to_vec();
-        let mut out = f.local_mut()?;
-        for (o, g) in out.iter_mut().zip(g) {
-            *o = -1.0 + (-g).exp();
-        }
-        Ok(())
-    };
+    let mut forces = contact_force;
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
     let mut state = State {
         time: 0.0,
@@ -94,8 +87,7 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
         let j = jacobian(ns, &m, None, &k, Some(&mock))?;
         DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")
     };
-    let energy0 = g0 + (-g0).exp();
-    let (mut energy_error, mut crossings, mut previous) = (0.0f64, Vec::new(), None::<(f64, f64)>);
+    let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State, _r: &squeal::time::newmark::StepReport| {
         let (g, v) = (
             s.q.gather_all()
@@ -103,13 +95,7 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
             s.v.gather_all()
                 .map_err(squeal::time::newmark::TimeError::La)?[0],
         );
-        energy_error = energy_error.max(rel(0.5 * v * v + g + (-g).exp(), energy0));
-        if let Some((t0, v0)) = previous {
-            if v0 > 0.0 && v <= 0.0 {
-                crossings.push(t0 + (s.time - t0) * v0 / (v0 - v));
-            }
-        }
-        previous = Some((s.time, v));
+        oscillation.observe(s.time, g, v);
         Ok(())
     };
     let mut lines = Vec::new();
@@ -129,7 +115,8 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
         &mut log,
     )
     .map_err(|e| e.to_string())?;
-    let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+    let period = oscillation.period().ok_or("fewer than two maxima")?;
+    let energy_error = oscillation.energy_error;
     say(
         petsc,
         &format!(
@@ -449,6 +436,55 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
     Ok(())
 }
 
+/// The exponential-contact oscillator g'' = -1 + exp(-g) observed along a run: energy error
+/// and the times of the maxima of g (v changing sign from + to -, interpolated).
+struct Oscillation {
+    energy0: f64,
+    energy_error: f64,
+    maxima: Vec<f64>,
+    previous: Option<(f64, f64)>,
+}
+
+impl Oscillation {
+    fn released_at(g0: f64) -> Self {
+        Oscillation {
+            energy0: g0 + (-g0).exp(),
+            energy_error: 0.0,
+            maxima: Vec::new(),
+            previous: None,
+        }
+    }
+
+    fn observe(&mut self, time: f64, g: f64, v: f64) {
+        self.energy_error = self
+            .energy_error
+            .max(rel(0.5 * v * v + g + (-g).exp(), self.energy0));
+        if let Some((t0, v0)) = self.previous {
+            if v0 > 0.0 && v <= 0.0 {
+                self.maxima.push(t0 + (time - t0) * v0 / (v0 - v));
+            }
+        }
+        self.previous = Some((time, v));
+    }
+
+    /// Mean period between the first and last maximum.
+    fn period(&self) -> Option<f64> {
+        (self.maxima.len() >= 2).then(|| {
+            (self.maxima[self.maxima.len() - 1] - self.maxima[0]) / (self.maxima.len() - 1) as f64
+        })
+    }
+}
+
+/// The oscillator's force: -1 (external, towards the wall) + exp(-g) (contact), q = g.
+fn contact_force(_t: f64, q: &Vector, _v: &Vector, f: &Vector) -> Result<(), squeal::la::LaError> {
+    let g = q.local()?.to_vec();
+    let mut out = f.local_mut()?;
+    for (o, g) in out.iter_mut().zip(g) {
+        *o = -1.0 + (-g).exp();
+    }
+    Ok(())
+}
+
 fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
     let references: [(f64, f64); 4] = [
         (0.1, 6.28571843),
@@ -469,17 +505,8 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             ..Default::default()
         };
         // f = -1 (external, towards the wall) + exp(-g) (contact), q = g.
-        let mut forces = |_t: f64, q: &Vector, _v: &Vector, f: &Vector| {
-            let g = q.local()?.to_vec();
-            let mut out = f.local_mut()?;
-            for (o, g) in out.iter_mut().zip(g) {
-                *o = -1.0 + (-g).exp();
-            }
-            Ok(())
-        };
-        let (mut crossings, mut previous) = (Vec::new(), None::<(f64, f64)>);
-        let energy0 = g0 + (-g0).exp();
-        let mut energy_error = 0.0f64;
+        let mut forces = contact_force;
+        let mut oscillation = Oscillation::released_at(g0);
         let steps = (3.2 * reference / h) as usize;
         let iterations = integrate(
             petsc,
@@ -492,21 +519,14 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             &mut forces,
             |s| {
                 let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
-                energy_error = energy_error.max(rel(0.5 * v * v + g + (-g).exp(), energy0));
-                // Maxima of g: v changes sign from + to -.
-                if let Some((t0, v0)) = previous {
-                    if v0 > 0.0 && v <= 0.0 {
-                        crossings.push(t0 + (s.time - t0) * v0 / (v0 - v));
-                    }
-                }
-                previous = Some((s.time, v));
+                oscillation.observe(s.time, g, v);
                 Ok(())
             },
         )?;
-        if crossings.len() < 2 {
-            return Err(format!("g0 = {g0}: fewer than two maxima in three periods"));
-        }
-        let period = (crossings[crossings.len() - 1] - crossings[0]) / (crossings.len() - 1) as f64;
+        let period = oscillation
+            .period()
+            .ok_or(format!("g0 = {g0}: fewer than two maxima in three periods"))?;
+        let energy_error = oscillation.energy_error;
         report.push(format!(
             "g0 = {g0}: T = {period:.8} (ref. {reference}, rel. {:.1e}), energy {energy_error:.1e}, <= {iterations} iterations/step",
             rel(period, reference)
