@@ -136,7 +136,7 @@ fn main() {
     let preload = t.elapsed().as_secs_f64();
     let terms = |parts: &[Part]| contact.tangent_terms(&state.contact, parts);
     let mut ks = contact
-        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
+        .joined_matrix(&petsc, &system.stiffness)
         .expect("tangent");
     contact
         .add_tangent(&state.contact, &[Part::Normal, Part::Stick], &mut ks)
@@ -153,9 +153,7 @@ fn main() {
     drop(ks);
     // The full operators.
     let damping = scene.damping.unwrap_or_default();
-    let mut kf = contact
-        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
-        .expect("K");
+    let mut kf = contact.joined_matrix(&petsc, &system.stiffness).expect("K");
     contact
         .add_tangent(
             &state.contact,
@@ -164,9 +162,7 @@ fn main() {
         )
         .expect("K");
     kf.assemble().expect("K");
-    let mut cf = contact
-        .joined_matrix(&petsc, &system.stiffness, &system.dofs)
-        .expect("C");
+    let mut cf = contact.joined_matrix(&petsc, &system.stiffness).expect("C");
     cf.scale(damping.rayleigh_beta).expect("C");
     contact
         .add_tangent(&state.contact, &[Part::Damping], &mut cf)

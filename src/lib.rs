@@ -15,6 +15,7 @@ pub mod mesh;
 pub mod parallel;
 pub mod pipeline;
 pub mod progress;
+pub mod reduce;
 pub mod scene;
 pub mod statics;
 pub mod time;

@@ -229,6 +229,22 @@ fn print_summary(s: &RunSummary) {
             );
         }
     }
+    if let Some(r) = &s.reduction {
+        println!(
+            "reduction: {} -> {} DOF ({} kept in the contact zone + {} modal coordinates of {} offered, {} dropped), {:.2} s; reduced real modes vs full: max relative error {:.1e} over {}; static state represented to {:.1e}; basis M-orthonormal to {:.1e}",
+            r.full_dofs,
+            r.kept + r.modal,
+            r.kept,
+            r.modal,
+            r.offered,
+            r.dropped,
+            r.seconds,
+            r.mode_error,
+            r.mode_check.len(),
+            r.static_error,
+            r.orthonormality
+        );
+    }
     if let Some(t) = &s.transient {
         println!(
             "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts; {} Jacobian factorizations ({:.3e} entries, {:.2} s)",

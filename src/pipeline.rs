@@ -93,6 +93,24 @@ pub struct RunSummary {
     pub complex: Vec<ComplexSummary>,
     pub sweep: Option<SweepSummary>,
     pub transient: Option<TransientSummary>,
+    pub reduction: Option<ReductionSummary>,
+}
+
+/// The superelement reduction, for the summary.
+#[derive(Debug, Clone)]
+pub struct ReductionSummary {
+    pub full_dofs: usize,
+    pub kept: usize,
+    pub modal: usize,
+    pub offered: usize,
+    pub dropped: usize,
+    /// max |B^T M B - I|, and ||q0 - T x0|| / ||q0||.
+    pub orthonormality: f64,
+    pub static_error: f64,
+    /// (full Hz, reduced Hz) of the real modes in the basis, and the largest relative gap.
+    pub mode_check: Vec<(f64, f64)>,
+    pub mode_error: f64,
+    pub seconds: f64,
 }
 
 /// What the static preload found, for the summary.
@@ -456,7 +474,7 @@ pub fn run(
             })
         })?;
         let kt = timings.time("tangent state", || -> Result<SparseMatrix, LaError> {
-            let mut kt = contact.joined_matrix(petsc, k, &system.dofs)?;
+            let mut kt = contact.joined_matrix(petsc, k)?;
             contact.add_tangent(
                 &state.contact,
                 &[
@@ -557,6 +575,36 @@ pub fn run(
         })?);
     }
 
+    // Superelement reduction of the preloaded model (for the time response).
+    let mut reduced = None;
+    if let Some(settings) = &scene.reduction {
+        let (Some((contact, state)), Some(f_ext), Some(system), Some(modes), Some(model)) = (
+            preload.as_ref(),
+            static_load.as_ref(),
+            system.as_ref(),
+            modes.as_ref(),
+            model.as_ref(),
+        ) else {
+            return Err(RunError::Model(
+                "key 'reduction': the reduction needs a brake (or mesh) model with [statics] and [real_modes]".into(),
+            ));
+        };
+        reduced = Some(timings.time("reduction", || {
+            reduction_stage(
+                petsc,
+                settings,
+                k0,
+                m,
+                &model.mesh,
+                &system.dofs,
+                contact,
+                state,
+                f_ext,
+                modes,
+            )
+        })?);
+    }
+
     let mut transient = None;
     let mut transient_error = None;
     if let Some(settings) = &scene.transient {
@@ -577,12 +625,39 @@ pub fn run(
                 modes.shapes.len()
             ))
         })?;
+        let _ = system;
         let damping = scene.damping.unwrap_or_default();
+        // The full model, or the reduced one in its own unknowns.
+        let restricted_shape = match &reduced {
+            Some(r) => Some(r.model.reduction.restrict(petsc, shape)?),
+            None => None,
+        };
+        let (k0_t, m_t, contact_t, f_t, q_t, state_t, shape_t) = match (&reduced, &restricted_shape)
+        {
+            (Some(r), Some(s)) => (
+                &r.model.stiffness,
+                &r.model.mass,
+                &r.contact,
+                &r.f_ext,
+                &r.q_static,
+                &r.static_state,
+                s,
+            ),
+            _ => (
+                k0,
+                m,
+                contact,
+                f_ext,
+                &state.displacement,
+                &state.contact,
+                shape,
+            ),
+        };
         let c = if damping.rayleigh_alpha != 0.0 || damping.rayleigh_beta != 0.0 {
-            let mut c = k0.try_clone()?;
+            let mut c = k0_t.try_clone()?;
             c.scale(damping.rayleigh_beta)?;
             if damping.rayleigh_alpha != 0.0 {
-                c.axpy(damping.rayleigh_alpha, m)?;
+                c.axpy(damping.rayleigh_alpha, m_t)?;
             }
             Some(c)
         } else {
@@ -593,15 +668,14 @@ pub fn run(
                 petsc,
                 settings,
                 crate::time::transient::TransientInputs {
-                    k0,
-                    m,
+                    k0: k0_t,
+                    m: m_t,
                     c: c.as_ref(),
-                    contact,
-                    dofs: &system.dofs,
-                    f_ext,
-                    q_static: &state.displacement,
-                    static_state: &state.contact,
-                    shape,
+                    contact: contact_t,
+                    f_ext: f_t,
+                    q_static: q_t,
+                    static_state: state_t,
+                    shape: shape_t,
                 },
             )
         })?;
@@ -674,6 +748,10 @@ pub fn run(
     if let (Some(tr), Some((contact, _))) = (&transient, &preload) {
         write_transient(petsc, &file, tr, contact, output)?;
     }
+    let reduction_summary = match &reduced {
+        Some(r) => Some(write_reduction(&file, r, dofs)?),
+        None => None,
+    };
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
             .iter()
@@ -761,6 +839,7 @@ pub fn run(
             cuts: t.cuts,
             factorizations: t.factorizations,
         }),
+        reduction: reduction_summary,
         sweep: sweep_result.map(|s| SweepSummary {
             parameter: s.parameter.name(),
             points: s.values.len(),
@@ -780,6 +859,133 @@ pub fn run(
                 solve_seconds: c.solve_seconds,
             })
             .collect(),
+    })
+}
+
+/// Writes /reduced (sizes, checks) and returns the summary.
+fn write_reduction(
+    file: &ResultsFile,
+    r: &ReducedStage,
+    full_dofs: usize,
+) -> Result<ReductionSummary, RunError> {
+    let red = &r.model.reduction;
+    let mode_error = r
+        .mode_check
+        .iter()
+        .map(|(f, g)| (g - f).abs() / f.abs().max(1e-300))
+        .fold(0.0, f64::max);
+    let summary = ReductionSummary {
+        full_dofs,
+        kept: red.kept,
+        modal: red.modal,
+        offered: red.offered,
+        dropped: red.dropped,
+        orthonormality: red.orthonormality,
+        static_error: r.static_error,
+        mode_check: r.mode_check.clone(),
+        mode_error,
+        seconds: red.seconds,
+    };
+    let g = "reduced";
+    file.set_number(g, "full_dofs", full_dofs as f64)?;
+    file.set_number(g, "size", red.size() as f64)?;
+    file.set_number(g, "kept_dofs", red.kept as f64)?;
+    file.set_number(g, "modal_coordinates", red.modal as f64)?;
+    file.set_number(g, "basis_offered", red.offered as f64)?;
+    file.set_number(g, "basis_dropped", red.dropped as f64)?;
+    file.set_number(g, "mass_orthonormality", red.orthonormality)?;
+    file.set_number(g, "static_state_error", r.static_error)?;
+    file.set_number(g, "seconds", red.seconds)?;
+    let full: Vec<f64> = r.mode_check.iter().map(|m| m.0).collect();
+    let reduced: Vec<f64> = r.mode_check.iter().map(|m| m.1).collect();
+    file.write_table("reduced/check/full_frequency", &full, "Hz")?;
+    file.write_table("reduced/check/reduced_frequency", &reduced, "Hz")?;
+    Ok(summary)
+}
+
+/// The reduced model with everything the time response needs in its unknowns.
+struct ReducedStage<'p> {
+    model: crate::reduce::ReducedModel<'p>,
+    contact: crate::contact::ContactModel<'p>,
+    f_ext: crate::la::Vector<'p>,
+    q_static: crate::la::Vector<'p>,
+    static_state: crate::contact::ContactState,
+    /// Representation error of the static state, ||q0 - T x0|| / ||q0||.
+    static_error: f64,
+    /// Real modes of the reduced tangent vs the full ones in the basis: (full Hz, reduced Hz).
+    mode_check: Vec<(f64, f64)>,
+}
+
+/// Keeps every element touching a contact surface (all interfaces: their forces act on kept
+/// DOFs only), reduces the rest on the real modes of the tangent state and the static shape,
+/// and checks the reduced model's real modes against the full ones.
+///
+/// # Collective
+#[allow(clippy::too_many_arguments)] // the stages it joins
+fn reduction_stage<'p>(
+    petsc: &'p Petsc,
+    settings: &crate::reduce::ReductionSettings,
+    k0: &SparseMatrix<'p>,
+    m: &SparseMatrix<'p>,
+    mesh: &crate::mesh::Mesh,
+    dofs: &crate::fem::dofmap::DofMap,
+    contact: &crate::contact::ContactModel<'p>,
+    state: &crate::statics::StaticState<'p>,
+    f_ext: &crate::la::Vector<'p>,
+    modes: &RealModes<'p>,
+) -> Result<ReducedStage<'p>, RunError> {
+    use crate::contact::kernel::Part;
+    let surfaces: Vec<&str> = contact
+        .interfaces
+        .iter()
+        .flat_map(|i| [i.master.as_str(), i.slave.as_str()])
+        .collect();
+    let kept = crate::reduce::kept_dofs(mesh, dofs, &surfaces).map_err(RunError::Model)?;
+    let model = crate::reduce::reduce(
+        petsc,
+        k0,
+        m,
+        &kept,
+        &modes.shapes,
+        settings.static_shape.then_some(&state.displacement),
+        settings,
+    )?;
+    let r = &model.reduction;
+    let reduced_contact = contact
+        .restricted(petsc, &r.map, r.columns.clone())
+        .map_err(|e| RunError::Model(e.to_string()))?;
+    let f_ext = r.project_force(petsc, f_ext)?;
+    let q_static = r.restrict(petsc, &state.displacement)?;
+    let recovered = state.displacement.duplicate()?;
+    r.recover(petsc, &q_static, &recovered)?;
+    recovered.axpy(-1.0, &state.displacement)?;
+    let static_error = recovered.norm2()? / state.displacement.norm2()?.max(f64::MIN_POSITIVE);
+    let static_state = reduced_contact.evaluate(&q_static, None, state.contact.friction_scale)?;
+    // The reduced tangent's real modes: those of the full model in the basis, exactly.
+    let mut kt = reduced_contact.joined_matrix(petsc, &model.stiffness)?;
+    reduced_contact.add_tangent(&static_state, &[Part::Normal, Part::Stick], &mut kt)?;
+    kt.assemble()?;
+    kt.set_symmetric(true)?;
+    let request = crate::eigen::real_modes::RealModeRequest {
+        count: modes.shapes.len(),
+        tolerance: 1e-10,
+        ..Default::default()
+    };
+    let check = real_modes(petsc, &kt, &model.mass, false, &request, "reduced_")?;
+    let mode_check = modes
+        .frequencies_hz
+        .iter()
+        .copied()
+        .zip(check.frequencies_hz.iter().copied())
+        .collect();
+    Ok(ReducedStage {
+        model,
+        contact: reduced_contact,
+        f_ext,
+        q_static,
+        static_state,
+        static_error,
+        mode_check,
     })
 }
 
@@ -823,15 +1029,15 @@ fn complex_stage<'p>(
         "complex operators",
         || -> Result<(SparseMatrix<'p>, SparseMatrix<'p>), RunError> {
             match (input.preload, input.dofs, input.user) {
-                (Some((contact, state)), Some(dofs), _) => {
-                    let mut kf = contact.joined_matrix(petsc, input.k0, dofs)?;
+                (Some((contact, state)), Some(_), _) => {
+                    let mut kf = contact.joined_matrix(petsc, input.k0)?;
                     contact.add_tangent(
                         state,
                         &[Part::Normal, Part::Stick, Part::Friction],
                         &mut kf,
                     )?;
                     kf.assemble()?;
-                    let mut cf = contact.joined_matrix(petsc, input.k0, dofs)?;
+                    let mut cf = contact.joined_matrix(petsc, input.k0)?;
                     cf.scale(damping.rayleigh_beta)?;
                     if damping.rayleigh_alpha != 0.0 {
                         cf.axpy(damping.rayleigh_alpha, input.m)?;

@@ -39,6 +39,10 @@ pub struct Scene {
     /// Nonlinear time response from the static state (needs [statics], [real_modes]).
     #[serde(default)]
     pub transient: Option<crate::time::transient::TransientSettings>,
+    /// Superelement reduction of the model for the time response (needs [statics],
+    /// [real_modes]): the contact zone kept, the rest on the real modes + static shape.
+    #[serde(default)]
+    pub reduction: Option<crate::reduce::ReductionSettings>,
     #[serde(default)]
     pub output: Output,
 }
@@ -323,6 +327,12 @@ impl Scene {
             t.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
                 return Err("key 'transient': the time response starts from the static state plus a real mode: it needs [statics] and [real_modes]".into());
+            }
+        }
+        if let Some(r) = &self.reduction {
+            r.validate()?;
+            if self.statics.is_none() || self.real_modes.is_none() {
+                return Err("key 'reduction': the reduction basis is the real modes of the preloaded model plus its static shape: it needs [statics] and [real_modes]".into());
             }
         }
         if let Some(sw) = &self.sweep {

@@ -232,6 +232,10 @@ pub struct ContactModel<'p> {
     pub c_tan: ObservationMatrix<'p>,
     pub c_tan2: ObservationMatrix<'p>,
     pub c_conv: ObservationMatrix<'p>,
+    /// This rank's columns (DOFs) and, for every point, the global columns it couples
+    /// (master nodes then slave nodes; -1 where a DOF is eliminated).
+    pub columns: std::ops::Range<usize>,
+    pub point_columns: Vec<Vec<i32>>,
     pub disc_speed: f64,
     pub pairing_seconds: f64,
 }
@@ -308,26 +312,16 @@ impl<'p> ContactModel<'p> {
             .iter()
             .map(|&i| point_rows(&points[i], dofs, &interfaces))
             .collect();
-        let sparse = |f: fn(&PointRows) -> &Vec<f64>| -> Vec<Vec<(i32, f64)>> {
-            rows.iter()
-                .map(|r| {
-                    r.dofs
-                        .iter()
-                        .zip(f(r))
-                        .filter(|(d, v)| **d >= 0 && **v != 0.0)
-                        .map(|(d, v)| (*d, *v))
-                        .collect()
-                })
-                .collect()
-        };
-        let columns = dofs.owned_dofs();
-        let c_nor =
-            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.nor), columns.clone())?;
-        let c_tan =
-            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan), columns.clone())?;
-        let c_tan2 =
-            ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan2), columns.clone())?;
-        let c_conv = ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.conv), columns)?;
+        let point_columns = points
+            .iter()
+            .map(|p| {
+                let mut d = Vec::new();
+                point_dofs(p, dofs, &mut d);
+                d
+            })
+            .collect();
+        let [c_nor, c_tan, c_tan2, c_conv] =
+            observation_matrices(petsc, first_row, &rows, dofs.owned_dofs())?;
         Ok(ContactModel {
             interfaces,
             misses: pairing.misses,
@@ -341,8 +335,77 @@ impl<'p> ContactModel<'p> {
             c_tan,
             c_tan2,
             c_conv,
+            columns: dofs.owned_dofs(),
+            point_columns,
             disc_speed: settings.disc_speed,
             pairing_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The same points on a renumbered set of unknowns (a reduced model that keeps every
+    /// contact DOF as it is): `map[old column]` is the new global column, and `columns` this
+    /// rank's new range. A point coupling a DOF the map drops (negative) is an error naming
+    /// the interface: such a point would lose its force.
+    ///
+    /// # Collective
+    pub fn restricted(
+        &self,
+        petsc: &'p Petsc,
+        map: &[i32],
+        columns: std::ops::Range<usize>,
+    ) -> Result<ContactModel<'p>, ContactError> {
+        let remap = |cols: &[i32], id: usize| -> Result<Vec<i32>, ContactError> {
+            cols.iter()
+                .map(|&c| {
+                    if c < 0 {
+                        return Ok(-1);
+                    }
+                    match map[c as usize] {
+                        m if m >= 0 => Ok(m),
+                        _ => Err(ContactError::Setup(format!(
+                            "interface '{}': a contact point couples DOF {c}, which the reduction does not keep; keep every contact interface's elements",
+                            self.interfaces[self.points[id].interface].name
+                        ))),
+                    }
+                })
+                .collect()
+        };
+        let point_columns = self
+            .point_columns
+            .iter()
+            .enumerate()
+            .map(|(id, cols)| remap(cols, id))
+            .collect::<Result<Vec<_>, _>>()?;
+        let rows = self
+            .rows
+            .iter()
+            .zip(&self.local)
+            .map(|(r, &id)| {
+                Ok(PointRows {
+                    dofs: remap(&r.dofs, id)?,
+                    ..r.clone()
+                })
+            })
+            .collect::<Result<Vec<_>, ContactError>>()?;
+        let [c_nor, c_tan, c_tan2, c_conv] =
+            observation_matrices(petsc, self.first_row, &rows, columns.clone())?;
+        Ok(ContactModel {
+            interfaces: self.interfaces.clone(),
+            points: self.points.clone(),
+            misses: self.misses.clone(),
+            candidates: self.candidates.clone(),
+            row_ids: self.row_ids.clone(),
+            first_row: self.first_row,
+            local: self.local.clone(),
+            rows,
+            c_nor,
+            c_tan,
+            c_tan2,
+            c_conv,
+            columns,
+            point_columns,
+            disc_speed: self.disc_speed,
+            pairing_seconds: self.pairing_seconds,
         })
     }
 
@@ -529,18 +592,13 @@ impl<'p> ContactModel<'p> {
     /// contact point's coupling.
     ///
     /// # Collective (when `base` is given)
-    pub fn pattern(
-        &self,
-        base: Option<&SparseMatrix>,
-        dofs: &DofMap,
-    ) -> Result<Preallocation, LaError> {
-        let own = dofs.owned_dofs();
+    pub fn pattern(&self, base: Option<&SparseMatrix>) -> Result<Preallocation, LaError> {
+        let own = self.columns.clone();
         let mut extra: HashMap<usize, Vec<i32>> = HashMap::new();
         let mut d = Vec::new();
-        for p in &self.points {
+        for cols in &self.point_columns {
             d.clear();
-            point_dofs(p, dofs, &mut d);
-            d.retain(|&x| x >= 0);
+            d.extend(cols.iter().copied().filter(|&x| x >= 0));
             for &r in &d {
                 if own.contains(&(r as usize)) {
                     extra
@@ -598,10 +656,9 @@ impl<'p> ContactModel<'p> {
         &self,
         petsc: &'p Petsc,
         base: &SparseMatrix,
-        dofs: &DofMap,
     ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(Some(base), dofs)?;
-        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
+        let pre = self.pattern(Some(base))?;
+        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, self.columns.len(), &pre)?;
         let mut failed = Ok(());
         base.for_each_local_row(|row, cols, vals| {
             if failed.is_ok() {
@@ -623,12 +680,11 @@ impl<'p> ContactModel<'p> {
     pub fn tangent_matrix(
         &self,
         petsc: &'p Petsc,
-        dofs: &DofMap,
         state: &ContactState,
         parts: &[Part],
     ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(None, dofs)?;
-        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, dofs.local_dofs(), &pre)?;
+        let pre = self.pattern(None)?;
+        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, self.columns.len(), &pre)?;
         self.add_tangent(state, parts, &mut m)?;
         m.assemble()?;
         Ok(m)
@@ -692,6 +748,36 @@ impl<'p> ContactModel<'p> {
         }
         Ok(out)
     }
+}
+
+/// The four observation matrices (normal, tangent, second tangent, convection) of this rank's
+/// point rows.
+///
+/// # Collective
+fn observation_matrices<'p>(
+    petsc: &'p Petsc,
+    first_row: usize,
+    rows: &[PointRows],
+    columns: std::ops::Range<usize>,
+) -> Result<[ObservationMatrix<'p>; 4], LaError> {
+    let sparse = |f: fn(&PointRows) -> &Vec<f64>| -> Vec<Vec<(i32, f64)>> {
+        rows.iter()
+            .map(|r| {
+                r.dofs
+                    .iter()
+                    .zip(f(r))
+                    .filter(|(d, v)| **d >= 0 && **v != 0.0)
+                    .map(|(d, v)| (*d, *v))
+                    .collect()
+            })
+            .collect()
+    };
+    Ok([
+        ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.nor), columns.clone())?,
+        ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan), columns.clone())?,
+        ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.tan2), columns.clone())?,
+        ObservationMatrix::from_rows(petsc, first_row, &sparse(|r| &r.conv), columns)?,
+    ])
 }
 
 /// The DOFs of a point: master nodes then slave nodes, 3 each.

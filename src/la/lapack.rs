@@ -1,6 +1,7 @@
 //! Dense LAPACK/BLAS (the library PETSc links, OpenBLAS here) for the small dense problems of
-//! the projected complex modes: the general eigenproblem of the companion matrix (dgeev, with
-//! its balancing) and matrix products (dgemm). Column-major storage throughout.
+//! the projected complex modes and the reduction: the general eigenproblem of the companion
+//! matrix (dgeev, with its balancing), the symmetric one of a Gram matrix (dsyev) and matrix
+//! products (dgemm). Column-major storage throughout.
 
 use std::os::raw::{c_char, c_int};
 
@@ -17,6 +18,17 @@ extern "C" {
         ldvl: *const c_int,
         vr: *mut f64,
         ldvr: *const c_int,
+        work: *mut f64,
+        lwork: *const c_int,
+        info: *mut c_int,
+    );
+    fn dsyev_(
+        jobz: *const c_char,
+        uplo: *const c_char,
+        n: *const c_int,
+        a: *mut f64,
+        lda: *const c_int,
+        w: *mut f64,
         work: *mut f64,
         lwork: *const c_int,
         info: *mut c_int,
@@ -148,12 +160,72 @@ pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
     })
 }
 
-/// C = A^T B for column-major A (k x m) and B (k x n); returns m x n column-major.
-pub fn gemm_tn(k: usize, m: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
-    assert!(
-        a.len() >= k * m && b.len() >= k * n,
-        "gemm_tn: operand sizes"
-    );
+/// Eigenvalues (ascending) and orthonormal eigenvectors (column-major, n x n) of the
+/// symmetric n x n column-major matrix `a` (its lower triangle is read; consumed).
+pub fn eigen_symmetric(n: usize, mut a: Vec<f64>) -> Result<(Vec<f64>, Vec<f64>), String> {
+    if a.len() != n * n {
+        return Err(format!(
+            "dense symmetric eigenproblem: {} entries for order {n}",
+            a.len()
+        ));
+    }
+    if n == 0 {
+        return Ok((Vec::new(), Vec::new()));
+    }
+    let ni = dim(n)?;
+    let (jobz, uplo) = (b'V' as c_char, b'L' as c_char);
+    let mut w = vec![0.0; n];
+    let mut info: c_int = 0;
+    let mut query = 0.0f64;
+    let minus_one: c_int = -1;
+    // SAFETY: workspace query (lwork = -1): LAPACK writes the optimal size into `query`; a is
+    // n x n (lda n), w has n entries.
+    unsafe {
+        dsyev_(
+            &jobz,
+            &uplo,
+            &ni,
+            a.as_mut_ptr(),
+            &ni,
+            w.as_mut_ptr(),
+            &mut query,
+            &minus_one,
+            &mut info,
+        );
+    }
+    if info != 0 {
+        return Err(format!("LAPACK dsyev workspace query failed (info {info})"));
+    }
+    let lwork = (query as usize).max(3 * n);
+    let mut work = vec![0.0; lwork];
+    let lw = dim(lwork)?;
+    // SAFETY: as above with a workspace of lwork entries.
+    unsafe {
+        dsyev_(
+            &jobz,
+            &uplo,
+            &ni,
+            a.as_mut_ptr(),
+            &ni,
+            w.as_mut_ptr(),
+            work.as_mut_ptr(),
+            &lw,
+            &mut info,
+        );
+    }
+    if info != 0 {
+        return Err(format!(
+            "LAPACK dsyev did not converge (info {info}) on a symmetric matrix of order {n}"
+        ));
+    }
+    Ok((w, a))
+}
+
+/// C = op(A) op(B) (op = transpose when the flag is set) for column-major operands; C is
+/// m x n, the inner dimension k. A is k x m when transposed, else m x k; B is n x k when
+/// transposed, else k x n.
+fn gemm(ta: bool, tb: bool, m: usize, k: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
+    assert!(a.len() >= k * m && b.len() >= k * n, "gemm: operand sizes");
     let mut c = vec![0.0; m * n];
     if k == 0 || m == 0 || n == 0 {
         return c;
@@ -163,21 +235,23 @@ pub fn gemm_tn(k: usize, m: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
         dim(m).expect("gemm order"),
         dim(n).expect("gemm order"),
     );
-    let (t, nt) = (b'T' as c_char, b'N' as c_char);
+    let flag = |t: bool| if t { b'T' as c_char } else { b'N' as c_char };
+    let (lda, ldb) = (if ta { ki } else { mi }, if tb { ni } else { ki });
     let (alpha, beta) = (1.0f64, 0.0f64);
-    // SAFETY: A is k x m (lda k), B is k x n (ldb k), C is m x n (ldc m), all allocated above.
+    // SAFETY: A is stored with leading dimension lda and k x m or m x k entries, B likewise
+    // with ldb, C is m x n (ldc m); the sizes are asserted above.
     unsafe {
         dgemm_(
-            &t,
-            &nt,
+            &flag(ta),
+            &flag(tb),
             &mi,
             &ni,
             &ki,
             &alpha,
             a.as_ptr(),
-            &ki,
+            &lda,
             b.as_ptr(),
-            &ki,
+            &ldb,
             &beta,
             c.as_mut_ptr(),
             &mi,
@@ -186,9 +260,40 @@ pub fn gemm_tn(k: usize, m: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
     c
 }
 
+/// C = A^T B for column-major A (k x m) and B (k x n); returns m x n column-major.
+pub fn gemm_tn(k: usize, m: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
+    gemm(true, false, m, k, n, a, b)
+}
+
+/// C = A B for column-major A (m x k) and B (k x n); returns m x n column-major.
+pub fn gemm_nn(m: usize, k: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
+    gemm(false, false, m, k, n, a, b)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn symmetric_eigenvectors_are_orthonormal_and_diagonalize() {
+        // [[2, 1, 0], [1, 2, 1], [0, 1, 2]]: 2 - sqrt 2, 2, 2 + sqrt 2.
+        let a = vec![2.0, 1.0, 0.0, 1.0, 2.0, 1.0, 0.0, 1.0, 2.0];
+        let (w, v) = eigen_symmetric(3, a.clone()).unwrap();
+        let s = 2f64.sqrt();
+        for (got, want) in w.iter().zip([2.0 - s, 2.0, 2.0 + s]) {
+            assert!((got - want).abs() < 1e-14, "{got} vs {want}");
+        }
+        let av = gemm_nn(3, 3, 3, &a, &v);
+        let vtav = gemm_tn(3, 3, 3, &v, &av);
+        let vtv = gemm_tn(3, 3, 3, &v, &v);
+        for i in 0..3 {
+            for j in 0..3 {
+                let d = if i == j { 1.0 } else { 0.0 };
+                assert!((vtv[i + 3 * j] - d).abs() < 1e-14);
+                assert!((vtav[i + 3 * j] - d * w[i]).abs() < 1e-13);
+            }
+        }
+    }
 
     #[test]
     fn rotation_scaling_has_conjugate_pair_and_vectors_satisfy_av_equals_lambda_v() {

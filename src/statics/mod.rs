@@ -218,7 +218,7 @@ pub fn solve<'p>(
         .iter()
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
         && contact.disc_speed != 0.0;
-    let mut jac = contact.joined_matrix(petsc, k0, dofs)?;
+    let mut jac = contact.joined_matrix(petsc, k0)?;
     let q = k0.new_vector()?;
     if let Some(start) = start_from {
         q.copy_from(start)?;

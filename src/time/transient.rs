@@ -13,7 +13,6 @@ use super::newmark::{
 };
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, InterfaceSummary};
-use crate::fem::dofmap::DofMap;
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
 
 /// The `[transient]` table of a scene.
@@ -110,7 +109,6 @@ pub struct TransientInputs<'a, 'p> {
     pub m: &'a SparseMatrix<'p>,
     pub c: Option<&'a SparseMatrix<'p>>,
     pub contact: &'a ContactModel<'p>,
-    pub dofs: &'a DofMap,
     pub f_ext: &'a Vector<'p>,
     pub q_static: &'a Vector<'p>,
     pub static_state: &'a crate::contact::ContactState,
@@ -135,13 +133,13 @@ pub fn run<'p>(
     // The fixed Jacobian: the static state's contact stiffness (normal and stick) stands for
     // the mock contact stiffness of DESIGN.md.
     let t = Instant::now();
-    let mut mock = input.contact.joined_matrix(petsc, input.k0, input.dofs)?;
+    let mut mock = input.contact.joined_matrix(petsc, input.k0)?;
     mock.zero_entries()?;
     input
         .contact
         .add_tangent(input.static_state, &[Part::Normal, Part::Stick], &mut mock)?;
     mock.assemble()?;
-    let k0 = input.contact.joined_matrix(petsc, input.k0, input.dofs)?;
+    let k0 = input.contact.joined_matrix(petsc, input.k0)?;
     let mass = DirectSolver::factorize(petsc, input.m, Factorization::Lu, "time_mass_")?;
     let seconds_factorizing = t.elapsed().as_secs_f64();
 
