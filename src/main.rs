@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 use squeal::la::Petsc;
-use squeal::pipeline::{run, RunSummary};
+use squeal::pipeline::RunSummary;
 use squeal::scene::{Scene, DEFAULT_SCENE};
 
 #[derive(Parser)]
@@ -30,6 +30,10 @@ enum Command {
         /// Results folder (overrides output.directory of the scene).
         #[arg(long, short)]
         output: Option<PathBuf>,
+        /// Resume an interrupted (or extended: raise transient.steps) transient from
+        /// <output>/checkpoint.h5; same scene otherwise, same number of ranks.
+        #[arg(long)]
+        restart: bool,
         /// PETSc/SLEPc options.
         #[arg(last = true)]
         petsc_options: Vec<String>,
@@ -56,14 +60,16 @@ fn main() -> ExitCode {
         Command::Run {
             scene,
             output,
+            restart,
             petsc_options,
-        } => run_command(scene, output, petsc_options),
+        } => run_command(scene, output, restart, petsc_options),
     }
 }
 
 fn run_command(
     scene_path: Option<PathBuf>,
     output: Option<PathBuf>,
+    restart: bool,
     petsc_options: Vec<String>,
 ) -> ExitCode {
     let Some(universe) = mpi::initialize() else {
@@ -119,7 +125,16 @@ fn run_command(
             petsc.size()
         );
     }
-    let result = run(&petsc, &scene, &text, &dir, &output, &petsc_options);
+    let options = squeal::pipeline::RunOptions { restart };
+    let result = squeal::pipeline::run_with(
+        &petsc,
+        &scene,
+        &text,
+        &dir,
+        &output,
+        &petsc_options,
+        &options,
+    );
     let code = match result {
         Ok(summary) => {
             if rank == 0 {
@@ -247,13 +262,14 @@ fn print_summary(s: &RunSummary) {
     }
     if let Some(t) = &s.transient {
         println!(
-            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts; {} Jacobian factorizations ({:.3e} entries, {:.2} s)",
+            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s)",
             t.steps,
             t.simulated,
             t.mean_iterations,
             t.max_iterations,
             1e3 * t.seconds_per_step,
             t.cuts,
+            t.refreshes,
             t.factorizations,
             t.factor_entries,
             t.seconds_factorizing

@@ -282,6 +282,7 @@ pub struct TransientSummary {
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
     pub cuts: usize,
+    pub refreshes: usize,
     pub factorizations: usize,
 }
 
@@ -329,6 +330,42 @@ pub fn run(
     output: &Path,
     petsc_options: &[String],
 ) -> Result<RunSummary, RunError> {
+    run_with(
+        petsc,
+        scene,
+        scene_text,
+        scene_dir,
+        output,
+        petsc_options,
+        &RunOptions::default(),
+    )
+}
+
+/// How to run beyond the scene.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    /// Resume the transient from output/checkpoint.h5 (everything before it is recomputed,
+    /// deterministically, and written again).
+    pub restart: bool,
+}
+
+/// [`run`] with options.
+///
+/// # Collective
+pub fn run_with(
+    petsc: &Petsc,
+    scene: &Scene,
+    scene_text: &str,
+    scene_dir: &Path,
+    output: &Path,
+    petsc_options: &[String],
+    options: &RunOptions,
+) -> Result<RunSummary, RunError> {
+    if options.restart && scene.transient.is_none() {
+        return Err(RunError::Model(
+            "--restart resumes a transient: the scene has no [transient]".into(),
+        ));
+    }
     let mut timings = Timings::default();
     if petsc.rank() == 0 {
         std::fs::create_dir_all(output).map_err(|source| RunError::Io {
@@ -605,6 +642,76 @@ pub fn run(
         })?);
     }
 
+    // Output.
+    let start = Instant::now();
+    let h5 = output.join("results.h5");
+    let file = ResultsFile::create(petsc.world(), &h5)?;
+    file.set_text("/", "scene", scene_text)?;
+    file.set_text("/", "petsc_options", &petsc_options.join(" "))?;
+    file.set_text("/", "squeal_version", env!("CARGO_PKG_VERSION"))?;
+    file.set_number("/", "ranks", petsc.size() as f64)?;
+    file.set_number("/", "dofs", dofs as f64)?;
+    let mesh = model.as_ref().map(|m| &m.mesh);
+    if let Some(model) = &model {
+        file.write_mesh(&model.mesh)?;
+        for i in &model.interfaces {
+            let group = format!("model/interfaces/{}", i.name);
+            file.set_text(&group, "master", &i.master)?;
+            file.set_text(&group, "slave", &i.slave)?;
+            file.set_text(&group, "kind", &format!("{:?}", i.kind).to_lowercase())?;
+        }
+        for l in &model.loads {
+            let group = format!("model/loads/{}", l.surface);
+            file.set_number(&group, "hydraulic_area_m2", l.area)?;
+            file.set_number(&group, "pressure_pa", model.pressure)?;
+        }
+        for q in &quality_stats {
+            let group = format!("model/quality/{}", q.block);
+            file.set_number(&group, "elements", q.elements as f64)?;
+            file.set_number(&group, "min_scaled_jacobian", q.min_scaled_jacobian)?;
+            file.set_number(&group, "max_aspect_ratio", q.max_aspect_ratio)?;
+            file.set_number(&group, "mean_aspect_ratio", q.mean_aspect_ratio)?;
+            file.set_number(&group, "max_warping_deg", q.max_warping_deg)?;
+        }
+    }
+    if let Some(b) = &balance {
+        let rows: Vec<f64> = b.rows.iter().map(|&r| r as f64).collect();
+        let elements: Vec<f64> = b.elements.iter().map(|&e| e as f64).collect();
+        file.write_table("partition/rows_per_rank", &rows, "1")?;
+        file.write_table("partition/elements_per_rank", &elements, "1")?;
+    }
+    let mut static_summary = None;
+    if let (Some((contact, state)), Some(system), Some(model)) = (&preload, &system, &model) {
+        let settings = scene.contact.clone().unwrap_or_default();
+        static_summary = Some(write_static(
+            petsc,
+            &file,
+            contact,
+            state,
+            &system.dofs,
+            model,
+            &settings,
+            output,
+        )?);
+    }
+    if let Some(modes) = &modes {
+        file.write_real_modes(modes, system.as_ref().map(|s| &s.dofs))?;
+    }
+    for c in &complex {
+        write_complex(petsc, &file, c, system.as_ref().map(|s| &s.dofs), output)?;
+    }
+    if let Some(sw) = &sweep_result {
+        write_sweep(petsc, &file, sw, output)?;
+    }
+    let reduction_summary = match &reduced {
+        Some(r) => Some(write_reduction(&file, r, dofs)?),
+        None => None,
+    };
+    let before_transient = start.elapsed().as_secs_f64();
+
+    // The transient streams into transient.h5 (linked as /transient) while it runs; what the
+    // earlier stages found is already in results.h5.
+    file.flush()?;
     let mut transient = None;
     let mut transient_error = None;
     if let Some(settings) = &scene.transient {
@@ -677,6 +784,7 @@ pub fn run(
                     static_state: state_t,
                     shape: shape_t,
                 },
+                &crate::time::transient::TransientFiles::in_directory(output, options.restart),
             )
         })?;
         transient = Some(signals);
@@ -684,74 +792,11 @@ pub fn run(
         transient_error = failure;
     }
 
-    // Output.
     let start = Instant::now();
-    let h5 = output.join("results.h5");
-    let file = ResultsFile::create(petsc.world(), &h5)?;
-    file.set_text("/", "scene", scene_text)?;
-    file.set_text("/", "petsc_options", &petsc_options.join(" "))?;
-    file.set_text("/", "squeal_version", env!("CARGO_PKG_VERSION"))?;
-    file.set_number("/", "ranks", petsc.size() as f64)?;
-    file.set_number("/", "dofs", dofs as f64)?;
-    let mesh = model.as_ref().map(|m| &m.mesh);
-    if let Some(model) = &model {
-        file.write_mesh(&model.mesh)?;
-        for i in &model.interfaces {
-            let group = format!("model/interfaces/{}", i.name);
-            file.set_text(&group, "master", &i.master)?;
-            file.set_text(&group, "slave", &i.slave)?;
-            file.set_text(&group, "kind", &format!("{:?}", i.kind).to_lowercase())?;
-        }
-        for l in &model.loads {
-            let group = format!("model/loads/{}", l.surface);
-            file.set_number(&group, "hydraulic_area_m2", l.area)?;
-            file.set_number(&group, "pressure_pa", model.pressure)?;
-        }
-        for q in &quality_stats {
-            let group = format!("model/quality/{}", q.block);
-            file.set_number(&group, "elements", q.elements as f64)?;
-            file.set_number(&group, "min_scaled_jacobian", q.min_scaled_jacobian)?;
-            file.set_number(&group, "max_aspect_ratio", q.max_aspect_ratio)?;
-            file.set_number(&group, "mean_aspect_ratio", q.mean_aspect_ratio)?;
-            file.set_number(&group, "max_warping_deg", q.max_warping_deg)?;
-        }
-    }
-    if let Some(b) = &balance {
-        let rows: Vec<f64> = b.rows.iter().map(|&r| r as f64).collect();
-        let elements: Vec<f64> = b.elements.iter().map(|&e| e as f64).collect();
-        file.write_table("partition/rows_per_rank", &rows, "1")?;
-        file.write_table("partition/elements_per_rank", &elements, "1")?;
-    }
-    let mut static_summary = None;
-    if let (Some((contact, state)), Some(system), Some(model)) = (&preload, &system, &model) {
-        let settings = scene.contact.clone().unwrap_or_default();
-        static_summary = Some(write_static(
-            petsc,
-            &file,
-            contact,
-            state,
-            &system.dofs,
-            model,
-            &settings,
-            output,
-        )?);
-    }
-    if let Some(modes) = &modes {
-        file.write_real_modes(modes, system.as_ref().map(|s| &s.dofs))?;
-    }
-    for c in &complex {
-        write_complex(petsc, &file, c, system.as_ref().map(|s| &s.dofs), output)?;
-    }
-    if let Some(sw) = &sweep_result {
-        write_sweep(petsc, &file, sw, output)?;
-    }
     if let (Some(tr), Some((contact, _))) = (&transient, &preload) {
         write_transient(petsc, &file, tr, contact, output)?;
     }
-    let reduction_summary = match &reduced {
-        Some(r) => Some(write_reduction(&file, r, dofs)?),
-        None => None,
-    };
+
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
         let fields: Vec<NodalField> = modes
             .iter()
@@ -792,9 +837,10 @@ pub fn run(
         crate::io::preview::write_png(&path, mesh, 1200, 900)
             .map_err(|source| RunError::Io { path, source })?;
     }
-    timings
-        .stages
-        .push(("output".into(), start.elapsed().as_secs_f64()));
+    timings.stages.push((
+        "output".into(),
+        before_transient + start.elapsed().as_secs_f64(),
+    ));
     for (name, secs) in &timings.stages {
         file.set_number("timings", &name.replace(' ', "_"), *secs)?;
     }
@@ -827,17 +873,21 @@ pub fn run(
         peak_memory_per_rank: peak,
         output: output.to_path_buf(),
         statics: static_summary,
-        transient: transient.as_ref().map(|t| TransientSummary {
-            steps: t.iterations.len(),
-            simulated: t.time.last().copied().unwrap_or(0.0),
-            mean_iterations: t.iterations.iter().sum::<usize>() as f64
-                / t.iterations.len().max(1) as f64,
-            max_iterations: t.iterations.iter().copied().max().unwrap_or(0),
-            seconds_per_step: t.seconds_stepping / t.iterations.len().max(1) as f64,
-            factor_entries: t.factor_entries,
-            seconds_factorizing: t.seconds_factorizing,
-            cuts: t.cuts,
-            factorizations: t.factorizations,
+        transient: transient.as_ref().map(|t| {
+            // Index 0 of the signals is the start; steps follow.
+            let its = &t.iterations[1.min(t.iterations.len())..];
+            TransientSummary {
+                steps: its.len(),
+                simulated: t.time.last().copied().unwrap_or(0.0),
+                mean_iterations: its.iter().sum::<usize>() as f64 / its.len().max(1) as f64,
+                max_iterations: its.iter().copied().max().unwrap_or(0),
+                seconds_per_step: t.seconds_stepping / its.len().max(1) as f64,
+                factor_entries: t.factor_entries,
+                seconds_factorizing: t.seconds_factorizing,
+                cuts: t.cuts,
+                refreshes: t.refreshes,
+                factorizations: t.factorizations,
+            }
         }),
         reduction: reduction_summary,
         sweep: sweep_result.map(|s| SweepSummary {
@@ -1636,19 +1686,27 @@ fn write_transient(
     contact: &crate::contact::ContactModel,
     output: &Path,
 ) -> Result<(), RunError> {
-    file.write_table("transient/time", &tr.time, "s")?;
-    let its: Vec<f64> = tr.iterations.iter().map(|&i| i as f64).collect();
-    file.write_table("transient/iterations", &its, "1")?;
-    for (i, itf) in contact.interfaces.iter().enumerate() {
-        let g = format!("transient/interfaces/{}", itf.name);
-        file.write_table(&format!("{g}/normal_force"), &tr.normal_force[i], "N")?;
-        file.write_table(&format!("{g}/friction_force"), &tr.friction_force[i], "N")?;
-        file.write_table(&format!("{g}/torque"), &tr.torque[i], "N m")?;
+    // The signals and states are in transient.h5, written as the run went.
+    file.link_external("transient", "transient.h5")?;
+    let g = "transient_run";
+    file.set_number(g, "steps", tr.iterations.len().saturating_sub(1) as f64)?;
+    file.set_number(
+        g,
+        "simulated_time_s",
+        tr.time.last().copied().unwrap_or(0.0),
+    )?;
+    file.set_number(g, "step_cuts", tr.cuts as f64)?;
+    file.set_number(g, "jacobian_refreshes", tr.refreshes as f64)?;
+    file.set_number(g, "factorizations", tr.factorizations as f64)?;
+    file.set_number(g, "factor_entries", tr.factor_entries)?;
+    file.set_number(g, "states_written", tr.states as f64)?;
+    if let Some(t) = tr.resumed_at {
+        file.set_number(g, "restarted_at_s", t)?;
     }
+    let _ = contact;
     let torque: Vec<f64> = (0..tr.time.len())
         .map(|k| tr.torque.iter().map(|t| t[k]).sum())
         .collect();
-    file.write_table("transient/braking_torque", &torque, "N m")?;
     if petsc.rank() == 0 {
         let path = output.join("torque.png");
         let (lo, hi) = torque

@@ -21,6 +21,8 @@ pub struct Progress {
     start: Instant,
     enabled: bool,
     last_print: Option<Instant>,
+    /// Work done before this run started (a restart): not counted in the rate.
+    first: usize,
 }
 
 impl Progress {
@@ -31,7 +33,13 @@ impl Progress {
             start: Instant::now(),
             enabled: rank == 0 && interactive(),
             last_print: None,
+            first: 0,
         }
+    }
+
+    /// The run resumes with `done` of `total` already done (before this process started).
+    pub fn resume_from(&mut self, done: usize) {
+        self.first = done.min(self.total);
     }
 
     /// Reports `done` of `total`, with extra text; at most a few times per second.
@@ -49,10 +57,10 @@ impl Progress {
         self.last_print = Some(now);
         let elapsed = self.start.elapsed().as_secs_f64();
         let done = done.min(self.total);
-        let eta = if done > 0 {
+        let eta = if done > self.first {
             format!(
                 "ETA {:.0} s",
-                elapsed * (self.total - done) as f64 / done as f64
+                elapsed * (self.total - done) as f64 / (done - self.first) as f64
             )
         } else {
             "ETA --".into()

@@ -5,6 +5,7 @@ pub mod matrix_market;
 pub mod plot;
 pub mod preview;
 pub mod results;
+pub mod series;
 pub mod stability;
 pub mod user_matrices;
 pub mod xdmf;

@@ -67,6 +67,24 @@ impl ResultsFile {
         Ok(g)
     }
 
+    /// Pushes what was written to the file, so a crash in a later stage keeps it.
+    ///
+    /// # Collective
+    pub fn flush(&self) -> Result<(), ResultsError> {
+        self.file.flush().map_err(self.err())
+    }
+
+    /// An external link at `link` to the root of `target` (a file name relative to this
+    /// file's folder): h5py follows it like a group.
+    ///
+    /// # Collective
+    pub fn link_external(&self, link: &str, target: &str) -> Result<(), ResultsError> {
+        let (dir, name) = link.rsplit_once('/').unwrap_or(("", link));
+        self.group(dir)?
+            .link_external(target, "/", name)
+            .map_err(self.err())
+    }
+
     /// A string attribute on a group (created collectively).
     ///
     /// # Collective

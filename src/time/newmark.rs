@@ -62,6 +62,8 @@ pub enum TimeError {
         residual: f64,
         target: f64,
     },
+    #[error("transient output: {0}")]
+    Output(String),
     #[error(transparent)]
     La(#[from] LaError),
 }
@@ -282,21 +284,39 @@ pub fn initial_acceleration<'p>(
     mass_solver.solve(&f, &state.a)
 }
 
-/// What an adaptive run did besides stepping.
+/// What an adaptive run did besides stepping, and where its step control stands (so a
+/// checkpoint can resume it exactly).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct StepControl {
     pub steps: usize,
     /// Steps halved after a failed step (each with a new factor), and doublings back.
     pub cuts: usize,
     pub restores: usize,
+    /// Jacobians rebuilt with the tangent of the current state after a failed step.
+    pub refreshes: usize,
     pub factorizations: usize,
+    /// The step is the nominal one / 2^level; good steps since the last change.
+    pub level: u32,
+    pub good: usize,
+    /// J uses a state's tangent (after the first refresh), and J was built at the state it
+    /// retries from (a failure there cuts the step).
+    pub refreshed: bool,
+    pub fresh: bool,
 }
 
+/// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
+/// the tangent of that state.
+pub type Factorize<'f, 'p> =
+    dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<DirectSolver<'p>, LaError> + 'f;
+
 /// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's
-/// fixed-Jacobian iterations fail, the step is halved (J refactorized for it) and retried from
-/// the same state, at most `max_cuts` levels deep; after `restore_after` good steps the step is
-/// doubled back towards the nominal one. Every change goes to `log`. Only when the smallest step
-/// fails too is the error returned.
+/// fixed-Jacobian iterations fail, J is first rebuilt with the tangent of the current state
+/// (when `refresh` is set) and the step retried; if that fails too, the step is halved (J
+/// refactorized) and retried from the same state, at most `max_cuts` levels deep; after
+/// `restore_after` good steps the step is doubled back towards the nominal one. Once refreshed,
+/// every later factorization uses the current state's tangent. Every change goes to `log`.
+/// Only when the smallest step fails too is the error returned. `control` starts at its
+/// default, or where a checkpoint left it.
 ///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // operators, factor builder, state, forces, controls, sinks
@@ -305,27 +325,25 @@ pub fn integrate_adaptive<'p>(
     m: &SparseMatrix<'p>,
     c: Option<&SparseMatrix<'p>>,
     k: &SparseMatrix<'p>,
-    factorize: &mut dyn FnMut(&NewmarkSettings) -> Result<DirectSolver<'p>, LaError>,
+    factorize: &mut Factorize<'_, 'p>,
     state: &mut State<'p>,
     forces: &mut Forces<'_, 'p>,
     end_time: f64,
-    max_cuts: usize,
-    restore_after: usize,
-    on_step: &mut dyn FnMut(&State<'p>, &StepReport) -> Result<(), TimeError>,
+    (max_cuts, restore_after, refresh): (usize, usize, bool),
+    control: &mut StepControl,
+    on_step: &mut dyn FnMut(&State<'p>, &StepReport, &StepControl) -> Result<(), TimeError>,
     log: &mut dyn FnMut(&str),
-) -> Result<StepControl, TimeError> {
-    let mut control = StepControl::default();
-    let mut level = 0u32;
+) -> Result<(), TimeError> {
     let nominal = settings.step;
-    while state.time < end_time - 0.25 * nominal / f64::from(1u32 << level) {
+    let step_of = |level: u32| nominal / f64::from(1u32 << level);
+    while state.time < end_time - 0.25 * step_of(control.level) {
         let step_settings = NewmarkSettings {
-            step: nominal / f64::from(1u32 << level),
+            step: step_of(control.level),
             ..settings
         };
-        let factor = factorize(&step_settings)?;
+        let factor = factorize(&step_settings, control.refreshed.then_some(&*state))?;
         control.factorizations += 1;
         let mut integrator = Newmark::new(step_settings, m, c, k, &factor)?;
-        let mut good = 0usize;
         loop {
             if state.time >= end_time - 0.25 * step_settings.step {
                 break;
@@ -333,28 +351,48 @@ pub fn integrate_adaptive<'p>(
             match integrator.step(state, forces) {
                 Ok(report) => {
                     control.steps += 1;
-                    on_step(state, &report)?;
-                    good += 1;
-                    if level > 0 && good >= restore_after {
-                        level -= 1;
+                    control.fresh = false;
+                    control.good += 1;
+                    let restore = control.level > 0 && control.good >= restore_after;
+                    if restore {
+                        control.level -= 1;
                         control.restores += 1;
+                        control.good = 0;
                         log(&format!(
-                            "t = {:.6e} s: {good} steps converged, step back to {:.3e} s",
+                            "t = {:.6e} s: {restore_after} steps converged, step back to {:.3e} s",
                             state.time,
-                            nominal / f64::from(1u32 << level)
+                            step_of(control.level)
                         ));
+                    }
+                    on_step(state, &report, control)?;
+                    if restore {
                         break;
                     }
                 }
                 Err(TimeError::NotConverged {
                     residual, target, ..
-                }) if (level as usize) < max_cuts => {
-                    level += 1;
+                }) if refresh && !control.fresh => {
+                    control.refreshed = true;
+                    control.fresh = true;
+                    control.good = 0;
+                    control.refreshes += 1;
+                    log(&format!(
+                        "t = {:.6e} s: fixed-Jacobian iterations stalled (residual {residual:.3e} vs {target:.3e}); Jacobian rebuilt with the current contact tangent",
+                        state.time
+                    ));
+                    break;
+                }
+                Err(TimeError::NotConverged {
+                    residual, target, ..
+                }) if (control.level as usize) < max_cuts => {
+                    control.level += 1;
                     control.cuts += 1;
+                    control.good = 0;
+                    control.fresh = control.refreshed;
                     log(&format!(
                         "t = {:.6e} s: fixed-Jacobian iterations stalled (residual {residual:.3e} vs {target:.3e}); step cut to {:.3e} s, Jacobian refactorized",
                         state.time,
-                        nominal / f64::from(1u32 << level)
+                        step_of(control.level)
                     ));
                     break;
                 }
@@ -362,5 +400,5 @@ pub fn integrate_adaptive<'p>(
             }
         }
     }
-    Ok(control)
+    Ok(())
 }

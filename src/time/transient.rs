@@ -3,16 +3,18 @@
 //! perturbation, with the contact and friction forces of the contact stage, and observation
 //! signals (braking torque, normal and friction force per interface) at every step.
 
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
 use super::newmark::{
-    initial_acceleration, integrate_adaptive, jacobian, Forces, NewmarkSettings, State, StepReport,
-    TimeError,
+    initial_acceleration, integrate_adaptive, jacobian, Forces, NewmarkSettings, State,
+    StepControl, StepReport, TimeError,
 };
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, InterfaceSummary};
+use crate::io::series::SeriesFile;
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
 
 /// The `[transient]` table of a scene.
@@ -38,6 +40,29 @@ pub struct TransientSettings {
     /// A failed step is halved (Jacobian refactorized) at most this many levels deep.
     #[serde(default = "default_max_cuts")]
     pub max_cuts: usize,
+    /// Before cutting, rebuild the Jacobian with the contact tangent of the current state
+    /// (normal and stick stiffness, friction damping of nearly sticking points).
+    #[serde(default = "default_refresh")]
+    pub refresh: bool,
+    /// Displacement and velocity states go to transient.h5 every this much simulated time
+    /// (s; 0: none). Default 1e-5 s (100 kHz).
+    #[serde(default = "default_state_interval")]
+    pub state_interval: f64,
+    /// A checkpoint (checkpoint.h5, for `squeal run --restart`) every this many steps, and at
+    /// the end or the failure of the run (0: never).
+    #[serde(default = "default_checkpoint_every")]
+    pub checkpoint_every: usize,
+}
+
+fn default_state_interval() -> f64 {
+    1e-5
+}
+fn default_checkpoint_every() -> usize {
+    10_000
+}
+
+fn default_refresh() -> bool {
+    true
 }
 
 fn default_max_cuts() -> usize {
@@ -80,6 +105,12 @@ impl TransientSettings {
         if self.mode == 0 {
             return Err("key 'transient.mode' is 1-based: the first real mode is 1".into());
         }
+        if !(self.state_interval >= 0.0 && self.state_interval.is_finite()) {
+            return Err(format!(
+                "key 'transient.state_interval' = {}: must be a time (s) >= 0 (0: no states)",
+                self.state_interval
+            ));
+        }
         if !self.amplitude.is_finite() {
             return Err("key 'transient.amplitude' must be finite".into());
         }
@@ -95,8 +126,14 @@ pub struct Transient {
     pub friction_force: Vec<Vec<f64>>,
     pub torque: Vec<Vec<f64>>,
     pub iterations: Vec<usize>,
+    /// The step size of each step (0 at the start).
+    pub step_size: Vec<f64>,
+    /// States written (every state_interval), and the time a restart resumed from.
+    pub states: usize,
+    pub resumed_at: Option<f64>,
     /// Step cuts after failed steps, and Jacobian factorizations in all.
     pub cuts: usize,
+    pub refreshes: usize,
     pub factorizations: usize,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
@@ -123,6 +160,7 @@ pub fn run<'p>(
     petsc: &'p Petsc,
     settings: &TransientSettings,
     input: TransientInputs<'_, 'p>,
+    files: &TransientFiles,
 ) -> Result<(Transient, Option<TimeError>), TimeError> {
     let newmark = NewmarkSettings {
         step: settings.step,
@@ -176,20 +214,26 @@ pub fn run<'p>(
     let n_if = contact.interfaces.len();
     let mut out = Transient {
         time: Vec::with_capacity(settings.steps + 1),
+        step_size: Vec::with_capacity(settings.steps + 1),
         normal_force: vec![Vec::with_capacity(settings.steps + 1); n_if],
         friction_force: vec![Vec::with_capacity(settings.steps + 1); n_if],
         torque: vec![Vec::with_capacity(settings.steps + 1); n_if],
-        iterations: Vec::with_capacity(settings.steps),
+        iterations: Vec::with_capacity(settings.steps + 1),
         cuts: 0,
+        refreshes: 0,
         factorizations: 0,
         factor_entries: 0.0,
         seconds_factorizing,
         seconds_stepping: 0.0,
+        states: 0,
+        resumed_at: None,
     };
-    let record = |out: &mut Transient, s: &State<'p>| -> Result<(), LaError> {
+    let record = |out: &mut Transient, s: &State<'p>, h: f64, its: usize| -> Result<(), LaError> {
         let cs = contact.evaluate(&s.q, Some(&s.v), 1.0)?;
         let sums: Vec<InterfaceSummary> = contact.summarize(petsc, &cs);
         out.time.push(s.time);
+        out.step_size.push(h);
+        out.iterations.push(its);
         for (i, sum) in sums.iter().enumerate() {
             out.normal_force[i].push(sum.normal_force);
             out.friction_force[i].push(sum.friction_force);
@@ -197,35 +241,213 @@ pub fn run<'p>(
         }
         Ok(())
     };
-    record(&mut out, &state)?;
+
+    // The stream (transient.h5) and the checkpoint: a fresh start, or the checkpoint's state,
+    // step control and Jacobian state, with the stream cut back to the checkpoint's rows.
+    let names: Vec<String> = contact.interfaces.iter().map(|i| i.name.clone()).collect();
+    let world = petsc.world();
+    let mut control = StepControl::default();
+    let mut jacobian_at: Option<(Vector<'p>, Vector<'p>)> = None;
+    let stream = if files.restart {
+        let checkpoint = Checkpoint::read(petsc, files, settings, &state)?;
+        let stream = SeriesFile::open(world, &files.stream).map_err(io_error)?;
+        let rows = checkpoint.signal_rows;
+        for path in signal_paths(&names) {
+            stream.truncate(&path, rows).map_err(io_error)?;
+        }
+        for path in STATE_PATHS {
+            stream
+                .truncate(path, checkpoint.state_rows)
+                .map_err(io_error)?;
+        }
+        stream.flush().map_err(io_error)?;
+        // The signals so far, for the summary and the plots.
+        let read = |p: &str| stream.read(p).map_err(io_error);
+        out.time = read("time")?;
+        out.step_size = read("step_size")?;
+        out.iterations = read("iterations")?
+            .into_iter()
+            .map(|x| x as usize)
+            .collect();
+        for (i, name) in names.iter().enumerate() {
+            out.normal_force[i] = read(&format!("interfaces/{name}/normal_force"))?;
+            out.friction_force[i] = read(&format!("interfaces/{name}/friction_force"))?;
+            out.torque[i] = read(&format!("interfaces/{name}/torque"))?;
+        }
+        out.states = checkpoint.state_rows;
+        out.resumed_at = Some(checkpoint.state_time);
+        control = checkpoint.control;
+        jacobian_at = checkpoint.jacobian_at;
+        state = checkpoint.state;
+        stream
+    } else {
+        let stream = SeriesFile::create(world, &files.stream).map_err(io_error)?;
+        for path in signal_paths(&names) {
+            let units = match path.rsplit('/').next().unwrap_or("") {
+                "time" | "step_size" => "s",
+                "iterations" => "1",
+                "torque" | "braking_torque" => "N m",
+                _ => "N",
+            };
+            stream.create_series(&path, 1, units).map_err(io_error)?;
+        }
+        stream
+            .create_series("states/time", 1, "s")
+            .map_err(io_error)?;
+        let n = state.q.global_len();
+        stream
+            .create_series("states/displacement", n, "m")
+            .map_err(io_error)?;
+        stream
+            .create_series("states/velocity", n, "m/s")
+            .map_err(io_error)?;
+        record(&mut out, &state, 0.0, 0)?;
+        stream
+    };
+    let mut written = stream.rows("time").map_err(io_error)?;
+    let flush = |out: &Transient, written: &mut usize| -> Result<(), TimeError> {
+        let from = *written;
+        let its: Vec<f64> = out.iterations[from..].iter().map(|&i| i as f64).collect();
+        let torque: Vec<f64> = (from..out.time.len())
+            .map(|k| out.torque.iter().map(|t| t[k]).sum())
+            .collect();
+        let mut series: Vec<(String, &[f64])> = vec![
+            ("time".into(), &out.time[from..]),
+            ("step_size".into(), &out.step_size[from..]),
+            ("iterations".into(), &its),
+            ("braking_torque".into(), &torque),
+        ];
+        for (i, name) in names.iter().enumerate() {
+            series.push((
+                format!("interfaces/{name}/normal_force"),
+                &out.normal_force[i][from..],
+            ));
+            series.push((
+                format!("interfaces/{name}/friction_force"),
+                &out.friction_force[i][from..],
+            ));
+            series.push((format!("interfaces/{name}/torque"), &out.torque[i][from..]));
+        }
+        for (path, values) in series {
+            stream.append(&path, values).map_err(io_error)?;
+        }
+        stream.flush().map_err(io_error)?;
+        *written = out.time.len();
+        Ok(())
+    };
+    let write_state = |s: &State<'p>| -> Result<(), TimeError> {
+        let range = s.q.ownership();
+        stream.append("states/time", &[s.time]).map_err(io_error)?;
+        stream
+            .append_distributed("states/displacement", &s.q.local()?, range.clone())
+            .map_err(io_error)?;
+        stream
+            .append_distributed("states/velocity", &s.v.local()?, range)
+            .map_err(io_error)
+    };
+    // States every state_interval of simulated time (the first at the start).
+    let interval = settings.state_interval;
+    let next_sample = |states: usize| states as f64 * interval;
+    if !files.restart && interval > 0.0 {
+        write_state(&state)?;
+        out.states = 1;
+    }
+
     let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
+    let first_step = ((state.time / settings.step).round() as usize).min(settings.steps);
+    bar.resume_from(first_step);
     let t = Instant::now();
     let end_time = settings.steps as f64 * settings.step;
     let mut factor_entries = 0.0;
     let mut seconds_factorizing = seconds_factorizing;
-    let mut factorize = |ns: &NewmarkSettings| -> Result<DirectSolver<'p>, LaError> {
-        let t = Instant::now();
-        let j = jacobian(ns, input.m, input.c, &k0, Some(&mock))?;
-        j.set_symmetric(true)?;
-        let factor = DirectSolver::factorize(petsc, &j, Factorization::Cholesky, "time_")?;
-        factor_entries = factor.report().factor_entries;
-        seconds_factorizing += t.elapsed().as_secs_f64();
-        Ok(factor)
-    };
+    // J with the contact tangent of a state: K_c + K_stick + K_f (friction: unsymmetric, LU)
+    // and the friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
+    // through gamma / (beta h). The state J was built at is kept for the checkpoint (a restart
+    // rebuilds the same J).
+    let mut current = input.contact.joined_matrix(petsc, input.k0)?;
+    let mut restart_jacobian = jacobian_at.take();
+    let jacobian_at = std::cell::RefCell::new(None::<(Vector<'p>, Vector<'p>)>);
+    let mut factorize =
+        |ns: &NewmarkSettings, at: Option<&State<'p>>| -> Result<DirectSolver<'p>, LaError> {
+            let t = Instant::now();
+            let saved = restart_jacobian.take();
+            let at: Option<(&Vector<'p>, &Vector<'p>)> = match (&saved, at) {
+                (Some((q, v)), _) => Some((q, v)),
+                (None, Some(s)) => Some((&s.q, &s.v)),
+                (None, None) => None,
+            };
+            if let Some((q, v)) = at {
+                let cs = contact.evaluate(q, Some(v), 1.0)?;
+                current.zero_entries()?;
+                contact.add_tangent(
+                    &cs,
+                    &[Part::Normal, Part::Stick, Part::Friction],
+                    &mut current,
+                )?;
+                current.assemble()?;
+                let mut damping = contact.joined_matrix(petsc, input.k0)?;
+                damping.zero_entries()?;
+                contact.add_tangent(&cs, &[Part::Damping], &mut damping)?;
+                damping.assemble()?;
+                current.axpy(ns.gamma / (ns.beta * ns.step), &damping)?;
+                let copy = (q.try_clone()?, v.try_clone()?);
+                *jacobian_at.borrow_mut() = Some(copy);
+            }
+            let mock = if at.is_some() { &current } else { &mock };
+            let j = jacobian(ns, input.m, input.c, &k0, Some(mock))?;
+            // The static mock is symmetric (Cholesky); a state's tangent has the friction part.
+            let kind = if at.is_some() {
+                Factorization::Lu
+            } else {
+                j.set_symmetric(true)?;
+                Factorization::Cholesky
+            };
+            let factor = DirectSolver::factorize(petsc, &j, kind, "time_")?;
+            factor_entries = factor.report().factor_entries;
+            seconds_factorizing += t.elapsed().as_secs_f64();
+            Ok(factor)
+        };
     let rank0 = petsc.rank() == 0;
-    let mut on_step = |s: &State<'p>, report: &StepReport| -> Result<(), TimeError> {
-        out.iterations.push(report.iterations);
-        record(&mut out, s)?;
-        let done = ((s.time / settings.step).round() as usize).min(settings.steps);
-        if out.iterations.len().is_multiple_of(50) || done == settings.steps {
-            let mean = out.iterations.iter().sum::<usize>() as f64 / out.iterations.len() as f64;
-            bar.update(
-                done,
-                &format!("t = {:.3e} s, {mean:.2} iterations/step", s.time),
-            );
-        }
-        Ok(())
-    };
+    let mut checkpoint_failure = None;
+    let mut on_step =
+        |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<(), TimeError> {
+            let h = settings.step / f64::from(1u32 << c.level);
+            record(&mut out, s, h, report.iterations)?;
+            if interval > 0.0 && s.time >= next_sample(out.states) - 1e-3 * h {
+                write_state(s)?;
+                out.states += 1;
+            }
+            let done = ((s.time / settings.step).round() as usize).min(settings.steps);
+            let at_end = s.time >= end_time - 0.25 * h;
+            if out.time.len() - written >= FLUSH_ROWS || at_end {
+                flush(&out, &mut written)?;
+            }
+            if settings.checkpoint_every > 0
+                && (c.steps.is_multiple_of(settings.checkpoint_every) || at_end)
+            {
+                flush(&out, &mut written)?;
+                // After a step restore J is rebuilt at this state; otherwise it stays the one
+                // built at `jacobian_at`.
+                let at = jacobian_at.borrow();
+                let j = if c.good == 0 { None } else { at.as_ref() };
+                if let Err(e) = Checkpoint::write(petsc, files, settings, s, c, j, &out) {
+                    checkpoint_failure = Some(e.to_string());
+                }
+            }
+            if out.time.len().is_multiple_of(50) || at_end {
+                let recent = &out.iterations[out.iterations.len().saturating_sub(500)..];
+                let mean = recent.iter().sum::<usize>() as f64 / recent.len().max(1) as f64;
+                let rate = (done - first_step) as f64 / t.elapsed().as_secs_f64().max(1e-9);
+                bar.update(
+                    done,
+                    &format!(
+                        "t = {:.3e} s, {rate:.1} steps/s, {mean:.2} iterations/step",
+                        s.time
+                    ),
+                );
+            }
+            Ok(())
+        };
     let mut log = |line: &str| {
         if rank0 {
             println!("  transient: {line}");
@@ -240,21 +462,221 @@ pub fn run<'p>(
         &mut state,
         forces,
         end_time,
-        settings.max_cuts,
-        100,
+        (settings.max_cuts, 100, settings.refresh),
+        &mut control,
         &mut on_step,
         &mut log,
     );
     bar.finish();
+    // Whatever happened, the signals recorded so far go to the file, and a failed run leaves
+    // a checkpoint at its last converged step (to restart with other settings).
+    flush(&out, &mut written)?;
+    if result.is_err() && settings.checkpoint_every > 0 {
+        let at = jacobian_at.borrow();
+        Checkpoint::write(petsc, files, settings, &state, &control, at.as_ref(), &out)?;
+    }
+    if let Some(e) = checkpoint_failure {
+        return Err(TimeError::Output(e));
+    }
     out.seconds_stepping = t.elapsed().as_secs_f64();
     out.factor_entries = factor_entries;
     out.seconds_factorizing = seconds_factorizing;
+    out.cuts = control.cuts;
+    out.refreshes = control.refreshes;
+    out.factorizations = control.factorizations;
     match result {
-        Ok(control) => {
-            out.cuts = control.cuts;
-            out.factorizations = control.factorizations;
-            Ok((out, None))
-        }
+        Ok(()) => Ok((out, None)),
         Err(e) => Ok((out, Some(e))),
+    }
+}
+
+/// Signal rows buffered before they are appended to the file.
+const FLUSH_ROWS: usize = 1000;
+const STATE_PATHS: [&str; 3] = ["states/time", "states/displacement", "states/velocity"];
+
+/// The full-rate series of the stream.
+fn signal_paths(interfaces: &[String]) -> Vec<String> {
+    let mut v: Vec<String> = ["time", "step_size", "iterations", "braking_torque"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for name in interfaces {
+        for s in ["normal_force", "friction_force", "torque"] {
+            v.push(format!("interfaces/{name}/{s}"));
+        }
+    }
+    v
+}
+
+fn io_error(e: crate::io::results::ResultsError) -> TimeError {
+    TimeError::Output(e.to_string())
+}
+
+/// Where the stream and the checkpoint go, and whether to resume from the checkpoint.
+pub struct TransientFiles {
+    pub stream: PathBuf,
+    pub checkpoint: PathBuf,
+    pub restart: bool,
+}
+
+impl TransientFiles {
+    pub fn in_directory(dir: &Path, restart: bool) -> Self {
+        TransientFiles {
+            stream: dir.join("transient.h5"),
+            checkpoint: dir.join("checkpoint.h5"),
+            restart,
+        }
+    }
+}
+
+/// A resumable point of the run: the state, the step control, the state J was built at, and
+/// how many rows the stream held.
+struct Checkpoint<'p> {
+    state: State<'p>,
+    control: StepControl,
+    jacobian_at: Option<(Vector<'p>, Vector<'p>)>,
+    signal_rows: usize,
+    state_rows: usize,
+    state_time: f64,
+}
+
+impl<'p> Checkpoint<'p> {
+    /// Writes checkpoint.h5 (through a temporary file renamed when complete, so an
+    /// interruption while writing keeps the previous checkpoint).
+    ///
+    /// # Collective
+    fn write(
+        petsc: &'p Petsc,
+        files: &TransientFiles,
+        settings: &TransientSettings,
+        s: &State<'p>,
+        c: &StepControl,
+        jacobian_at: Option<&(Vector<'p>, Vector<'p>)>,
+        out: &Transient,
+    ) -> Result<(), TimeError> {
+        let world = petsc.world();
+        let tmp = files.checkpoint.with_extension("h5.tmp");
+        {
+            let f = SeriesFile::create(world, &tmp).map_err(io_error)?;
+            let numbers = [
+                ("ranks", petsc.size() as f64),
+                ("unknowns", s.q.global_len() as f64),
+                ("nominal_step", settings.step),
+                ("time", s.time),
+                ("step", s.step as f64),
+                ("steps", c.steps as f64),
+                ("cuts", c.cuts as f64),
+                ("restores", c.restores as f64),
+                ("refreshes", c.refreshes as f64),
+                ("factorizations", c.factorizations as f64),
+                ("level", f64::from(c.level)),
+                ("good", c.good as f64),
+                ("refreshed", f64::from(u8::from(c.refreshed))),
+                ("fresh", f64::from(u8::from(c.fresh))),
+                ("signal_rows", out.time.len() as f64),
+                ("state_rows", out.states as f64),
+                ("jacobian_state", f64::from(u8::from(jacobian_at.is_some()))),
+            ];
+            for (name, value) in numbers {
+                f.set_number(name, value).map_err(io_error)?;
+            }
+            let n = s.q.global_len();
+            let range = s.q.ownership();
+            let mut vectors = vec![("q", &s.q), ("v", &s.v), ("a", &s.a)];
+            if let Some((q, v)) = jacobian_at {
+                vectors.push(("jacobian_q", q));
+                vectors.push(("jacobian_v", v));
+            }
+            for (name, x) in vectors {
+                f.write_vector(name, &x.local()?, range.clone(), n)
+                    .map_err(io_error)?;
+            }
+            f.flush().map_err(io_error)?;
+        }
+        crate::parallel::barrier(world);
+        if petsc.rank() == 0 {
+            std::fs::rename(&tmp, &files.checkpoint).map_err(|e| {
+                TimeError::Output(format!(
+                    "{}: cannot replace the checkpoint: {e}",
+                    files.checkpoint.display()
+                ))
+            })?;
+        }
+        crate::parallel::barrier(world);
+        Ok(())
+    }
+
+    /// Reads checkpoint.h5 for a run with `settings` on this layout (`like` gives the vector
+    /// layout): the ranks, the number of unknowns and the nominal step must match.
+    ///
+    /// # Collective
+    fn read(
+        petsc: &'p Petsc,
+        files: &TransientFiles,
+        settings: &TransientSettings,
+        like: &State<'p>,
+    ) -> Result<Self, TimeError> {
+        let path = &files.checkpoint;
+        if !path.exists() || !files.stream.exists() {
+            return Err(TimeError::Output(format!(
+                "--restart: {} or {} is missing; run without --restart to start from the static state",
+                path.display(),
+                files.stream.display()
+            )));
+        }
+        let f = SeriesFile::open(petsc.world(), path).map_err(io_error)?;
+        let number = |name: &str| f.number(name).map_err(io_error);
+        let expect = |name: &str, value: f64, what: &str| -> Result<(), TimeError> {
+            let stored = number(name)?;
+            if stored != value {
+                return Err(TimeError::Output(format!(
+                    "--restart: {} was written with {what} = {stored}, this run has {value}; restart with the same {what}",
+                    path.display()
+                )));
+            }
+            Ok(())
+        };
+        expect("ranks", petsc.size() as f64, "number of MPI ranks")?;
+        expect("unknowns", like.q.global_len() as f64, "model (unknowns)")?;
+        expect("nominal_step", settings.step, "key 'transient.step'")?;
+        let range = like.q.ownership();
+        let vector = |name: &str| -> Result<Vector<'p>, TimeError> {
+            let x = like.q.duplicate()?;
+            let values = f.read_vector(name, range.clone()).map_err(io_error)?;
+            x.local_mut()?.copy_from_slice(&values);
+            Ok(x)
+        };
+        let state = State {
+            time: number("time")?,
+            step: number("step")? as usize,
+            q: vector("q")?,
+            v: vector("v")?,
+            a: vector("a")?,
+        };
+        let jacobian_at = if number("jacobian_state")? != 0.0 {
+            Some((vector("jacobian_q")?, vector("jacobian_v")?))
+        } else {
+            None
+        };
+        let control = StepControl {
+            steps: number("steps")? as usize,
+            cuts: number("cuts")? as usize,
+            restores: number("restores")? as usize,
+            refreshes: number("refreshes")? as usize,
+            factorizations: number("factorizations")? as usize,
+            level: number("level")? as u32,
+            good: number("good")? as usize,
+            refreshed: number("refreshed")? != 0.0,
+            fresh: number("fresh")? != 0.0,
+        };
+        let state_rows = number("state_rows")? as usize;
+        Ok(Checkpoint {
+            state_time: state.time,
+            state,
+            control,
+            jacobian_at,
+            signal_rows: number("signal_rows")? as usize,
+            state_rows,
+        })
     }
 }

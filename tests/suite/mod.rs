@@ -6,6 +6,7 @@ pub mod contact_statics;
 pub mod convergence;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
+pub mod reduction;
 pub mod static_solve;
 pub mod time_integration;
 
@@ -23,5 +24,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(contact_statics::tests());
     v.extend(complex_modes::tests());
     v.extend(time_integration::tests());
+    v.extend(reduction::tests());
     v
 }

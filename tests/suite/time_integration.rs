@@ -50,6 +50,10 @@ pub fn tests() -> Vec<super::NamedTest> {
             "newmark_step_near_the_convergence_limit_is_cut_and_restored",
             step_cutting,
         ),
+        (
+            "transient_restart_continues_the_interrupted_run",
+            restart_continues_the_interrupted_run,
+        ),
     ]
 }
 
@@ -60,12 +64,33 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// energy within 2e-3 and the period within 1e-3 of the reference 6.88757415 (measured: 479
 /// steps, 23 cuts, 21 restores, period 2.9e-4 off, energy 1.0e-3: the trapezoidal rule's
 /// O(h^2) at these large steps).
+///
+/// With Jacobian refresh (J rebuilt with the contact tangent exp(-g) of the current state
+/// before any cut) the same run needs fewer cuts and steps (measured: 302 steps, 7 cuts, 34
+/// refreshes, 47 factorizations against 479 steps and 23 cuts); since more of the run goes at
+/// h = 0.3, the energy error is that of the larger step (3.8e-3, bound 5e-3; period 4.4e-4).
 fn step_cutting(petsc: &Petsc) -> Result<(), String> {
+    let plain = cut_and_restore(petsc, false)?;
+    let refreshed = cut_and_restore(petsc, true)?;
+    if plain.cuts == 0 || plain.restores == 0 || plain.refreshes != 0 {
+        return Err(format!("expected cuts and restores: {plain:?}"));
+    }
+    if refreshed.refreshes == 0 || refreshed.cuts >= plain.cuts {
+        return Err(format!(
+            "refresh should replace cuts: {refreshed:?} vs {plain:?}"
+        ));
+    }
+    Ok(())
+}
+
+fn cut_and_restore(
+    petsc: &Petsc,
+    refresh: bool,
+) -> Result<squeal::time::newmark::StepControl, String> {
     use squeal::time::newmark::integrate_adaptive;
     let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
-    let mock = tridiagonal(petsc, &[1.0], &[])?;
     let settings = NewmarkSettings {
         step: 0.3,
         tolerance: 1e-12,
@@ -83,12 +108,20 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
         a: vector(petsc, &[0.0])?,
     };
     initial_acceleration(&m, None, &k, &mut state, &mut forces, &mass).map_err(e)?;
-    let mut factorize = |ns: &NewmarkSettings| {
+    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
+        // The mock 1, or the contact tangent -df/dg = exp(-g) of the given state.
+        let stiffness = match at {
+            Some(s) => (-s.q.gather_all()?[0]).exp(),
+            None => 1.0,
+        };
+        let mock = tridiagonal(petsc, &[stiffness], &[]).map_err(squeal::la::LaError::Invalid)?;
         let j = jacobian(ns, &m, None, &k, Some(&mock))?;
         DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")
     };
     let mut oscillation = Oscillation::released_at(g0);
-    let mut on_step = |s: &State, _r: &squeal::time::newmark::StepReport| {
+    let mut on_step = |s: &State,
+                       _r: &squeal::time::newmark::StepReport,
+                       _c: &squeal::time::newmark::StepControl| {
         let (g, v) = (
             s.q.gather_all()
                 .map_err(squeal::time::newmark::TimeError::La)?[0],
@@ -100,7 +133,8 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
     };
     let mut lines = Vec::new();
     let mut log = |line: &str| lines.push(line.to_string());
-    let control = integrate_adaptive(
+    let mut control = squeal::time::newmark::StepControl::default();
+    integrate_adaptive(
         settings,
         &m,
         None,
@@ -109,8 +143,8 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
         &mut state,
         &mut forces,
         30.0,
-        8,
-        20,
+        (8, 20, refresh),
+        &mut control,
         &mut on_step,
         &mut log,
     )
@@ -120,25 +154,27 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
     say(
         petsc,
         &format!(
-            "h = 0.3, <= 4 iterations: {} steps, {} cuts, {} restores, {} factorizations; t = {:.4}; period {period:.6} (ref. 6.88757415, rel. {:.1e}); energy {energy_error:.1e}",
+            "h = 0.3, <= 4 iterations, refresh {refresh}: {} steps, {} cuts, {} restores, {} refreshes, {} factorizations; t = {:.4}; period {period:.6} (ref. 6.88757415, rel. {:.1e}); energy {energy_error:.1e}",
             control.steps,
             control.cuts,
             control.restores,
+            control.refreshes,
             control.factorizations,
             state.time,
             rel(period, 6.88757415)
         ),
     );
-    if control.cuts == 0 || control.restores == 0 {
-        return Err(format!("expected cuts and restores: {control:?}"));
-    }
-    if (state.time - 30.0).abs() > 0.2 || rel(period, 6.88757415) > 1e-3 || energy_error > 2e-3 {
+    let energy_bound = if refresh { 5e-3 } else { 2e-3 };
+    if (state.time - 30.0).abs() > 0.2
+        || rel(period, 6.88757415) > 1e-3
+        || energy_error > energy_bound
+    {
         return Err(format!(
-            "end time {}, period {period}, energy error {energy_error:e}",
+            "refresh {refresh}: end time {}, period {period}, energy error {energy_error:e}",
             state.time
         ));
     }
-    Ok(())
+    Ok(control)
 }
 
 /// The preloaded 12k brake (mu 0.4, disc turning) started exactly at its static state: the
@@ -537,6 +573,108 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
     }
     for line in report {
         say(petsc, &line);
+    }
+    Ok(())
+}
+
+/// `squeal run --restart`: a run of 80 steps (checkpoints at step 50 and at its end), resumed
+/// with `steps = 120`, against one uninterrupted run of 120 steps (preloaded 6k brake, reduced
+/// on 40 modes, kicked along mode 2; a state every 2e-5 s). The resumed run starts from the
+/// checkpoint's state, step control and Jacobian and appends to the same transient.h5. On 1
+/// rank everything is deterministic and the signals and states are equal bit for bit. On 2
+/// ranks MUMPS's parallel factorization is not bitwise reproducible from run to run (measured
+/// with a plain PETSc program: the same LU solve gives different last bits in some runs), and
+/// the restart recomputes the real modes, which then differ at their solver tolerance (1e-10):
+/// the two runs agree to that level (measured: torque 1.6e-5 of its tiny fluctuation = 3e-11
+/// of the torque, states 6e-11 of the largest; asserted 1e-9).
+fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
+    let scene = |steps: usize| {
+        format!(
+            "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
+             [contact]\ndisc_speed = 6.2832\n\
+             [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
+             friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
+             [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 40\n[reduction]\n\
+             [transient]\nstep = 2.0e-6\nsteps = {steps}\nmode = 2\namplitude = 1.0e-8\n\
+             state_interval = 2.0e-5\ncheckpoint_every = 50\n"
+        )
+    };
+    let go = |text: &str, dir: &str, restart: bool| -> Result<std::path::PathBuf, String> {
+        let s = squeal::scene::Scene::parse(text, dir).map_err(|e| e.to_string())?;
+        let out = super::common::suite_dir().join(dir);
+        let options = squeal::pipeline::RunOptions { restart };
+        squeal::pipeline::run_with(
+            petsc,
+            &s,
+            text,
+            std::path::Path::new("."),
+            &out,
+            &[],
+            &options,
+        )
+        .map_err(|e| e.to_string())?;
+        Ok(out)
+    };
+    let whole = go(&scene(120), "restart-whole", false)?;
+    go(&scene(80), "restart-resumed", false)?;
+    let resumed = go(&scene(120), "restart-resumed", true)?;
+    let read = |dir: &std::path::Path, name: &str| -> Result<Vec<f64>, String> {
+        hdf5::File::open(dir.join("results.h5"))
+            .and_then(|f| f.dataset(&format!("transient/{name}")))
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|e| format!("{name}: {e}"))
+    };
+    let mut report = Vec::new();
+    let mut worst = 0.0f64;
+    for name in [
+        "time",
+        "braking_torque",
+        "iterations",
+        "states/time",
+        "states/displacement",
+    ] {
+        let (a, b) = (read(&whole, name)?, read(&resumed, name)?);
+        if a.len() != b.len() {
+            return Err(format!(
+                "{name}: {} rows uninterrupted, {} resumed",
+                a.len(),
+                b.len()
+            ));
+        }
+        let scale = a
+            .iter()
+            .map(|x| x.abs())
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let diff = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+            / scale;
+        let identical = a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits());
+        report.push(format!(
+            "{name} ({} values) {}",
+            a.len(),
+            if identical {
+                "identical".to_string()
+            } else {
+                format!("differ by {diff:.1e} of the largest")
+            }
+        ));
+        if petsc.size() == 1 && !identical {
+            return Err(format!(
+                "1 rank: {name} differs by {diff:e} after the restart"
+            ));
+        }
+        worst = worst.max(diff);
+    }
+    say(
+        petsc,
+        &format!("restart at step 80 of 120: {}", report.join("; ")),
+    );
+    if worst > 1e-9 {
+        return Err(format!("the resumed run differs by {worst:e}"));
     }
     Ok(())
 }
