@@ -14,6 +14,7 @@ pub mod la;
 pub mod mesh;
 pub mod parallel;
 pub mod pipeline;
+pub mod post;
 pub mod progress;
 pub mod reduce;
 pub mod scene;

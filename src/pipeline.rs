@@ -732,8 +732,17 @@ pub fn run_with(
                 modes.shapes.len()
             ))
         })?;
-        let _ = system;
         let damping = scene.damping.unwrap_or_default();
+        let sensors = match &model {
+            Some(model) if !settings.sensors.is_empty() => Some(sensor_rows(
+                petsc,
+                settings,
+                &model.mesh,
+                &system.dofs,
+                reduced.as_ref().map(|r| &r.model.reduction),
+            )?),
+            _ => None,
+        };
         // The full model, or the reduced one in its own unknowns.
         let restricted_shape = match &reduced {
             Some(r) => Some(r.model.reduction.restrict(petsc, shape)?),
@@ -783,6 +792,7 @@ pub fn run_with(
                     q_static: q_t,
                     static_state: state_t,
                     shape: shape_t,
+                    sensors: sensors.as_ref(),
                 },
                 &crate::time::transient::TransientFiles::in_directory(output, options.restart),
             )
@@ -794,7 +804,8 @@ pub fn run_with(
 
     let start = Instant::now();
     if let (Some(tr), Some((contact, _))) = (&transient, &preload) {
-        write_transient(petsc, &file, tr, contact, output)?;
+        let settings = scene.transient.as_ref().expect("a transient ran");
+        write_transient(petsc, &file, tr, contact, settings, output)?;
     }
 
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
@@ -910,6 +921,65 @@ pub fn run_with(
             })
             .collect(),
     })
+}
+
+/// The sensor rows of the transient: the node nearest to each sensor position, its x, y, z
+/// over the integrated unknowns (the full model's DOFs, or a row of T for the reduced one).
+///
+/// # Collective
+fn sensor_rows<'p>(
+    petsc: &'p Petsc,
+    settings: &crate::time::transient::TransientSettings,
+    mesh: &crate::mesh::Mesh,
+    dofs: &crate::fem::dofmap::DofMap,
+    reduction: Option<&crate::reduce::Reduction>,
+) -> Result<crate::time::transient::Sensors<'p>, RunError> {
+    let mut names = Vec::new();
+    let mut rows = Vec::new();
+    let mut first_row = 0;
+    let mut owners = Vec::new();
+    for (name, p) in &settings.sensors {
+        let (node, distance) = mesh
+            .coords
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let d = (0..3).map(|k| (c[k] - p[k]).powi(2)).sum::<f64>().sqrt();
+                (i, d)
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .ok_or_else(|| RunError::Model("sensors need a mesh with nodes".into()))?;
+        if petsc.rank() == 0 {
+            let c = mesh.coords[node];
+            println!(
+                "  sensor '{name}': node {node} at ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
+                c[0], c[1], c[2]
+            );
+        }
+        let owner = dofs.owner_of_node(node);
+        owners.push(owner);
+        if owner < dofs.rank {
+            first_row += 3;
+        } else if owner == dofs.rank {
+            for &d in &dofs.node_dofs[node] {
+                rows.push(match (d, reduction) {
+                    (d, _) if d < 0 => Vec::new(),
+                    (d, Some(r)) => r.recovery_row(d as usize),
+                    (d, None) => vec![(d, 1.0)],
+                });
+            }
+        }
+        names.push(name.clone());
+    }
+    let columns = match reduction {
+        Some(r) => r.columns.clone(),
+        None => dofs.owned_dofs(),
+    };
+    let rows = crate::la::ObservationMatrix::from_rows(petsc, first_row, &rows, columns)?;
+    // Rows go rank by rank: block k of the gathered values is sensor order[k].
+    let mut order: Vec<usize> = (0..names.len()).collect();
+    order.sort_by_key(|&i| owners[i]);
+    Ok(crate::time::transient::Sensors { names, rows, order })
 }
 
 /// Writes /reduced (sizes, checks) and returns the summary.
@@ -1684,6 +1754,7 @@ fn write_transient(
     file: &ResultsFile,
     tr: &crate::time::transient::Transient,
     contact: &crate::contact::ContactModel,
+    settings: &crate::time::transient::TransientSettings,
     output: &Path,
 ) -> Result<(), RunError> {
     // The signals and states are in transient.h5, written as the run went.
@@ -1732,6 +1803,88 @@ fn write_transient(
         fig.line(&points, crate::io::plot::BLUE);
         fig.save(&path)
             .map_err(|source| RunError::Io { path, source })?;
+        write_spectrogram(tr, &torque, settings, output)?;
     }
     Ok(())
+}
+
+/// spectrogram.png: the short-time spectrum of the first sensor's displacement component that
+/// moves most (or of the braking torque without sensors), on the nominal step grid.
+fn write_spectrogram(
+    tr: &crate::time::transient::Transient,
+    torque: &[f64],
+    settings: &crate::time::transient::TransientSettings,
+    output: &Path,
+) -> Result<(), RunError> {
+    use crate::post::spectrum;
+    let spread = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        v.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+    };
+    let (signal, what): (Vec<f64>, String) = match tr.sensor_values.first() {
+        Some(values) => {
+            let d = &values[0];
+            let component =
+                |k: usize| -> Vec<f64> { d.iter().skip(k).step_by(3).copied().collect() };
+            let k = (0..3)
+                .max_by(|&a, &b| spread(&component(a)).total_cmp(&spread(&component(b))))
+                .unwrap_or(0);
+            (
+                component(k),
+                format!(
+                    "sensor '{}' displacement {}",
+                    tr.sensor_names[0],
+                    ["x", "y", "z"][k]
+                ),
+            )
+        }
+        None => (torque.to_vec(), "braking torque".into()),
+    };
+    let uniform = spectrum::resample(&tr.time, &signal, settings.step);
+    let window = (uniform.len() / 8).clamp(64, 2048).next_power_of_two() / 2;
+    if uniform.len() < 2 * window || window < 32 {
+        return Ok(()); // too short for a spectrogram
+    }
+    let s = spectrum::spectrogram(&uniform, tr.time[0], settings.step, window, window / 4);
+    let rows = s
+        .frequencies
+        .iter()
+        .take_while(|&&f| f <= settings.spectrogram_max_hz)
+        .count()
+        .max(2);
+    let bins = s.frequencies.len();
+    let columns = s.times.len();
+    let mut db = Vec::with_capacity(columns * rows);
+    for c in 0..columns {
+        db.extend(
+            s.power[c * bins..c * bins + rows]
+                .iter()
+                .map(|p| 10.0 * p.max(1e-300).log10()),
+        );
+    }
+    let top = db.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let df = s.frequencies[1];
+    let dt = s.times.get(1).map_or(1.0, |t| t - s.times[0]);
+    let x = (s.times[0] - 0.5 * dt, s.times[columns - 1] + 0.5 * dt);
+    let y = (0.0, rows as f64 * df);
+    let mut fig = crate::io::plot::Figure::new(
+        1000,
+        500,
+        x,
+        y,
+        &format!("spectrogram of the {what} (dB, top 80 dB)"),
+        "time (s)",
+        "frequency (Hz)",
+    );
+    fig.heatmap(
+        columns,
+        rows,
+        &db,
+        x,
+        (y.0 - 0.5 * df, y.1 - 0.5 * df),
+        (top - 80.0, top),
+    );
+    let path = output.join("spectrogram.png");
+    fig.save(&path)
+        .map_err(|source| RunError::Io { path, source })
 }

@@ -33,6 +33,25 @@ pub struct Figure {
     y: (f64, f64),
 }
 
+/// Dark blue -> teal -> yellow for s in [0, 1] (perceptually ordered, like viridis).
+pub fn colormap(s: f64) -> Rgb {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = s.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = x - i as f64;
+    let mut c = [0u8; 3];
+    for k in 0..3 {
+        c[k] = (STOPS[i][k] + f * (STOPS[i + 1][k] - STOPS[i][k])).round() as u8;
+    }
+    c
+}
+
 /// About `n` round tick values covering [min, max].
 pub fn nice_ticks(min: f64, max: f64, n: usize) -> Vec<f64> {
     if max.partial_cmp(&min) != Some(std::cmp::Ordering::Greater)
@@ -188,6 +207,38 @@ impl Figure {
                 if dx * dx + dy * dy <= size * size + 1 {
                     self.put(cx + dx, cy + dy, c);
                 }
+            }
+        }
+    }
+
+    /// Fills the plot area with a grid of values (column-major: `columns` along x spanning
+    /// [x0, x1], `rows` along y spanning [y0, y1]) coloured from dark (lo) to bright (hi).
+    #[allow(clippy::too_many_arguments)] // the grid and where it lies
+    pub fn heatmap(
+        &mut self,
+        columns: usize,
+        rows: usize,
+        values: &[f64],
+        (x0, x1): (f64, f64),
+        (y0, y1): (f64, f64),
+        (lo, hi): (f64, f64),
+    ) {
+        let [l, t, r, b] = self.area;
+        if columns == 0 || rows == 0 {
+            return;
+        }
+        for py in t.ceil() as i64..=b.floor() as i64 {
+            for px in l.ceil() as i64..=r.floor() as i64 {
+                let x = self.x.0 + (px as f64 - l) / (r - l) * (self.x.1 - self.x.0);
+                let y = self.y.0 + (b - py as f64) / (b - t) * (self.y.1 - self.y.0);
+                let c = ((x - x0) / (x1 - x0) * columns as f64).floor();
+                let k = ((y - y0) / (y1 - y0) * rows as f64).floor();
+                if c < 0.0 || k < 0.0 || c >= columns as f64 || k >= rows as f64 {
+                    continue;
+                }
+                let v = values[c as usize * rows + k as usize];
+                let s = ((v - lo) / (hi - lo)).clamp(0.0, 1.0);
+                self.put(px, py, colormap(s));
             }
         }
     }

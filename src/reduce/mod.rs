@@ -211,6 +211,22 @@ impl Reduction {
         Ok(())
     }
 
+    /// The row of T for a full-model DOF this rank owns: (reduced column, value) pairs — the
+    /// kept DOF itself, or the basis at that DOF over the modal coordinates.
+    pub fn recovery_row(&self, dof: usize) -> Vec<(i32, f64)> {
+        if self.map[dof] >= 0 {
+            return vec![(self.map[dof], 1.0)];
+        }
+        let local = dof - self.full_start;
+        let nb = self.reduced_local.len();
+        match self.reduced_local.binary_search(&local) {
+            Ok(k) => (0..self.modal)
+                .map(|j| ((self.kept + j) as i32, self.basis[j * nb + k]))
+                .collect(),
+            Err(_) => Vec::new(),
+        }
+    }
+
     /// The b rows of `cols` full local columns (column-major).
     fn at_reduced_rows(&self, w: &[f64], cols: usize) -> Vec<f64> {
         let n = self.full_local;

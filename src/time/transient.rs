@@ -52,6 +52,25 @@ pub struct TransientSettings {
     /// the end or the failure of the run (0: never).
     #[serde(default = "default_checkpoint_every")]
     pub checkpoint_every: usize,
+    /// Sensor points by name: displacement, velocity and acceleration (x, y, z) of the node
+    /// nearest to each position (m) at every step.
+    #[serde(default)]
+    pub sensors: std::collections::BTreeMap<String, [f64; 3]>,
+    /// Upper frequency of the spectrogram plot (Hz).
+    #[serde(default = "default_spectrogram_max_hz")]
+    pub spectrogram_max_hz: f64,
+}
+
+fn default_spectrogram_max_hz() -> f64 {
+    20_000.0
+}
+
+/// Sensor rows: three per sensor (x, y, z of its node) over the integrated unknowns.
+pub struct Sensors<'p> {
+    pub names: Vec<String>,
+    pub rows: crate::la::ObservationMatrix<'p>,
+    /// Rows are grouped by owning rank: row block k belongs to sensor `order[k]`.
+    pub order: Vec<usize>,
 }
 
 fn default_state_interval() -> f64 {
@@ -105,6 +124,16 @@ impl TransientSettings {
         if self.mode == 0 {
             return Err("key 'transient.mode' is 1-based: the first real mode is 1".into());
         }
+        for (name, p) in &self.sensors {
+            if p.iter().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "key 'transient.sensors.{name}': the position must be three finite coordinates (m)"
+                ));
+            }
+        }
+        if self.spectrogram_max_hz.is_nan() || self.spectrogram_max_hz <= 0.0 {
+            return Err("key 'transient.spectrogram_max_hz' must be positive (Hz)".into());
+        }
         if !(self.state_interval >= 0.0 && self.state_interval.is_finite()) {
             return Err(format!(
                 "key 'transient.state_interval' = {}: must be a time (s) >= 0 (0: no states)",
@@ -128,6 +157,9 @@ pub struct Transient {
     pub iterations: Vec<usize>,
     /// The step size of each step (0 at the start).
     pub step_size: Vec<f64>,
+    /// Per sensor: displacement, velocity, acceleration (x, y, z per sample, row-major).
+    pub sensor_names: Vec<String>,
+    pub sensor_values: Vec<[Vec<f64>; 3]>,
     /// States written (every state_interval), and the time a restart resumed from.
     pub states: usize,
     pub resumed_at: Option<f64>,
@@ -150,6 +182,7 @@ pub struct TransientInputs<'a, 'p> {
     pub q_static: &'a Vector<'p>,
     pub static_state: &'a crate::contact::ContactState,
     pub shape: &'a Vector<'p>,
+    pub sensors: Option<&'a Sensors<'p>>,
 }
 
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
@@ -227,6 +260,12 @@ pub fn run<'p>(
         seconds_stepping: 0.0,
         states: 0,
         resumed_at: None,
+        sensor_names: input.sensors.map(|s| s.names.clone()).unwrap_or_default(),
+        sensor_values: vec![Default::default(); input.sensors.map_or(0, |s| s.names.len())],
+    };
+    let sensor_buffer = match input.sensors {
+        Some(s) => Some(s.rows.new_point_vector()?),
+        None => None,
     };
     let record = |out: &mut Transient, s: &State<'p>, h: f64, its: usize| -> Result<(), LaError> {
         let cs = contact.evaluate(&s.q, Some(&s.v), 1.0)?;
@@ -238,6 +277,15 @@ pub fn run<'p>(
             out.normal_force[i].push(sum.normal_force);
             out.friction_force[i].push(sum.friction_force);
             out.torque[i].push(sum.torque);
+        }
+        if let (Some(sensors), Some(y)) = (input.sensors, &sensor_buffer) {
+            for (kind, x) in [&s.q, &s.v, &s.a].into_iter().enumerate() {
+                sensors.rows.mult(x, y)?;
+                let values = y.gather_all()?;
+                for (k, v) in values.chunks(3).enumerate() {
+                    out.sensor_values[sensors.order[k]][kind].extend_from_slice(v);
+                }
+            }
         }
         Ok(())
     };
@@ -273,6 +321,12 @@ pub fn run<'p>(
             out.normal_force[i] = read(&format!("interfaces/{name}/normal_force"))?;
             out.friction_force[i] = read(&format!("interfaces/{name}/friction_force"))?;
             out.torque[i] = read(&format!("interfaces/{name}/torque"))?;
+        }
+        let sensor_series = sensor_paths(&out.sensor_names);
+        for (i, chunk) in sensor_series.chunks(3).enumerate() {
+            for (kind, path) in chunk.iter().enumerate() {
+                out.sensor_values[i][kind] = read(path)?;
+            }
         }
         out.states = checkpoint.state_rows;
         out.resumed_at = Some(checkpoint.state_time);
@@ -330,6 +384,13 @@ pub fn run<'p>(
         }
         for (path, values) in series {
             stream.append(&path, values).map_err(io_error)?;
+        }
+        let sensor_series = sensor_paths(&out.sensor_names);
+        for (i, chunk) in sensor_series.chunks(3).enumerate() {
+            for (kind, path) in chunk.iter().enumerate() {
+                let v = &out.sensor_values[i][kind];
+                stream.append(path, &v[3 * from..]).map_err(io_error)?;
+            }
         }
         stream.flush().map_err(io_error)?;
         *written = out.time.len();
@@ -506,6 +567,16 @@ fn signal_paths(interfaces: &[String]) -> Vec<String> {
         }
     }
     v
+}
+
+/// Displacement, velocity, acceleration series of every sensor (3 per sensor, in order).
+fn sensor_paths(names: &[String]) -> Vec<String> {
+    names
+        .iter()
+        .flat_map(|n| {
+            ["displacement", "velocity", "acceleration"].map(|k| format!("sensors/{n}/{k}"))
+        })
+        .collect()
 }
 
 fn io_error(e: crate::io::results::ResultsError) -> TimeError {

@@ -1,0 +1,3 @@
+//! Post-processing of time signals.
+
+pub mod spectrum;

@@ -1,0 +1,160 @@
+//! Spectra of time signals: a radix-2 FFT and the spectrogram (short-time Fourier transform
+//! with a Hann window) of a signal, resampled onto a uniform grid first when step cuts made
+//! its steps uneven.
+
+use std::f64::consts::PI;
+
+/// In-place radix-2 FFT of (re, im); the length must be a power of two.
+pub fn fft(re: &mut [f64], im: &mut [f64]) {
+    let n = re.len();
+    assert!(
+        n.is_power_of_two() && im.len() == n,
+        "fft: power-of-two length"
+    );
+    // Bit reversal.
+    let mut j = 0usize;
+    for i in 1..n {
+        let mut bit = n >> 1;
+        while j & bit != 0 {
+            j ^= bit;
+            bit >>= 1;
+        }
+        j |= bit;
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let angle = -2.0 * PI / len as f64;
+        for start in (0..n).step_by(len) {
+            for k in 0..len / 2 {
+                let (s, c) = (angle * k as f64).sin_cos();
+                let (a, b) = (start + k, start + k + len / 2);
+                let tr = re[b] * c - im[b] * s;
+                let ti = re[b] * s + im[b] * c;
+                re[b] = re[a] - tr;
+                im[b] = im[a] - ti;
+                re[a] += tr;
+                im[a] += ti;
+            }
+        }
+        len <<= 1;
+    }
+}
+
+/// Linear interpolation of (t, y) onto t0 + k dt, k = 0..n.
+pub fn resample(t: &[f64], y: &[f64], dt: f64) -> Vec<f64> {
+    if t.len() < 2 {
+        return y.to_vec();
+    }
+    let n = ((t[t.len() - 1] - t[0]) / dt).floor() as usize + 1;
+    let mut out = Vec::with_capacity(n);
+    let mut j = 0;
+    for k in 0..n {
+        let tk = t[0] + k as f64 * dt;
+        while j + 2 < t.len() && t[j + 1] < tk {
+            j += 1;
+        }
+        let (t0, t1) = (t[j], t[j + 1]);
+        let s = if t1 > t0 {
+            ((tk - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        out.push(y[j] + s * (y[j + 1] - y[j]));
+    }
+    out
+}
+
+/// A spectrogram: power spectral density (|X|^2 of Hann-windowed, mean-removed segments) per
+/// segment (column) and frequency bin (row), column-major.
+pub struct Spectrogram {
+    /// Segment centres (s) and bin frequencies (Hz).
+    pub times: Vec<f64>,
+    pub frequencies: Vec<f64>,
+    pub power: Vec<f64>,
+}
+
+/// Spectrogram of a uniformly sampled signal (step `dt`, first sample at `t0`) with segments of
+/// `window` samples (a power of two) advanced by `hop`.
+pub fn spectrogram(y: &[f64], t0: f64, dt: f64, window: usize, hop: usize) -> Spectrogram {
+    assert!(window.is_power_of_two() && hop > 0);
+    let bins = window / 2 + 1;
+    let hann: Vec<f64> = (0..window)
+        .map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / window as f64).cos())
+        .collect();
+    let mut out = Spectrogram {
+        times: Vec::new(),
+        frequencies: (0..bins).map(|k| k as f64 / (window as f64 * dt)).collect(),
+        power: Vec::new(),
+    };
+    let mut start = 0;
+    while start + window <= y.len() {
+        let seg = &y[start..start + window];
+        let mean = seg.iter().sum::<f64>() / window as f64;
+        let mut re: Vec<f64> = seg.iter().zip(&hann).map(|(v, w)| (v - mean) * w).collect();
+        let mut im = vec![0.0; window];
+        fft(&mut re, &mut im);
+        out.power
+            .extend((0..bins).map(|k| re[k] * re[k] + im[k] * im[k]));
+        out.times
+            .push(t0 + (start as f64 + 0.5 * window as f64) * dt);
+        start += hop;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fft_equals_the_direct_transform() {
+        let n = 64;
+        let x: Vec<f64> = (0..n)
+            .map(|i| ((i * i) as f64 * 0.37).sin() + 0.1 * i as f64)
+            .collect();
+        let (mut re, mut im) = (x.clone(), vec![0.0; n]);
+        fft(&mut re, &mut im);
+        for k in 0..n {
+            let (mut a, mut b) = (0.0, 0.0);
+            for (j, v) in x.iter().enumerate() {
+                let phase = -2.0 * PI * (j * k) as f64 / n as f64;
+                a += v * phase.cos();
+                b += v * phase.sin();
+            }
+            assert!(
+                (re[k] - a).abs() < 1e-10 && (im[k] - b).abs() < 1e-10,
+                "bin {k}"
+            );
+        }
+    }
+
+    #[test]
+    fn spectrogram_peak_follows_a_frequency_step_and_resampling_is_exact_on_lines() {
+        // 4 kHz then 10 kHz, sampled at 1 MHz.
+        let dt = 1e-6;
+        let y: Vec<f64> = (0..8192)
+            .map(|i| {
+                let t = i as f64 * dt;
+                let f = if i < 4096 { 4000.0 } else { 10000.0 };
+                (2.0 * PI * f * t).sin()
+            })
+            .collect();
+        let s = spectrogram(&y, 0.0, dt, 1024, 512);
+        let bins = s.frequencies.len();
+        let peak = |col: usize| {
+            let p = &s.power[col * bins..(col + 1) * bins];
+            let k = (0..bins).max_by(|&a, &b| p[a].total_cmp(&p[b])).unwrap();
+            s.frequencies[k]
+        };
+        let df = s.frequencies[1];
+        assert!((peak(0) - 4000.0).abs() <= df, "{}", peak(0));
+        assert!((peak(s.times.len() - 1) - 10000.0).abs() <= df);
+        let t = [0.0, 1.0, 3.0];
+        let r = resample(&t, &[1.0, 2.0, 4.0], 0.5);
+        assert_eq!(r, vec![1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0]);
+    }
+}
