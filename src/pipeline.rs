@@ -1808,8 +1808,8 @@ fn write_transient(
     Ok(())
 }
 
-/// spectrogram.png: the short-time spectrum of the first sensor's displacement component that
-/// moves most (or of the braking torque without sensors), on the nominal step grid.
+/// spectrogram.png: the short-time spectrum (80 dB range) of the sensor displacement component
+/// that moves most (or of the braking torque without sensors), on the nominal step grid.
 fn write_spectrogram(
     tr: &crate::time::transient::Transient,
     torque: &[f64],
@@ -1821,31 +1821,27 @@ fn write_spectrogram(
         let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
         v.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
     };
-    let (signal, what): (Vec<f64>, String) = match tr.sensor_values.first() {
-        Some(values) => {
-            let d = &values[0];
-            let component =
-                |k: usize| -> Vec<f64> { d.iter().skip(k).step_by(3).copied().collect() };
-            let k = (0..3)
-                .max_by(|&a, &b| spread(&component(a)).total_cmp(&spread(&component(b))))
-                .unwrap_or(0);
-            (
-                component(k),
-                format!(
-                    "sensor '{}' displacement {}",
-                    tr.sensor_names[0],
-                    ["x", "y", "z"][k]
-                ),
-            )
+    // The sensor component that moves most, or the torque without sensors.
+    let mut best: Option<(f64, Vec<f64>, String)> = None;
+    for (name, values) in tr.sensor_names.iter().zip(&tr.sensor_values) {
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            let c: Vec<f64> = values[0].iter().skip(k).step_by(3).copied().collect();
+            let sp = spread(&c);
+            if best.as_ref().is_none_or(|b| sp > b.0) {
+                best = Some((sp, c, format!("{name} {axis} displacement")));
+            }
         }
+    }
+    let (signal, what) = match best {
+        Some((_, c, what)) => (c, what),
         None => (torque.to_vec(), "braking torque".into()),
     };
     let uniform = spectrum::resample(&tr.time, &signal, settings.step);
-    let window = (uniform.len() / 8).clamp(64, 2048).next_power_of_two() / 2;
+    let window = (uniform.len() / 4).clamp(64, 4096).next_power_of_two() / 2;
     if uniform.len() < 2 * window || window < 32 {
         return Ok(()); // too short for a spectrogram
     }
-    let s = spectrum::spectrogram(&uniform, tr.time[0], settings.step, window, window / 4);
+    let s = spectrum::spectrogram(&uniform, tr.time[0], settings.step, window, window / 8);
     let rows = s
         .frequencies
         .iter()
@@ -1872,7 +1868,7 @@ fn write_spectrogram(
         500,
         x,
         y,
-        &format!("spectrogram of the {what} (dB, top 80 dB)"),
+        &format!("spectrogram: {what} (dB)"),
         "time (s)",
         "frequency (Hz)",
     );

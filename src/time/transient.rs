@@ -308,6 +308,9 @@ pub fn run<'p>(
                 .truncate(path, checkpoint.state_rows)
                 .map_err(io_error)?;
         }
+        for path in sensor_paths(&out.sensor_names) {
+            stream.truncate(&path, rows).map_err(io_error)?;
+        }
         stream.flush().map_err(io_error)?;
         // The signals so far, for the summary and the plots.
         let read = |p: &str| stream.read(p).map_err(io_error);
@@ -344,6 +347,10 @@ pub fn run<'p>(
                 _ => "N",
             };
             stream.create_series(&path, 1, units).map_err(io_error)?;
+        }
+        for (k, path) in sensor_paths(&out.sensor_names).iter().enumerate() {
+            let units = ["m", "m/s", "m/s^2"][k % 3];
+            stream.create_series(path, 3, units).map_err(io_error)?;
         }
         stream
             .create_series("states/time", 1, "s")

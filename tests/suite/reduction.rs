@@ -21,7 +21,8 @@ fn scene(modes: usize, reduction: bool) -> String {
          [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
          friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
          [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = {modes}\n\
-         [transient]\nstep = 2.0e-6\nsteps = 300\nmode = 2\namplitude = 1.0e-9\n{}",
+         [transient]\nstep = 2.0e-6\nsteps = 300\nmode = 2\namplitude = 1.0e-9\n\
+         [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n{}",
         if reduction { "[reduction]\n" } else { "" }
     )
 }
@@ -30,16 +31,20 @@ fn run(
     petsc: &Petsc,
     text: &str,
     name: &str,
-) -> Result<(squeal::pipeline::RunSummary, Vec<f64>), String> {
+) -> Result<(squeal::pipeline::RunSummary, Vec<f64>, Vec<f64>), String> {
     let scene = squeal::scene::Scene::parse(text, name).map_err(|e| e.to_string())?;
     let out = super::common::suite_dir().join(name);
     let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
         .map_err(|e| e.to_string())?;
-    let torque = hdf5::File::open(out.join("results.h5"))
-        .and_then(|f| f.dataset("transient/braking_torque"))
-        .and_then(|d| d.read_raw::<f64>())
-        .map_err(|e| e.to_string())?;
-    Ok((run, torque))
+    let read = |name: &str| {
+        hdf5::File::open(out.join("results.h5"))
+            .and_then(|f| f.dataset(name))
+            .and_then(|d| d.read_raw::<f64>())
+            .map_err(|e| e.to_string())
+    };
+    let torque = read("transient/braking_torque")?;
+    let velocity = read("transient/sensors/pad/velocity")?;
+    Ok((run, torque, velocity))
 }
 
 /// Rayleigh-Ritz with an exact subspace: every full real mode in the basis is a mode of the
@@ -52,15 +57,26 @@ fn run(
 /// ranks; asserted: falling, and below 5e-2 with 120 modes. The kept zone is 3,300 of 5,754
 /// DOF on this small brake (its linings and disc layer are a large share of it).
 fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
-    let (full, reference) = run(petsc, &scene(60, false), "reduction-full")?;
+    let (full, reference, reference_velocity) = run(petsc, &scene(60, false), "reduction-full")?;
+    let largest_velocity = reference_velocity
+        .iter()
+        .map(|v| v.abs())
+        .fold(0.0, f64::max);
     let fluctuation = reference
         .iter()
         .map(|t| (t - reference[0]).abs())
         .fold(0.0, f64::max);
     let mut errors = Vec::new();
+    let mut velocity_errors = Vec::new();
     for modes in [60, 120] {
         let name = format!("reduction-{modes}");
-        let (reduced, torque) = run(petsc, &scene(modes, true), &name)?;
+        let (reduced, torque, velocity) = run(petsc, &scene(modes, true), &name)?;
+        let velocity_error = velocity
+            .iter()
+            .zip(&reference_velocity)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+            / largest_velocity;
         let r = reduced.reduction.as_ref().ok_or("no reduction summary")?;
         let error = torque
             .iter()
@@ -71,7 +87,7 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
         say(
             petsc,
             &format!(
-                "{} -> {} DOF ({} kept + {} modal); real modes vs full: {:.1e} over {}; static state {:.1e}; B^T M B = I to {:.1e}; torque fluctuation {fluctuation:.2e} N m, reduced vs full {error:.2e} of it",
+                "{} -> {} DOF ({} kept + {} modal); real modes vs full: {:.1e} over {}; static state {:.1e}; B^T M B = I to {:.1e}; torque fluctuation {fluctuation:.2e} N m, reduced vs full {error:.2e} of it; pad sensor velocity (largest {largest_velocity:.2e} m/s) {velocity_error:.2e} of it",
                 r.full_dofs,
                 r.kept + r.modal,
                 r.kept,
@@ -103,6 +119,12 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
             ));
         }
         errors.push(error);
+        velocity_errors.push(velocity_error);
+    }
+    if !(velocity_errors[1] < velocity_errors[0] && velocity_errors[1] < 0.1) {
+        return Err(format!(
+            "reduced vs full pad velocity error {velocity_errors:?}: expected to fall below 0.1 with 120 modes"
+        ));
     }
     if !(errors[1] < errors[0] && errors[1] < 5e-2) {
         return Err(format!(

@@ -596,7 +596,8 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
              friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
              [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 40\n[reduction]\n\
              [transient]\nstep = 2.0e-6\nsteps = {steps}\nmode = 2\namplitude = 1.0e-8\n\
-             state_interval = 2.0e-5\ncheckpoint_every = 50\n"
+             state_interval = 2.0e-5\ncheckpoint_every = 50\n\
+             [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
         )
     };
     let go = |text: &str, dir: &str, restart: bool| -> Result<std::path::PathBuf, String> {
@@ -630,6 +631,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         "time",
         "braking_torque",
         "iterations",
+        "sensors/pad/velocity",
         "states/time",
         "states/displacement",
     ] {
