@@ -262,7 +262,7 @@ fn print_summary(s: &RunSummary) {
     }
     if let Some(t) = &s.transient {
         println!(
-            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s)",
+            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2})",
             t.steps,
             t.simulated,
             t.mean_iterations,
@@ -272,7 +272,10 @@ fn print_summary(s: &RunSummary) {
             t.refreshes,
             t.factorizations,
             t.factor_entries,
-            t.seconds_factorizing
+            t.seconds_factorizing,
+            1e3 * t.seconds_per_iteration,
+            1e3 * t.seconds_per_solve,
+            t.seconds_per_iteration / t.seconds_per_solve.max(1e-300)
         );
     }
     if let Some(sw) = &s.sweep {

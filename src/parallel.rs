@@ -31,6 +31,14 @@ pub fn sum_in_place(comm: &SimpleCommunicator, values: &mut [f64]) {
     comm.all_reduce_into(&local[..], values, SystemOperation::sum());
 }
 
+/// Element-wise maximum over ranks, in place.
+///
+/// # Collective
+pub fn max_in_place(comm: &SimpleCommunicator, values: &mut [f64]) {
+    let local = values.to_vec();
+    comm.all_reduce_into(&local[..], values, SystemOperation::max());
+}
+
 /// Maximum over ranks.
 ///
 /// # Collective

@@ -284,6 +284,9 @@ pub struct TransientSummary {
     pub cuts: usize,
     pub refreshes: usize,
     pub factorizations: usize,
+    /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
+    pub seconds_per_iteration: f64,
+    pub seconds_per_solve: f64,
 }
 
 /// A parameter sweep, for the summary.
@@ -898,6 +901,8 @@ pub fn run_with(
                 cuts: t.cuts,
                 refreshes: t.refreshes,
                 factorizations: t.factorizations,
+                seconds_per_iteration: t.seconds_stepping / t.iterations_run.max(1) as f64,
+                seconds_per_solve: t.seconds_solving / t.iterations_run.max(1) as f64,
             }
         }),
         reduction: reduction_summary,
@@ -1771,6 +1776,9 @@ fn write_transient(
     file.set_number(g, "factorizations", tr.factorizations as f64)?;
     file.set_number(g, "factor_entries", tr.factor_entries)?;
     file.set_number(g, "states_written", tr.states as f64)?;
+    file.set_number(g, "seconds_stepping", tr.seconds_stepping)?;
+    file.set_number(g, "seconds_in_solves", tr.seconds_solving)?;
+    file.set_number(g, "iterations_run", tr.iterations_run as f64)?;
     if let Some(t) = tr.resumed_at {
         file.set_number(g, "restarted_at_s", t)?;
     }

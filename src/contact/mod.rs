@@ -721,17 +721,40 @@ impl<'p> ContactModel<'p> {
                 Status::Slip => s.slip += 1,
             }
         }
+        // Two reductions for all interfaces (sums, and maxima with min_gap negated): this runs
+        // at every time step.
         let world = petsc.world();
-        for s in &mut out {
-            s.normal_force = crate::parallel::sum(world, s.normal_force);
-            s.friction_force = crate::parallel::sum(world, s.friction_force);
-            s.torque = crate::parallel::sum(world, s.torque);
-            s.coulomb_torque = crate::parallel::sum(world, s.coulomb_torque);
-            s.max_pressure = crate::parallel::max(world, s.max_pressure);
-            s.min_gap = -crate::parallel::max(world, -s.min_gap);
-            s.open = crate::parallel::sum(world, s.open as f64) as usize;
-            s.stick = crate::parallel::sum(world, s.stick as f64) as usize;
-            s.slip = crate::parallel::sum(world, s.slip as f64) as usize;
+        let mut sums: Vec<f64> = out
+            .iter()
+            .flat_map(|s| {
+                [
+                    s.normal_force,
+                    s.friction_force,
+                    s.torque,
+                    s.coulomb_torque,
+                    s.open as f64,
+                    s.stick as f64,
+                    s.slip as f64,
+                ]
+            })
+            .collect();
+        let mut maxima: Vec<f64> = out
+            .iter()
+            .flat_map(|s| [s.max_pressure, -s.min_gap])
+            .collect();
+        crate::parallel::sum_in_place(world, &mut sums);
+        crate::parallel::max_in_place(world, &mut maxima);
+        for (i, s) in out.iter_mut().enumerate() {
+            let v = &sums[7 * i..7 * i + 7];
+            s.normal_force = v[0];
+            s.friction_force = v[1];
+            s.torque = v[2];
+            s.coulomb_torque = v[3];
+            s.open = v[4] as usize;
+            s.stick = v[5] as usize;
+            s.slip = v[6] as usize;
+            s.max_pressure = maxima[2 * i];
+            s.min_gap = -maxima[2 * i + 1];
         }
         out
     }

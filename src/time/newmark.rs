@@ -46,6 +46,8 @@ pub struct StepReport {
     /// Final residual and the reference it was compared with.
     pub residual: f64,
     pub reference: f64,
+    /// Time inside the factor's solves (the rest of an iteration: forces and products).
+    pub solve_seconds: f64,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -179,6 +181,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
         self.q1.axpy(h, &state.v)?;
         self.q1.axpy(0.5 * h * h, &state.a)?;
         let mut iterations = 0;
+        let mut solve_seconds = 0.0;
         loop {
             self.kinematics(state)?;
             let (r, reference) = self.residual(t1, forces)?;
@@ -187,6 +190,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 iterations,
                 residual: r,
                 reference,
+                solve_seconds,
             };
             if r <= target {
                 self.accept(state, t1)?;
@@ -201,7 +205,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     target,
                 });
             }
+            let t = std::time::Instant::now();
             self.jacobian.solve(&self.r, &self.dq)?;
+            solve_seconds += t.elapsed().as_secs_f64();
             self.q1.axpy(-1.0, &self.dq)?;
             iterations += 1;
             // Converged in q1 (the residual's round-off floor reached): accept.
@@ -215,6 +221,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 self.accept(state, t1)?;
                 return Ok(StepReport {
                     iterations,
+                    solve_seconds,
                     ..report
                 });
             }

@@ -170,6 +170,10 @@ pub struct Transient {
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
     pub seconds_stepping: f64,
+    /// Time in the factor's solves, steps and iterations (solves), over this process's steps.
+    pub seconds_solving: f64,
+    pub steps_run: usize,
+    pub iterations_run: usize,
 }
 
 /// Everything the stage needs.
@@ -258,6 +262,9 @@ pub fn run<'p>(
         factor_entries: 0.0,
         seconds_factorizing,
         seconds_stepping: 0.0,
+        seconds_solving: 0.0,
+        steps_run: 0,
+        iterations_run: 0,
         states: 0,
         resumed_at: None,
         sensor_names: input.sensors.map(|s| s.names.clone()).unwrap_or_default(),
@@ -480,6 +487,9 @@ pub fn run<'p>(
     let mut on_step =
         |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<(), TimeError> {
             let h = settings.step / f64::from(1u32 << c.level);
+            out.seconds_solving += report.solve_seconds;
+            out.steps_run += 1;
+            out.iterations_run += report.iterations;
             record(&mut out, s, h, report.iterations)?;
             if interval > 0.0 && s.time >= next_sample(out.states) - 1e-3 * h {
                 write_state(s)?;

@@ -1,0 +1,233 @@
+//! Transient benchmark, speed against error (run under mpirun by scripts/bench):
+//!
+//! 1. Memory bandwidth: a STREAM-like triad on every rank at once (the bound of a solve with
+//!    a factor that does not fit in cache: its bytes are read twice, forward and backward).
+//! 2. The reduced brake: the superelement reduction of a brake of `--dofs` with `--modes` real
+//!    modes, then `--steps` steps of the nonlinear transient from the kicked static state:
+//!    reduction time, reduced size, factor size, seconds per step, iterations per step, one
+//!    fixed-Jacobian iteration against one solve with the same factor, the solve against its
+//!    bandwidth bound, and 150,000 steps extrapolated from the measured rate.
+//! 3. Step size against error: the reduced brake of `--study-dofs` over `--study-time` with
+//!    steps `--study-steps` (µs) against a reference at a quarter of the smallest step: error
+//!    of a sensor's velocity (max over common sample times, relative to its largest value)
+//!    and of the braking torque fluctuation, with the cost of each run.
+//!
+//!   mpirun -n 2 target/release/deps/transient-* --dofs 600000 --modes 200 --steps 500
+
+use std::time::Instant;
+
+use clap::Parser;
+use squeal::la::Petsc;
+use squeal::pipeline::{run_with, RunOptions, RunSummary};
+use squeal::scene::Scene;
+
+#[derive(Parser)]
+struct Args {
+    /// Target size of the reduced brake (DOF); 0 skips part 2.
+    #[arg(long, default_value_t = 600_000)]
+    dofs: usize,
+    #[arg(long, default_value_t = 200)]
+    modes: usize,
+    #[arg(long, default_value_t = 500)]
+    steps: usize,
+    /// Target size of the step-size study (DOF); 0 skips part 3.
+    #[arg(long, default_value_t = 12_000)]
+    study_dofs: usize,
+    /// Simulated time of the study (s) and its step sizes (µs).
+    #[arg(long, default_value_t = 1e-3)]
+    study_time: f64,
+    #[arg(long, value_delimiter = ',', default_value = "4,2,1,0.5")]
+    study_steps: Vec<f64>,
+    /// Doubles per triad array and rank.
+    #[arg(long, default_value_t = 1 << 24)]
+    stream_len: usize,
+    /// cargo bench passes --bench; ignored.
+    #[arg(long, hide = true)]
+    bench: bool,
+}
+
+fn scene(dofs: usize, modes: usize, step: f64, steps: usize, amplitude: f64) -> String {
+    format!(
+        "[model]\nsource = \"brake\"\ntarget_dofs = {dofs}\npressure_bar = 20.0\n\
+         [contact]\ndisc_speed = 6.2832\n\
+         [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
+         friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
+         [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = {modes}\n\
+         [reduction]\n\
+         [transient]\nstep = {step:e}\nsteps = {steps}\nmode = 2\namplitude = {amplitude:e}\n\
+         state_interval = 0.0\ncheckpoint_every = 0\n\
+         [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
+    )
+}
+
+fn run(petsc: &Petsc, text: &str, dir: &str) -> RunSummary {
+    let scene = Scene::parse(text, dir).expect("bench scene parses");
+    let out = std::path::Path::new("target/bench").join(dir);
+    run_with(
+        petsc,
+        &scene,
+        text,
+        std::path::Path::new("."),
+        &out,
+        &[],
+        &RunOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{dir}: {e}"))
+}
+
+fn read(dir: &str, name: &str) -> Vec<f64> {
+    let path = std::path::Path::new("target/bench")
+        .join(dir)
+        .join("results.h5");
+    hdf5::File::open(&path)
+        .and_then(|f| f.dataset(name))
+        .and_then(|d| d.read_raw::<f64>())
+        .unwrap_or_else(|e| panic!("{}: {name}: {e}", path.display()))
+}
+
+/// Triad a = b + s c on every rank at once; returns the total bandwidth (bytes/s), best of 5.
+fn stream_bandwidth(petsc: &Petsc, n: usize) -> f64 {
+    let b = vec![1.0f64; n];
+    let c = vec![2.0f64; n];
+    let mut a = vec![0.0f64; n];
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        squeal::parallel::barrier(petsc.world());
+        let t = Instant::now();
+        for ((x, y), z) in a.iter_mut().zip(&b).zip(&c) {
+            *x = y + 3.0 * z;
+        }
+        std::hint::black_box(&mut a);
+        let slowest = squeal::parallel::max(petsc.world(), t.elapsed().as_secs_f64());
+        best = best.min(slowest);
+    }
+    // Three arrays move per element (two reads, one write), on every rank.
+    3.0 * 8.0 * n as f64 * petsc.size() as f64 / best
+}
+
+fn main() {
+    let args = Args::parse();
+    let universe = mpi::initialize().expect("MPI initializes");
+    squeal::la::install_panic_hook();
+    let petsc = Petsc::initialize(&universe, &[]).expect("PETSc initializes");
+    let say = |s: &str| {
+        if petsc.rank() == 0 {
+            println!("{s}");
+        }
+    };
+    let bandwidth = stream_bandwidth(&petsc, args.stream_len);
+    say(&format!(
+        "memory bandwidth (triad, {} ranks at once): {:.2} GB/s",
+        petsc.size(),
+        bandwidth / 1e9
+    ));
+
+    if args.dofs > 0 {
+        let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9);
+        let s = run(&petsc, &text, &format!("transient-{}", args.dofs));
+        let r = s.reduction.as_ref().expect("reduction ran");
+        let t = s.transient.as_ref().expect("transient ran");
+        let stage = |name: &str| {
+            s.timings
+                .stages
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(0.0, |(_, v)| *v)
+        };
+        say(&format!(
+            "brake {} DOF: static preload {:.1} s, {} real modes {:.1} s, reduction {:.1} s (basis work {:.1} s + reduced-mode check)",
+            r.full_dofs,
+            stage("static preload"),
+            args.modes,
+            stage("real modes"),
+            stage("reduction"),
+            r.seconds
+        ));
+        say(&format!(
+            "reduced model: {} DOF = {} kept + {} modal; reduced real modes vs full {:.1e}",
+            r.kept + r.modal,
+            r.kept,
+            r.modal,
+            r.mode_error
+        ));
+        let factor_bytes = 8.0 * t.factor_entries;
+        let bound = 2.0 * factor_bytes / bandwidth;
+        say(&format!(
+            "transient: {} steps of 2 us, {:.2} iterations/step, {:.2} ms/step; factor {:.3e} entries ({:.0} MB), factorized in {:.2} s",
+            t.steps,
+            t.mean_iterations,
+            1e3 * t.seconds_per_step,
+            t.factor_entries,
+            factor_bytes / 1e6,
+            t.seconds_factorizing
+        ));
+        say(&format!(
+            "one iteration {:.2} ms vs one MUMPS solve on the same factor {:.2} ms: ratio {:.2} (target <= 1.3); solve vs bandwidth bound (2 x factor bytes / {:.1} GB/s = {:.2} ms): {:.1}x",
+            1e3 * t.seconds_per_iteration,
+            1e3 * t.seconds_per_solve,
+            t.seconds_per_iteration / t.seconds_per_solve,
+            bandwidth / 1e9,
+            1e3 * bound,
+            t.seconds_per_solve / bound
+        ));
+        say(&format!(
+            "150,000 steps at this rate (measured on {} steps, extrapolated): {:.1} min (target < 30 min; the paper: 12 h)",
+            t.steps,
+            150_000.0 * t.seconds_per_step / 60.0
+        ));
+    }
+
+    if args.study_dofs > 0 {
+        let mut steps = args.study_steps.clone();
+        steps.sort_by(|a, b| b.total_cmp(a));
+        let reference = steps.last().copied().unwrap_or(1.0) / 4.0;
+        let study = |h_us: f64| -> (String, f64, RunSummary) {
+            let h = h_us * 1e-6;
+            let n = (args.study_time / h).round() as usize;
+            let dir = format!("study-{h_us}us");
+            let t = Instant::now();
+            let s = run(&petsc, &scene(args.study_dofs, 60, h, n, 1e-7), &dir);
+            (dir, t.elapsed().as_secs_f64(), s)
+        };
+        let (ref_dir, ref_seconds, _) = study(reference);
+        let rt = read(&ref_dir, "transient/time");
+        let rv = read(&ref_dir, "transient/sensors/pad/velocity");
+        let rq = read(&ref_dir, "transient/braking_torque");
+        let vmax = rv.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let qmax = rq.iter().map(|q| (q - rq[0]).abs()).fold(0.0, f64::max);
+        say(&format!(
+            "step size vs error: reduced {}-DOF brake over {} s, kick 1e-7 m on mode 2; reference h = {reference} us ({ref_seconds:.1} s); pad velocity up to {vmax:.2e} m/s, torque fluctuation up to {qmax:.2e} N m",
+            args.study_dofs, args.study_time
+        ));
+        say("    h (us)   steps   iterations/step   velocity error   torque error   run (s)   transient (s)");
+        for h_us in steps {
+            let (dir, seconds, s) = study(h_us);
+            let t = read(&dir, "transient/time");
+            let v = read(&dir, "transient/sensors/pad/velocity");
+            let q = read(&dir, "transient/braking_torque");
+            // Common times: every sample of this run (the reference's step divides it).
+            let ratio = (h_us / reference).round() as usize;
+            let (mut ev, mut eq) = (0.0f64, 0.0f64);
+            for (k, _) in t.iter().enumerate() {
+                let j = k * ratio;
+                if j >= rt.len() {
+                    break;
+                }
+                for c in 0..3 {
+                    ev = ev.max((v[3 * k + c] - rv[3 * j + c]).abs());
+                }
+                eq = eq.max((q[k] - rq[j]).abs());
+            }
+            let tr = s.transient.as_ref().expect("transient ran");
+            say(&format!(
+                "{h_us:>10} {:>7} {:>17.2} {:>16.2e} {:>14.2e} {:>9.1} {:>15.1}",
+                tr.steps,
+                tr.mean_iterations,
+                ev / vmax,
+                eq / qmax.max(f64::MIN_POSITIVE),
+                seconds,
+                tr.seconds_per_step * tr.steps as f64
+            ));
+        }
+    }
+}
