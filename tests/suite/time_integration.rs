@@ -584,9 +584,11 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
 /// rank everything is deterministic and the signals and states are equal bit for bit. On 2
 /// ranks MUMPS's parallel factorization is not bitwise reproducible from run to run (measured
 /// with a plain PETSc program: the same LU solve gives different last bits in some runs), and
-/// the restart recomputes the real modes, which then differ at their solver tolerance (1e-10):
-/// the two runs agree to that level (measured: torque 1.6e-5 of its tiny fluctuation = 3e-11
-/// of the torque, states 6e-11 of the largest; asserted 1e-9).
+/// the restart recomputes the real modes, which then differ at their solver tolerance (1e-10
+/// on the residual; the shapes to that over the relative gap of close modes): the two runs
+/// agree to that level (measured: torque 9e-12 of its value, states 1.4e-11 of the largest
+/// (static) value, asserted 1e-9; the pad velocity, which has no static part, 2.2e-7 of its
+/// largest value, asserted 1e-5).
 fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
     let scene = |steps: usize| {
         format!(
@@ -626,7 +628,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
             .map_err(|e| format!("{name}: {e}"))
     };
     let mut report = Vec::new();
-    let mut worst = 0.0f64;
+    let mut failures = Vec::new();
     for name in [
         "time",
         "braking_torque",
@@ -669,14 +671,22 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
                 "1 rank: {name} differs by {diff:e} after the restart"
             ));
         }
-        worst = worst.max(diff);
+        // A velocity is pure vibration: it carries the shapes' tolerance undiluted.
+        let bound = if name.contains("velocity") {
+            1e-5
+        } else {
+            1e-9
+        };
+        if diff > bound {
+            failures.push(format!("{name} differs by {diff:e} (bound {bound:e})"));
+        }
     }
     say(
         petsc,
         &format!("restart at step 80 of 120: {}", report.join("; ")),
     );
-    if worst > 1e-9 {
-        return Err(format!("the resumed run differs by {worst:e}"));
+    if !failures.is_empty() {
+        return Err(format!("the resumed run: {}", failures.join("; ")));
     }
     Ok(())
 }
