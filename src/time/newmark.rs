@@ -174,6 +174,19 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state: &mut State<'p>,
         forces: &mut Forces<'_, 'p>,
     ) -> Result<StepReport, TimeError> {
+        self.step_with(state, forces, None)
+    }
+
+    /// [`Newmark::step`], or with `retangent` a full Newton: J rebuilt and factorized at every
+    /// iterate (for checking the fixed-Jacobian iterations, and for problems they cannot do).
+    ///
+    /// # Collective
+    pub fn step_with(
+        &mut self,
+        state: &mut State<'p>,
+        forces: &mut Forces<'_, 'p>,
+        mut retangent: Option<&mut Factorize<'_, 'p>>,
+    ) -> Result<StepReport, TimeError> {
         let h = self.settings.step;
         let t1 = state.time + h;
         // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
@@ -205,8 +218,24 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     target,
                 });
             }
+            let fresh = match retangent.as_mut() {
+                Some(build) => {
+                    let iterate = State {
+                        time: t1,
+                        step: state.step + 1,
+                        q: self.q1.try_clone()?,
+                        v: self.v1.try_clone()?,
+                        a: self.a1.try_clone()?,
+                    };
+                    Some(build(&self.settings, Some(&iterate))?)
+                }
+                None => None,
+            };
             let t = std::time::Instant::now();
-            self.jacobian.solve(&self.r, &self.dq)?;
+            fresh
+                .as_ref()
+                .unwrap_or(self.jacobian)
+                .solve(&self.r, &self.dq)?;
             solve_seconds += t.elapsed().as_secs_f64();
             self.q1.axpy(-1.0, &self.dq)?;
             iterations += 1;
@@ -311,6 +340,18 @@ pub struct StepControl {
     pub fresh: bool,
 }
 
+/// How an adaptive run reacts to failed steps.
+#[derive(Debug, Clone, Copy)]
+pub struct Adaptivity {
+    /// Step halvings at most, and good steps before the step is doubled back.
+    pub max_cuts: usize,
+    pub restore_after: usize,
+    /// Rebuild J with the current state's tangent before cutting.
+    pub refresh: bool,
+    /// A full Newton (J at every iterate) instead of the fixed Jacobian.
+    pub full_newton: bool,
+}
+
 /// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
 /// the tangent of that state.
 pub type Factorize<'f, 'p> =
@@ -336,11 +377,17 @@ pub fn integrate_adaptive<'p>(
     state: &mut State<'p>,
     forces: &mut Forces<'_, 'p>,
     end_time: f64,
-    (max_cuts, restore_after, refresh): (usize, usize, bool),
+    adaptivity: Adaptivity,
     control: &mut StepControl,
     on_step: &mut dyn FnMut(&State<'p>, &StepReport, &StepControl) -> Result<(), TimeError>,
     log: &mut dyn FnMut(&str),
 ) -> Result<(), TimeError> {
+    let Adaptivity {
+        max_cuts,
+        restore_after,
+        refresh,
+        full_newton,
+    } = adaptivity;
     let nominal = settings.step;
     let step_of = |level: u32| nominal / f64::from(1u32 << level);
     while state.time < end_time - 0.25 * step_of(control.level) {
@@ -355,7 +402,12 @@ pub fn integrate_adaptive<'p>(
             if state.time >= end_time - 0.25 * step_settings.step {
                 break;
             }
-            match integrator.step(state, forces) {
+            let step = if full_newton {
+                integrator.step_with(state, forces, Some(&mut *factorize))
+            } else {
+                integrator.step(state, forces)
+            };
+            match step {
                 Ok(report) => {
                     control.steps += 1;
                     control.fresh = false;

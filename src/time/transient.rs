@@ -9,7 +9,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::newmark::{
-    initial_acceleration, integrate_adaptive, jacobian, Forces, NewmarkSettings, State,
+    initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Forces, NewmarkSettings, State,
     StepControl, StepReport, TimeError,
 };
 use crate::contact::kernel::Part;
@@ -44,6 +44,10 @@ pub struct TransientSettings {
     /// (normal and stick stiffness, friction damping of nearly sticking points).
     #[serde(default = "default_refresh")]
     pub refresh: bool,
+    /// `"modified"` (default): the fixed Jacobian; `"full"`: J rebuilt with the contact tangent
+    /// at every iterate (the reference the fixed-Jacobian iterations are checked against).
+    #[serde(default)]
+    pub newton: Newton,
     /// Displacement and velocity states go to transient.h5 every this much simulated time
     /// (s; 0: none). Default 1e-5 s (100 kHz).
     #[serde(default = "default_state_interval")]
@@ -78,6 +82,15 @@ fn default_state_interval() -> f64 {
 }
 fn default_checkpoint_every() -> usize {
     10_000
+}
+
+/// The Newton variant of the transient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Newton {
+    #[default]
+    Modified,
+    Full,
 }
 
 fn default_refresh() -> bool {
@@ -434,6 +447,8 @@ pub fn run<'p>(
     let t = Instant::now();
     let end_time = settings.steps as f64 * settings.step;
     let mut factor_entries = 0.0;
+    // Every factorization (adaptive ones, and one per iterate with a full Newton).
+    let mut built = 0usize;
     let mut seconds_factorizing = seconds_factorizing;
     // J with the contact tangent of a state: K_c + K_stick + K_f (friction: unsymmetric, LU)
     // and the friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
@@ -479,6 +494,7 @@ pub fn run<'p>(
             };
             let factor = DirectSolver::factorize(petsc, &j, kind, "time_")?;
             factor_entries = factor.report().factor_entries;
+            built += 1;
             seconds_factorizing += t.elapsed().as_secs_f64();
             Ok(factor)
         };
@@ -540,7 +556,12 @@ pub fn run<'p>(
         &mut state,
         forces,
         end_time,
-        (settings.max_cuts, 100, settings.refresh),
+        Adaptivity {
+            max_cuts: settings.max_cuts,
+            restore_after: 100,
+            refresh: settings.refresh,
+            full_newton: settings.newton == Newton::Full,
+        },
         &mut control,
         &mut on_step,
         &mut log,
@@ -561,7 +582,7 @@ pub fn run<'p>(
     out.seconds_factorizing = seconds_factorizing;
     out.cuts = control.cuts;
     out.refreshes = control.refreshes;
-    out.factorizations = control.factorizations;
+    out.factorizations = control.factorizations.max(built);
     match result {
         Ok(()) => Ok((out, None)),
         Err(e) => Ok((out, Some(e))),
