@@ -806,9 +806,8 @@ pub fn run_with(
     }
 
     let start = Instant::now();
-    if let (Some(tr), Some((contact, _))) = (&transient, &preload) {
-        let settings = scene.transient.as_ref().expect("a transient ran");
-        write_transient(petsc, &file, tr, contact, settings, output)?;
+    if let (Some(tr), Some(settings)) = (&transient, &scene.transient) {
+        write_transient(petsc, &file, tr, settings, output)?;
     }
 
     if let (Some(mesh), 0) = (mesh, petsc.rank()) {
@@ -1758,7 +1757,6 @@ fn write_transient(
     petsc: &Petsc,
     file: &ResultsFile,
     tr: &crate::time::transient::Transient,
-    contact: &crate::contact::ContactModel,
     settings: &crate::time::transient::TransientSettings,
     output: &Path,
 ) -> Result<(), RunError> {
@@ -1782,7 +1780,6 @@ fn write_transient(
     if let Some(t) = tr.resumed_at {
         file.set_number(g, "restarted_at_s", t)?;
     }
-    let _ = contact;
     let torque: Vec<f64> = (0..tr.time.len())
         .map(|k| tr.torque.iter().map(|t| t[k]).sum())
         .collect();
