@@ -23,6 +23,39 @@ pub enum ResultsError {
     La(#[from] LaError),
 }
 
+/// The group at `path` (slash-separated, from the root), created with its parents if missing.
+pub(crate) fn group_at(file: &hdf5::File, path: &str) -> Result<hdf5::Group, hdf5::Error> {
+    let mut g = file.group("/")?;
+    for part in path.split('/').filter(|p| !p.is_empty()) {
+        g = match g.group(part) {
+            Ok(x) => x,
+            Err(_) => g.create_group(part)?,
+        };
+    }
+    Ok(g)
+}
+
+/// Opens (or creates) an HDF5 file for parallel access by every rank of `comm`.
+///
+/// # Collective
+pub(crate) fn open_parallel(
+    comm: &SimpleCommunicator,
+    path: &Path,
+    create: bool,
+) -> Result<hdf5::File, ResultsError> {
+    let mut builder = hdf5::File::with_options();
+    builder.with_fapl(|fapl| fapl.mpio(comm.as_raw(), None));
+    if create {
+        builder.create(path)
+    } else {
+        builder.open_rw(path)
+    }
+    .map_err(|source| ResultsError::Hdf5 {
+        path: path.to_string_lossy().to_string(),
+        source,
+    })
+}
+
 pub struct ResultsFile {
     file: hdf5::File,
     path: String,
@@ -34,17 +67,10 @@ impl ResultsFile {
     ///
     /// # Collective
     pub fn create(comm: &SimpleCommunicator, path: &Path) -> Result<Self, ResultsError> {
-        let p = path.to_string_lossy().to_string();
-        let file = hdf5::File::with_options()
-            .with_fapl(|fapl| fapl.mpio(comm.as_raw(), None))
-            .create(path)
-            .map_err(|source| ResultsError::Hdf5 {
-                path: p.clone(),
-                source,
-            })?;
+        let file = open_parallel(comm, path, true)?;
         Ok(ResultsFile {
             file,
-            path: p,
+            path: path.to_string_lossy().to_string(),
             rank: comm.rank(),
         })
     }
@@ -57,14 +83,7 @@ impl ResultsFile {
     }
 
     fn group(&self, path: &str) -> Result<hdf5::Group, ResultsError> {
-        let mut g = self.file.group("/").map_err(self.err())?;
-        for part in path.split('/').filter(|p| !p.is_empty()) {
-            g = match g.group(part) {
-                Ok(x) => x,
-                Err(_) => g.create_group(part).map_err(self.err())?,
-            };
-        }
-        Ok(g)
+        group_at(&self.file, path).map_err(self.err())
     }
 
     /// Pushes what was written to the file, so a crash in a later stage keeps it.

@@ -6,7 +6,6 @@
 use std::path::Path;
 
 use hdf5::types::VarLenUnicode;
-use mpi::raw::AsRaw;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 use ndarray::{s, Array1, Array2};
@@ -39,21 +38,10 @@ impl SeriesFile {
         path: &Path,
         create: bool,
     ) -> Result<Self, ResultsError> {
-        let p = path.to_string_lossy().to_string();
-        let mut builder = hdf5::File::with_options();
-        builder.with_fapl(|fapl| fapl.mpio(comm.as_raw(), None));
-        let file = if create {
-            builder.create(path)
-        } else {
-            builder.open_rw(path)
-        }
-        .map_err(|source| ResultsError::Hdf5 {
-            path: p.clone(),
-            source,
-        })?;
+        let file = super::results::open_parallel(comm, path, create)?;
         Ok(SeriesFile {
             file,
-            path: p,
+            path: path.to_string_lossy().to_string(),
             rank: comm.rank(),
         })
     }
@@ -66,14 +54,7 @@ impl SeriesFile {
     }
 
     fn group(&self, path: &str) -> Result<hdf5::Group, ResultsError> {
-        let mut g = self.file.group("/").map_err(self.err())?;
-        for part in path.split('/').filter(|p| !p.is_empty()) {
-            g = match g.group(part) {
-                Ok(x) => x,
-                Err(_) => g.create_group(part).map_err(self.err())?,
-            };
-        }
-        Ok(g)
+        super::results::group_at(&self.file, path).map_err(self.err())
     }
 
     /// Creates an empty series of rows of `columns` values (1: a 1D signal).
