@@ -772,15 +772,14 @@ pub fn run_with(
                 shape,
             ),
         };
+        // Rayleigh damping on the integrated operators (never assembled).
         let c = if damping.rayleigh_alpha != 0.0 || damping.rayleigh_beta != 0.0 {
-            let mut c = k0_t.try_clone()?;
-            c.scale(damping.rayleigh_beta)?;
-            if damping.rayleigh_alpha != 0.0 {
-                c.axpy(damping.rayleigh_alpha, m_t)?;
+            crate::time::newmark::Damping::Rayleigh {
+                alpha: damping.rayleigh_alpha,
+                beta: damping.rayleigh_beta,
             }
-            Some(c)
         } else {
-            None
+            crate::time::newmark::Damping::None
         };
         let (signals, failure) = timings.time("transient", || {
             crate::time::transient::run(
@@ -789,7 +788,7 @@ pub fn run_with(
                 crate::time::transient::TransientInputs {
                     k0: k0_t,
                     m: m_t,
-                    c: c.as_ref(),
+                    c,
                     contact: contact_t,
                     f_ext: f_t,
                     q_static: q_t,

@@ -240,6 +240,48 @@ pub struct ContactModel<'p> {
     pub pairing_seconds: f64,
 }
 
+/// A contact tangent sum_points sum_terms coef c_a c_b^T applied as C_a^T diag(coef) C_b x
+/// (see [`ContactModel::tangent_operator`]).
+pub struct TangentOperator<'c, 'p> {
+    contact: &'c ContactModel<'p>,
+    /// (a, b, coefficient per local point), sorted by a then b, the same pairs on every rank.
+    blocks: Vec<(Channel, Channel, Vec<f64>)>,
+    /// C_b x per channel, and the weighted point vector of one channel a.
+    work: [Vector<'p>; 4],
+    weighted: Vector<'p>,
+}
+
+impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
+    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<(), LaError> {
+        for b in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
+            if self.blocks.iter().any(|t| t.1 == b) {
+                self.contact
+                    .observation(b)
+                    .mult(x, &self.work[b as usize])?;
+            }
+        }
+        for a in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
+            if !self.blocks.iter().any(|t| t.0 == a) {
+                continue;
+            }
+            {
+                let mut w = self.weighted.local_mut()?;
+                w.iter_mut().for_each(|x| *x = 0.0);
+                for (_, b, coef) in self.blocks.iter().filter(|t| t.0 == a) {
+                    let observed = self.work[*b as usize].local()?;
+                    for ((w, c), o) in w.iter_mut().zip(coef).zip(observed.iter()) {
+                        *w += c * o;
+                    }
+                }
+            }
+            self.contact
+                .observation(a)
+                .mult_transpose_add(&self.weighted, y, y)?;
+        }
+        Ok(())
+    }
+}
+
 /// The contact response of this rank's points at one state.
 #[derive(Debug, Clone)]
 pub struct ContactState {
@@ -565,6 +607,74 @@ impl<'p> ContactModel<'p> {
                     .collect()
             })
             .collect()
+    }
+
+    /// The chosen tangent parts at `state` as an operator applied through the observation
+    /// rows, without assembling it: each `(parts, scale)` adds `scale` times those parts.
+    /// Applying it costs four observation products and three transposed ones; an assembled
+    /// contact tangent has |point DOFs|^2 entries per point.
+    ///
+    /// # Collective
+    pub fn tangent_operator<'c>(
+        &'c self,
+        petsc: &Petsc,
+        state: &ContactState,
+        parts: &[(&[Part], f64)],
+    ) -> Result<TangentOperator<'c, 'p>, LaError> {
+        let n = self.local.len();
+        // One coefficient column per (a, b) channel pair that occurs on any rank.
+        let mut blocks: Vec<(Channel, Channel, Vec<f64>)> = Vec::new();
+        for &(part_list, scale) in parts {
+            for (k, terms) in self.tangent_terms(state, part_list).into_iter().enumerate() {
+                for (coef, a, b) in terms {
+                    let i = match blocks.iter().position(|x| x.0 == a && x.1 == b) {
+                        Some(i) => i,
+                        None => {
+                            blocks.push((a, b, vec![0.0; n]));
+                            blocks.len() - 1
+                        }
+                    };
+                    blocks[i].2[k] += scale * coef;
+                }
+            }
+        }
+        // Every rank takes part in the same products (they are collective).
+        let mut present = [0.0; 16];
+        for (a, b, _) in &blocks {
+            present[4 * *a as usize + *b as usize] = 1.0;
+        }
+        crate::parallel::max_in_place(petsc.world(), &mut present);
+        for a in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
+            for b in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
+                let missing = !blocks.iter().any(|x| x.0 == a && x.1 == b);
+                if present[4 * a as usize + b as usize] > 0.0 && missing {
+                    blocks.push((a, b, vec![0.0; n]));
+                }
+            }
+        }
+        blocks.sort_by_key(|x| (x.0 as usize, x.1 as usize));
+        let work = [
+            self.c_nor.new_point_vector()?,
+            self.c_nor.new_point_vector()?,
+            self.c_nor.new_point_vector()?,
+            self.c_nor.new_point_vector()?,
+        ];
+        let weighted = self.c_nor.new_point_vector()?;
+        Ok(TangentOperator {
+            contact: self,
+            blocks,
+            work,
+            weighted,
+        })
+    }
+
+    fn observation(&self, c: Channel) -> &ObservationMatrix<'p> {
+        match c {
+            Channel::Nor => &self.c_nor,
+            Channel::Tan => &self.c_tan,
+            Channel::Tan2 => &self.c_tan2,
+            Channel::Conv => &self.c_conv,
+        }
     }
 
     /// The observation rows applied to each shape: for every channel (normal, tangent, second

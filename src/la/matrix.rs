@@ -225,6 +225,13 @@ impl<'p> SparseMatrix<'p> {
         call!(MatMultTranspose(self.raw, x.raw, y.raw))
     }
 
+    /// `y = y + A x`
+    ///
+    /// # Collective
+    pub fn mult_add(&self, x: &Vector, y: &Vector) -> Result<()> {
+        call!(MatMultAdd(self.raw, x.raw, y.raw, y.raw))
+    }
+
     /// # Collective
     pub fn norm_frobenius(&self) -> Result<f64> {
         let mut n = 0.0;
@@ -398,5 +405,23 @@ impl crate::fem::assembly::MatrixSink for SparseMatrix<'_> {
         } else {
             self.add_values(dofs, dofs, values)
         }
+    }
+}
+
+/// A linear operator applied without being assembled, or a matrix: `y = y + A x`.
+pub trait Operator<'p> {
+    /// # Collective
+    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()>;
+}
+
+impl<'p> Operator<'p> for SparseMatrix<'p> {
+    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()> {
+        SparseMatrix::mult_add(self, x, y)
+    }
+}
+
+impl<'p, T: Operator<'p> + ?Sized> Operator<'p> for &T {
+    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()> {
+        (**self).mult_add(x, y)
     }
 }

@@ -9,8 +9,8 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use super::newmark::{
-    initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Forces, NewmarkSettings, State,
-    StepControl, StepReport, TimeError,
+    initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Damping, Forces, Jacobian,
+    NewmarkSettings, State, StepControl, StepReport, TimeError,
 };
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, InterfaceSummary};
@@ -193,7 +193,7 @@ pub struct Transient {
 pub struct TransientInputs<'a, 'p> {
     pub k0: &'a SparseMatrix<'p>,
     pub m: &'a SparseMatrix<'p>,
-    pub c: Option<&'a SparseMatrix<'p>>,
+    pub c: Damping<'a, 'p>,
     pub contact: &'a ContactModel<'p>,
     pub f_ext: &'a Vector<'p>,
     pub q_static: &'a Vector<'p>,
@@ -233,10 +233,14 @@ pub fn run<'p>(
 
     let contact = input.contact;
     let fc = input.f_ext.duplicate()?;
+    // The contact state of the last force evaluation: the step's record reuses it when the
+    // step ended there.
+    let last_contact = std::cell::RefCell::new(None::<crate::contact::ContactState>);
     let mut forces =
         |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| -> Result<(), LaError> {
             let state = contact.evaluate(q, Some(v), 1.0)?;
             contact.force(&state, &fc)?;
+            *last_contact.borrow_mut() = Some(state);
             f.copy_from(input.f_ext)?;
             f.axpy(1.0, &fc)
         };
@@ -287,9 +291,16 @@ pub fn run<'p>(
         Some(s) => Some(s.rows.new_point_vector()?),
         None => None,
     };
-    let record = |out: &mut Transient, s: &State<'p>, h: f64, its: usize| -> Result<(), LaError> {
-        let cs = contact.evaluate(&s.q, Some(&s.v), 1.0)?;
-        let sums: Vec<InterfaceSummary> = contact.summarize(petsc, &cs);
+    let record = |out: &mut Transient,
+                  s: &State<'p>,
+                  h: f64,
+                  its: usize,
+                  evaluated: Option<&crate::contact::ContactState>|
+     -> Result<(), LaError> {
+        let sums: Vec<InterfaceSummary> = match evaluated {
+            Some(cs) => contact.summarize(petsc, cs),
+            None => contact.summarize(petsc, &contact.evaluate(&s.q, Some(&s.v), 1.0)?),
+        };
         out.time.push(s.time);
         out.step_size.push(h);
         out.iterations.push(its);
@@ -382,7 +393,7 @@ pub fn run<'p>(
         stream
             .create_series("states/velocity", n, "m/s")
             .map_err(io_error)?;
-        record(&mut out, &state, 0.0, 0)?;
+        record(&mut out, &state, 0.0, 0, None)?;
         stream
     };
     let mut written = stream.rows("time").map_err(io_error)?;
@@ -458,7 +469,7 @@ pub fn run<'p>(
     let mut restart_jacobian = jacobian_at.take();
     let jacobian_at = std::cell::RefCell::new(None::<(Vector<'p>, Vector<'p>)>);
     let mut factorize =
-        |ns: &NewmarkSettings, at: Option<&State<'p>>| -> Result<DirectSolver<'p>, LaError> {
+        |ns: &NewmarkSettings, at: Option<&State<'p>>| -> Result<Jacobian<'_, 'p>, LaError> {
             let t = Instant::now();
             let saved = restart_jacobian.take();
             let at: Option<(&Vector<'p>, &Vector<'p>)> = match (&saved, at) {
@@ -466,7 +477,8 @@ pub fn run<'p>(
                 (None, Some(s)) => Some((&s.q, &s.v)),
                 (None, None) => None,
             };
-            if let Some((q, v)) = at {
+            let c1 = ns.gamma / (ns.beta * ns.step);
+            let extra = if let Some((q, v)) = at {
                 let cs = contact.evaluate(q, Some(v), 1.0)?;
                 current.zero_entries()?;
                 contact.add_tangent(
@@ -479,10 +491,24 @@ pub fn run<'p>(
                 damping.zero_entries()?;
                 contact.add_tangent(&cs, &[Part::Damping], &mut damping)?;
                 damping.assemble()?;
-                current.axpy(ns.gamma / (ns.beta * ns.step), &damping)?;
+                current.axpy(c1, &damping)?;
                 let copy = (q.try_clone()?, v.try_clone()?);
                 *jacobian_at.borrow_mut() = Some(copy);
-            }
+                contact.tangent_operator(
+                    petsc,
+                    &cs,
+                    &[
+                        (&[Part::Normal, Part::Stick, Part::Friction], 1.0),
+                        (&[Part::Damping], c1),
+                    ],
+                )?
+            } else {
+                contact.tangent_operator(
+                    petsc,
+                    input.static_state,
+                    &[(&[Part::Normal, Part::Stick], 1.0)],
+                )?
+            };
             let mock = if at.is_some() { &current } else { &mock };
             let j = jacobian(ns, input.m, input.c, &k0, Some(mock))?;
             // The static mock is symmetric (Cholesky); a state's tangent has the friction part.
@@ -496,7 +522,10 @@ pub fn run<'p>(
             factor_entries = factor.report().factor_entries;
             built += 1;
             seconds_factorizing += t.elapsed().as_secs_f64();
-            Ok(factor)
+            Ok(Jacobian {
+                factor,
+                extra: Some(Box::new(extra)),
+            })
         };
     let rank0 = petsc.rank() == 0;
     let mut checkpoint_failure = None;
@@ -506,7 +535,9 @@ pub fn run<'p>(
             out.seconds_solving += report.solve_seconds;
             out.steps_run += 1;
             out.iterations_run += report.iterations;
-            record(&mut out, s, h, report.iterations)?;
+            let evaluated = last_contact.borrow();
+            let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
+            record(&mut out, s, h, report.iterations, evaluated)?;
             if interval > 0.0 && s.time >= next_sample(out.states) - 1e-3 * h {
                 write_state(s)?;
                 out.states += 1;

@@ -13,6 +13,9 @@
 //! - static brake: the normal force on each pad's lining equals the piston force p x A
 //!   (1e-8 relative), the braking torque equals sum(mu w p r) over the sliding points (1e-8),
 //!   and 1 and 2 ranks give the same contact pressures to round-off.
+//! - the contact tangent applied through the observation rows (the transient's residual
+//!   update) equals the assembled tangent's product at the preloaded state (normal, stick,
+//!   friction with the convective term, and scaled friction damping) to 1e-12 relative.
 
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
@@ -191,6 +194,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         mu: 0.25,
         slip_speed: 1e-3,
     };
+    settings.disc_speed = 6.2832;
     let resolved = settings.resolve(&model.interfaces)?;
     let contact = ContactModel::new(petsc, &model.mesh, &system.dofs, resolved, &settings)
         .map_err(|e| e.to_string())?;
@@ -227,6 +231,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             "pad force vs piston {worst_force:e}, torque vs mu F r {worst_torque:e}"
         ));
     }
+    tangent_operator_equals_assembled(petsc, &contact, &state.contact, &f)?;
     // 1 vs 2 ranks: contact pressures in point order.
     let local: Vec<f64> = state.contact.response.iter().map(|r| r.pressure).collect();
     let pressures = contact.gather(petsc, &local).map_err(|e| e.to_string())?;
@@ -265,6 +270,58 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     );
     if diff > 1e-8 {
         return Err(format!("pressures differ by {diff:e} of the largest"));
+    }
+    Ok(())
+}
+
+/// The unassembled contact tangent (observation rows) vs the assembled one, applied to a
+/// vector that varies over every DOF.
+fn tangent_operator_equals_assembled<'p>(
+    petsc: &'p Petsc,
+    contact: &ContactModel<'p>,
+    state: &squeal::contact::ContactState,
+    like: &squeal::la::Vector<'p>,
+) -> Result<(), String> {
+    use squeal::contact::kernel::Part;
+    use squeal::la::Operator;
+    let e = |e: squeal::la::LaError| e.to_string();
+    let x = like.duplicate().map_err(e)?;
+    {
+        let range = x.ownership();
+        let mut local = x.local_mut().map_err(e)?;
+        for (i, v) in local.iter_mut().enumerate() {
+            *v = ((range.start + i) as f64 * 0.7).sin();
+        }
+    }
+    let stiffness: &[Part] = &[Part::Normal, Part::Stick, Part::Friction];
+    let damping_scale = 2.5e3;
+    let mut assembled = contact.tangent_matrix(petsc, state, stiffness).map_err(e)?;
+    let damping = contact
+        .tangent_matrix(petsc, state, &[Part::Damping])
+        .map_err(e)?;
+    assembled.axpy(damping_scale, &damping).map_err(e)?;
+    let operator = contact
+        .tangent_operator(
+            petsc,
+            state,
+            &[(stiffness, 1.0), (&[Part::Damping], damping_scale)],
+        )
+        .map_err(e)?;
+    let (y, z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
+    assembled.mult(&x, &y).map_err(e)?;
+    z.set_all(0.0).map_err(e)?;
+    operator.mult_add(&x, &z).map_err(e)?;
+    let scale = y.norm2().map_err(e)?;
+    z.axpy(-1.0, &y).map_err(e)?;
+    let diff = z.norm2().map_err(e)? / scale;
+    say(
+        petsc,
+        &format!("contact tangent through the observation rows vs assembled: {diff:.1e} (|K x| = {scale:.3e})"),
+    );
+    if !(scale > 0.0 && diff < 1e-12) {
+        return Err(format!(
+            "tangent operator differs from the assembled tangent by {diff:e}"
+        ));
     }
     Ok(())
 }

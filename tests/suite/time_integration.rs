@@ -19,10 +19,10 @@
 //!   fixed-Jacobian iterations per step.
 
 use squeal::la::{
-    DirectSolver, Factorization, MatrixFormat, Petsc, Preallocation, SparseMatrix, Vector,
+    DirectSolver, Factorization, MatrixFormat, Operator, Petsc, Preallocation, SparseMatrix, Vector,
 };
 use squeal::time::newmark::{
-    initial_acceleration, jacobian, Forces, Newmark, NewmarkSettings, State,
+    initial_acceleration, jacobian, Damping, Forces, Jacobian, Newmark, NewmarkSettings, State,
 };
 
 use super::common::{rel, say};
@@ -111,7 +111,7 @@ fn cut_and_restore(
         v: vector(petsc, &[0.0])?,
         a: vector(petsc, &[0.0])?,
     };
-    initial_acceleration(&m, None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
         // The mock 1, or the contact tangent -df/dg = exp(-g) of the given state.
         let stiffness = match at {
@@ -119,8 +119,11 @@ fn cut_and_restore(
             None => 1.0,
         };
         let mock = tridiagonal(petsc, &[stiffness], &[]).map_err(squeal::la::LaError::Invalid)?;
-        let j = jacobian(ns, &m, None, &k, Some(&mock))?;
-        DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")
+        let j = jacobian(ns, &m, Damping::None, &k, Some(&mock))?;
+        Ok(Jacobian {
+            factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
+            extra: Some(Box::new(mock)),
+        })
     };
     let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State,
@@ -141,7 +144,7 @@ fn cut_and_restore(
     integrate_adaptive(
         settings,
         &m,
-        None,
+        Damping::None,
         &k,
         &mut factorize,
         &mut state,
@@ -302,10 +305,13 @@ fn integrate<'p>(
     mut observe: impl FnMut(&State<'p>) -> Result<(), String>,
 ) -> Result<usize, String> {
     let e = |e: squeal::la::LaError| e.to_string();
-    let j = jacobian(&settings, m, None, k, mock).map_err(e)?;
-    let factor = DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?;
+    let j = jacobian(&settings, m, Damping::None, k, mock).map_err(e)?;
+    let factor = Jacobian {
+        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?,
+        extra: mock.map(|x| Box::new(x) as Box<dyn Operator<'p> + '_>),
+    };
     let mass = DirectSolver::factorize(petsc, m, Factorization::Lu, "mass_").map_err(e)?;
-    let mut integrator = Newmark::new(settings, m, None, k, &factor).map_err(e)?;
+    let mut integrator = Newmark::new(settings, m, Damping::None, k, &factor).map_err(e)?;
     let zeros = vec![0.0; q0.len()];
     let mut state = State {
         time: 0.0,
@@ -314,7 +320,7 @@ fn integrate<'p>(
         v: vector(petsc, &zeros)?,
         a: vector(petsc, &zeros)?,
     };
-    initial_acceleration(m, None, k, &mut state, forces, &mass).map_err(e)?;
+    initial_acceleration(m, Damping::None, k, &mut state, forces, &mass).map_err(e)?;
     observe(&state)?;
     let mut most = 0;
     for _ in 0..steps {
