@@ -194,7 +194,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         mu: 0.25,
         slip_speed: 1e-3,
     };
-    settings.disc_speed = 6.2832;
+    settings.disc_speed = 2.0 * std::f64::consts::PI; // one revolution per second
     let resolved = settings.resolve(&model.interfaces)?;
     let contact = ContactModel::new(petsc, &model.mesh, &system.dofs, resolved, &settings)
         .map_err(|e| e.to_string())?;
