@@ -310,9 +310,16 @@ pub fn run<'p>(
             out.torque[i].push(sum.torque);
         }
         if let (Some(sensors), Some(y)) = (input.sensors, &sensor_buffer) {
+            // Each rank's rows into their place, then one sum over the ranks for all three.
+            let n = y.global_len();
+            let mut values = vec![0.0; 3 * n];
+            let range = y.ownership();
             for (kind, x) in [&s.q, &s.v, &s.a].into_iter().enumerate() {
                 sensors.rows.mult(x, y)?;
-                let values = y.gather_all()?;
+                values[kind * n + range.start..kind * n + range.end].copy_from_slice(&y.local()?);
+            }
+            crate::parallel::sum_in_place(petsc.world(), &mut values);
+            for (kind, values) in values.chunks(n).enumerate() {
                 for (k, v) in values.chunks(3).enumerate() {
                     out.sensor_values[sensors.order[k]][kind].extend_from_slice(v);
                 }
