@@ -551,9 +551,9 @@ impl<'p> ContactModel<'p> {
                 c[k] = -w * r.traction[1];
             }
         }
-        self.c_nor.mult_transpose(&wp, out)?;
-        self.c_tan.mult_transpose_add(&wt1, out, out)?;
-        self.c_tan2.mult_transpose_add(&wt2, out, out)
+        self.c_nor.mult_transpose(wp, out)?;
+        self.c_tan.mult_transpose_add(wt1, out, out)?;
+        self.c_tan2.mult_transpose_add(wt2, out, out)
     }
 
     /// Adds the chosen tangent parts of this rank's points to `matrix` (entries of other
