@@ -728,13 +728,6 @@ pub fn run_with(
                 "key 'transient': a transient needs a brake (or mesh) model with [statics] and [real_modes] (its start)".into(),
             ));
         };
-        let shape = modes.shapes.get(settings.mode - 1).ok_or_else(|| {
-            RunError::Model(format!(
-                "key 'transient.mode' = {}: only {} real modes were computed",
-                settings.mode,
-                modes.shapes.len()
-            ))
-        })?;
         let damping = scene.damping.unwrap_or_default();
         let sensors = match &model {
             Some(model) if !settings.sensors.is_empty() => Some(sensor_rows(
@@ -746,13 +739,16 @@ pub fn run_with(
             )?),
             _ => None,
         };
+        let kick = transient_kick(petsc, settings, modes, model.as_ref(), &system.dofs)?;
         // The full model, or the reduced one in its own unknowns.
-        let restricted_shape = match &reduced {
-            Some(r) => Some(r.model.reduction.restrict(petsc, shape)?),
-            None => None,
+        let kick_t = match (&reduced, settings.start) {
+            (Some(r), crate::time::transient::Start::Impulse) => {
+                Some(r.model.reduction.project_force(petsc, &kick)?)
+            }
+            (Some(r), _) => Some(r.model.reduction.restrict(petsc, &kick)?),
+            (None, _) => None,
         };
-        let (k0_t, m_t, contact_t, f_t, q_t, state_t, shape_t) = match (&reduced, &restricted_shape)
-        {
+        let (k0_t, m_t, contact_t, f_t, q_t, state_t, kick_t) = match (&reduced, &kick_t) {
             (Some(r), Some(s)) => (
                 &r.model.stiffness,
                 &r.model.mass,
@@ -769,7 +765,7 @@ pub fn run_with(
                 f_ext,
                 &state.displacement,
                 &state.contact,
-                shape,
+                &kick,
             ),
         };
         // Rayleigh damping on the integrated operators (never assembled).
@@ -793,7 +789,12 @@ pub fn run_with(
                     f_ext: f_t,
                     q_static: q_t,
                     static_state: state_t,
-                    shape: shape_t,
+                    kick: match settings.start {
+                        crate::time::transient::Start::Impulse => {
+                            crate::time::transient::Kick::Impulse(kick_t)
+                        }
+                        _ => crate::time::transient::Kick::Displacement(kick_t),
+                    },
                     sensors: sensors.as_ref(),
                 },
                 &crate::time::transient::TransientFiles::in_directory(output, options.restart),
@@ -930,6 +931,120 @@ pub fn run_with(
 /// over the integrated unknowns (the full model's DOFs, or a row of T for the reduced one).
 ///
 /// # Collective
+/// The node nearest to a point and its distance.
+fn nearest_node(mesh: &crate::mesh::Mesh, p: &[f64; 3]) -> Option<(usize, f64)> {
+    mesh.coords
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let d = (0..3).map(|k| (c[k] - p[k]).powi(2)).sum::<f64>().sqrt();
+            (i, d)
+        })
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// The transient's kick in full-model unknowns: a real mode shape, a seeded random
+/// combination of all of them, or an impulse vector (N s) at a node.
+///
+/// # Collective
+fn transient_kick<'p>(
+    petsc: &'p Petsc,
+    settings: &crate::time::transient::TransientSettings,
+    modes: &crate::eigen::real_modes::RealModes<'p>,
+    model: Option<&Model>,
+    dofs: &crate::fem::dofmap::DofMap,
+) -> Result<crate::la::Vector<'p>, RunError> {
+    use crate::time::transient::Start;
+    let first = modes.shapes.first().ok_or_else(|| {
+        RunError::Model("key 'transient': the start needs at least one real mode".into())
+    })?;
+    // A mode's sign is the eigensolver's choice (it may differ with the number of ranks):
+    // each kick shape is signed so that its product with a fixed field of the node positions
+    // is positive, so the same scene starts the same way on any number of ranks.
+    let sign_field = first.duplicate()?;
+    if let Some(model) = model {
+        let start = sign_field.ownership().start;
+        let mut local = sign_field.local_mut()?;
+        for node in dofs.owned_nodes() {
+            let x = model.mesh.coords[node];
+            for (k, &d) in dofs.node_dofs[node].iter().enumerate() {
+                if d >= 0 {
+                    local[d as usize - start] =
+                        (37.0 * x[0] + 53.0 * x[1] + 71.0 * x[2] + 1.1 * k as f64 + 0.3).sin();
+                }
+            }
+        }
+    } else {
+        sign_field.set_all(1.0)?;
+    }
+    let signed = |shape: &crate::la::Vector<'p>| -> Result<f64, RunError> {
+        Ok(if shape.dot(&sign_field)? < 0.0 {
+            -1.0
+        } else {
+            1.0
+        })
+    };
+    match settings.start {
+        Start::Mode => {
+            let shape = modes.shapes.get(settings.mode - 1).ok_or_else(|| {
+                RunError::Model(format!(
+                    "key 'transient.mode' = {}: only {} real modes were computed",
+                    settings.mode,
+                    modes.shapes.len()
+                ))
+            })?;
+            let kick = shape.try_clone()?;
+            kick.scale(signed(shape)?)?;
+            Ok(kick)
+        }
+        Start::Random => {
+            let field = first.duplicate()?;
+            field.set_all(0.0)?;
+            let coefficients =
+                crate::time::transient::random_coefficients(settings.seed, modes.shapes.len());
+            for (c, shape) in coefficients.iter().zip(&modes.shapes) {
+                field.axpy(c * signed(shape)?, shape)?;
+            }
+            Ok(field)
+        }
+        Start::Impulse => {
+            let (Some(impulse), Some(model)) = (&settings.impulse, model) else {
+                return Err(RunError::Model(
+                    "key 'transient.impulse': an impulse start needs [transient.impulse] and a mesh"
+                        .into(),
+                ));
+            };
+            let (node, distance) = nearest_node(&model.mesh, &impulse.point)
+                .ok_or_else(|| RunError::Model("an impulse needs a mesh with nodes".into()))?;
+            if petsc.rank() == 0 {
+                let c = model.mesh.coords[node];
+                println!(
+                    "  impulse ({:.3e}, {:.3e}, {:.3e}) N s at node {node} ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
+                    impulse.value[0], impulse.value[1], impulse.value[2], c[0], c[1], c[2]
+                );
+            }
+            let force = first.duplicate()?;
+            force.set_all(0.0)?;
+            if dofs.owner_of_node(node) == dofs.rank {
+                let (rows, values): (Vec<i32>, Vec<f64>) = dofs.node_dofs[node]
+                    .iter()
+                    .zip(impulse.value)
+                    .filter(|(d, _)| **d >= 0)
+                    .map(|(&d, v)| (d as i32, v))
+                    .unzip();
+                if rows.is_empty() {
+                    return Err(RunError::Model(format!(
+                        "key 'transient.impulse': node {node} nearest to the point is clamped; move the point"
+                    )));
+                }
+                force.add_values(&rows, &values)?;
+            }
+            force.assemble()?;
+            Ok(force)
+        }
+    }
+}
+
 fn sensor_rows<'p>(
     petsc: &'p Petsc,
     settings: &crate::time::transient::TransientSettings,
@@ -942,15 +1057,7 @@ fn sensor_rows<'p>(
     let mut first_row = 0;
     let mut owners = Vec::new();
     for (name, p) in &settings.sensors {
-        let (node, distance) = mesh
-            .coords
-            .iter()
-            .enumerate()
-            .map(|(i, c)| {
-                let d = (0..3).map(|k| (c[k] - p[k]).powi(2)).sum::<f64>().sqrt();
-                (i, d)
-            })
-            .min_by(|a, b| a.1.total_cmp(&b.1))
+        let (node, distance) = nearest_node(mesh, p)
             .ok_or_else(|| RunError::Model("sensors need a mesh with nodes".into()))?;
         if petsc.rank() == 0 {
             let c = mesh.coords[node];

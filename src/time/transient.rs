@@ -31,12 +31,21 @@ pub struct TransientSettings {
     pub tolerance: f64,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
-    /// Start: the static state plus `amplitude` (m, largest nodal displacement) times a real
-    /// mode shape (`mode`, 1-based).
+    /// The perturbation of the static state the run starts from (see [`Start`]).
+    #[serde(default)]
+    pub start: Start,
+    /// `start = "mode"`: the real mode (1-based).
     #[serde(default = "default_mode")]
     pub mode: usize,
+    /// `start = "mode"` or `"random"`: the largest nodal displacement of the kick (m).
     #[serde(default = "default_amplitude")]
     pub amplitude: f64,
+    /// `start = "random"`: the seed of the modal coefficients.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// `start = "impulse"`: where and how much.
+    #[serde(default)]
+    pub impulse: Option<Impulse>,
     /// A failed step is halved (Jacobian refactorized) at most this many levels deep.
     #[serde(default = "default_max_cuts")]
     pub max_cuts: usize,
@@ -63,6 +72,61 @@ pub struct TransientSettings {
     /// Upper frequency of the spectrogram plot (Hz).
     #[serde(default = "default_spectrogram_max_hz")]
     pub spectrogram_max_hz: f64,
+}
+
+/// How the transient leaves the static state (the growth of unstable modes needs a seed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Start {
+    /// Displaced along one real mode shape (`mode`, `amplitude`).
+    #[default]
+    Mode,
+    /// Displaced along a random combination of every computed real mode: coefficients
+    /// uniform in [-1, 1] from `seed` (the same on any number of ranks), scaled to
+    /// `amplitude`. Smooth (modal) rather than a per-DOF noise, whose strain energy would sit
+    /// in the mesh's highest frequencies.
+    Random,
+    /// At rest at the static state, hit by an impulse (`[transient.impulse]`): v0 = M^-1 I.
+    Impulse,
+}
+
+/// A force impulse at the node nearest to `point`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Impulse {
+    /// Position (m).
+    pub point: [f64; 3],
+    /// Impulse vector (N s).
+    pub value: [f64; 3],
+}
+
+/// The kick in the integrated unknowns.
+pub enum Kick<'a, 'p> {
+    /// Added to the static displacement, scaled so its largest entry is `amplitude`.
+    Displacement(&'a Vector<'p>),
+    /// A force impulse (N s): the initial velocity is M^-1 times it.
+    Impulse(&'a Vector<'p>),
+}
+
+/// Coefficients uniform in [-1, 1] (splitmix64: one definition, identical on every platform
+/// and rank count).
+pub fn random_coefficients(seed: u64, n: usize) -> Vec<f64> {
+    let mut x = seed;
+    (0..n)
+        .map(|_| {
+            x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = x;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            // 53 random bits to [0, 1), then to [-1, 1).
+            2.0 * ((z >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+        })
+        .collect()
+}
+
+fn default_seed() -> u64 {
+    1
 }
 
 fn default_spectrogram_max_hz() -> f64 {
@@ -156,6 +220,21 @@ impl TransientSettings {
         if !self.amplitude.is_finite() {
             return Err("key 'transient.amplitude' must be finite".into());
         }
+        match (self.start, &self.impulse) {
+            (Start::Impulse, None) => {
+                return Err(
+                    "key 'transient.start' = \"impulse\" needs [transient.impulse] with point = [x, y, z] (m) and value = [Ix, Iy, Iz] (N s)"
+                        .into(),
+                )
+            }
+            (_, Some(i)) if i.point.iter().chain(&i.value).any(|x| !x.is_finite()) => {
+                return Err(
+                    "key 'transient.impulse': point and value must be three finite numbers each"
+                        .into(),
+                )
+            }
+            _ => {}
+        }
         Ok(())
     }
 }
@@ -198,7 +277,7 @@ pub struct TransientInputs<'a, 'p> {
     pub f_ext: &'a Vector<'p>,
     pub q_static: &'a Vector<'p>,
     pub static_state: &'a crate::contact::ContactState,
-    pub shape: &'a Vector<'p>,
+    pub kick: Kick<'a, 'p>,
     pub sensors: Option<&'a Sensors<'p>>,
 }
 
@@ -246,14 +325,20 @@ pub fn run<'p>(
         };
     let forces: &mut Forces<'_, 'p> = &mut forces;
 
-    // Start: static state + amplitude x shape (scaled to its largest entry).
+    // Start: the static state + amplitude x the kick's shape (scaled to its largest entry),
+    // or at rest there with the velocity of an impulse.
     let q = input.q_static.try_clone()?;
-    let largest = input.shape.norm_inf()?;
-    if largest > 0.0 {
-        q.axpy(settings.amplitude / largest, input.shape)?;
-    }
     let v = q.duplicate()?;
     v.set_all(0.0)?;
+    match input.kick {
+        Kick::Displacement(shape) => {
+            let largest = shape.norm_inf()?;
+            if largest > 0.0 {
+                q.axpy(settings.amplitude / largest, shape)?;
+            }
+        }
+        Kick::Impulse(impulse) => mass.solve(impulse, &v)?,
+    }
     let a = q.duplicate()?;
     let mut state = State {
         time: 0.0,
@@ -825,5 +910,45 @@ impl<'p> Checkpoint<'p> {
             signal_rows: number("signal_rows")? as usize,
             state_rows,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(text: &str) -> TransientSettings {
+        toml::from_str(text).expect("transient settings parse")
+    }
+
+    #[test]
+    fn impulse_start_without_an_impulse_names_the_key() {
+        let err = settings("steps = 10\nstart = \"impulse\"")
+            .validate()
+            .unwrap_err();
+        assert!(err.contains("transient.impulse"), "{err}");
+        let ok = settings(
+            "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, 0.0, 0.0]\nvalue = [0.0, 0.0, 1.0e-3]",
+        );
+        assert!(ok.validate().is_ok());
+        let nan = settings(
+            "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, nan, 0.0]\nvalue = [0.0, 0.0, 1.0]",
+        );
+        assert!(nan.validate().unwrap_err().contains("finite"));
+        assert!(toml::from_str::<TransientSettings>("steps = 1\nstart = \"noise\"").is_err());
+    }
+
+    #[test]
+    fn random_coefficients_are_seeded_uniform_and_reproducible() {
+        let a = random_coefficients(7, 20_000);
+        assert_eq!(a, random_coefficients(7, 20_000));
+        assert_ne!(a[..10], random_coefficients(8, 10)[..]);
+        assert!(a.iter().all(|x| (-1.0..1.0).contains(x)));
+        // Uniform on [-1, 1): mean 0 and variance 1/3, to a few standard errors.
+        let n = a.len() as f64;
+        let mean = a.iter().sum::<f64>() / n;
+        let variance = a.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        assert!(mean.abs() < 4.0 * (1.0f64 / 3.0 / n).sqrt(), "mean {mean}");
+        assert!((variance - 1.0 / 3.0).abs() < 0.01, "variance {variance}");
     }
 }
