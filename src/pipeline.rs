@@ -1030,7 +1030,7 @@ fn transient_kick<'p>(
                     .iter()
                     .zip(impulse.value)
                     .filter(|(d, _)| **d >= 0)
-                    .map(|(&d, v)| (d as i32, v))
+                    .map(|(&d, v)| (d, v))
                     .unzip();
                 if rows.is_empty() {
                     return Err(RunError::Model(format!(
