@@ -912,7 +912,7 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
             .fold(0.0, f64::max)
             / scale;
         report.push(format!("{name} {diff:.1e}"));
-        if !(diff <= *bound) {
+        if diff.is_nan() || diff > *bound {
             return Err(format!(
                 "{name}: {} ranks differ from 1 by {diff:e} of its scale (bound {bound:e})",
                 petsc.size()
@@ -967,12 +967,12 @@ fn impulse_start(petsc: &Petsc) -> Result<(), String> {
             largest(&once)
         ),
     );
-    if !(along > 0.0) {
+    if along.is_nan() || along <= 0.0 {
         return Err(format!(
             "the sensor does not move along the impulse: v0 . I = {along:e}"
         ));
     }
-    if !(nonlinearity < 1e-4) {
+    if nonlinearity.is_nan() || nonlinearity >= 1e-4 {
         return Err(format!(
             "twice the impulse is not twice the response: {nonlinearity:e}"
         ));
