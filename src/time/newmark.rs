@@ -7,15 +7,16 @@
 //!   v1 = v0 + h ((1 - gamma) a0 + gamma a1)
 //!   R(q1) = M a1 + C v1 + K q1 - f(t + h, q1, v1)
 //! iterated as q1 <- q1 - J^-1 R(q1) from the constant-acceleration predictor, until
-//! ||R|| <= tolerance x max(||f||, ||K q1||, ||M a1||) (the last two at the predictor, with
-//! Rayleigh damping folded in), or until the correction is below
+//! ||R|| <= tolerance x max(||f||, ||z||), or until the correction is below
 //! tolerance x ||q1 - q0||: R carries M (q1 - q0) / (beta h^2), whose round-off (eps times
 //! that, ~1e-9 of the forces at h = 1e-3) no iteration removes, while the correction shows
 //! convergence of q1 itself. A step that does not converge is an error naming the step, the
 //! time and the residual: never accepted silently.
 //!
-//! The linear part z = M a1 + C v1 + K q1 is formed once per step, at the predictor (two
-//! sparse products with Rayleigh damping), and then updated from the solve itself: with
+//! The linear part z = M a1 + C v1 + K q1 is carried from step to step with the state: at
+//! the predictor it is z_n + C h a_n + K (h v_n + h^2/2 a_n) (one sparse product with
+//! Rayleigh damping C = beta_R K, two with alpha_R M), recomputed from scratch every
+//! LINEAR_FORCE_REFRESH steps; within the step it is updated from the solve itself: with
 //! J = L + X (L = M / (beta h^2) + gamma / (beta h) C + K, X the contact stiffness J was built
 //! with) and J dq = R, the correction changes z by -L dq = -(R - X dq). X is applied through
 //! the contact observation rows (a few products over contact points), so an iteration costs
@@ -112,7 +113,14 @@ pub struct State<'p> {
     pub q: Vector<'p>,
     pub v: Vector<'p>,
     pub a: Vector<'p>,
+    /// M a + C v + K q, carried by the integrator (None: computed at the next step).
+    pub linear: Option<Vector<'p>>,
 }
+
+/// The carried linear force is recomputed from scratch at every step number that is a
+/// multiple of this (so its update's round-off cannot drift, and a restart, which carries it
+/// in the checkpoint, recomputes it at the same steps).
+pub const LINEAR_FORCE_REFRESH: usize = 1000;
 
 /// A Newmark integrator over fixed operators M, C, K and a factor of J.
 pub struct Newmark<'a, 'p> {
@@ -182,10 +190,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
         self.v1.axpy(h * gamma, &self.a1)
     }
 
-    /// z = M a1 + C v1 + K q1 from scratch; returns the norms of its inertial and elastic
-    /// parts (the scale of the residual).
-    fn linear_force(&self) -> Result<(f64, f64), LaError> {
-        let (mass_side, stiffness_side) = match self.c {
+    /// z = M a1 + C v1 + K q1 from scratch.
+    fn linear_force(&self) -> Result<(), LaError> {
+        match self.c {
             Damping::Rayleigh { alpha, beta } => {
                 // M (a + alpha v) + K (q + beta v)
                 self.tmp.copy_from(&self.a1)?;
@@ -193,21 +200,43 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 self.m.mult(&self.tmp, &self.z)?;
                 self.tmp.copy_from(&self.q1)?;
                 self.tmp.axpy(beta, &self.v1)?;
-                self.k.mult(&self.tmp, &self.r)?;
-                (self.z.norm2()?, self.r.norm2()?)
+                self.k.mult_add(&self.tmp, &self.z)
             }
             Damping::None | Damping::Matrix(_) => {
                 self.m.mult(&self.a1, &self.z)?;
-                self.k.mult(&self.q1, &self.r)?;
-                let norms = (self.z.norm2()?, self.r.norm2()?);
+                self.k.mult_add(&self.q1, &self.z)?;
                 if let Damping::Matrix(c) = self.c {
                     c.mult_add(&self.v1, &self.z)?;
                 }
-                norms
+                Ok(())
             }
+        }
+    }
+
+    /// z at the constant-acceleration predictor from z_n of the state:
+    /// z_n + C h a_n + K (h v_n + h^2/2 a_n).
+    fn predicted_linear_force(&self, s: &State<'p>, z_n: &Vector<'p>) -> Result<(), LaError> {
+        let h = self.settings.step;
+        self.z.copy_from(z_n)?;
+        let (k_on_a, mass_on_a) = match self.c {
+            Damping::Rayleigh { alpha, beta } => (0.5 * h * h + h * beta, h * alpha),
+            Damping::None | Damping::Matrix(_) => (0.5 * h * h, 0.0),
         };
-        self.z.axpy(1.0, &self.r)?;
-        Ok((mass_side, stiffness_side))
+        self.tmp.copy_from(&s.v)?;
+        self.tmp.scale(h)?;
+        self.tmp.axpy(k_on_a, &s.a)?;
+        self.k.mult_add(&self.tmp, &self.z)?;
+        if mass_on_a != 0.0 {
+            self.tmp.copy_from(&s.a)?;
+            self.tmp.scale(mass_on_a)?;
+            self.m.mult_add(&self.tmp, &self.z)?;
+        }
+        if let Damping::Matrix(c) = self.c {
+            self.tmp.copy_from(&s.a)?;
+            self.tmp.scale(h)?;
+            c.mult_add(&self.tmp, &self.z)?;
+        }
+        Ok(())
     }
 
     /// Advances `state` by one step.
@@ -243,7 +272,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
         self.q1.axpy(h, &state.v)?;
         self.q1.axpy(0.5 * h * h, &state.a)?;
         self.kinematics(state)?;
-        let (inertia, elastic) = self.linear_force()?;
+        match &state.linear {
+            Some(z_n) if !state.step.is_multiple_of(LINEAR_FORCE_REFRESH) => {
+                self.predicted_linear_force(state, z_n)?
+            }
+            _ => self.linear_force()?,
+        }
         let mut iterations = 0;
         let mut solve_seconds = 0.0;
         loop {
@@ -252,7 +286,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.r.copy_from(&self.z)?;
             self.r.axpy(-1.0, &self.f)?;
             let r = self.r.norm2()?;
-            let reference = self.f.norm2()?.max(elastic).max(inertia);
+            let reference = self.f.norm2()?.max(self.z.norm2()?);
             let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
             let report = StepReport {
                 iterations,
@@ -282,6 +316,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
                         q: self.q1.try_clone()?,
                         v: self.v1.try_clone()?,
                         a: self.a1.try_clone()?,
+                        linear: None,
                     };
                     Some(build(&self.settings, Some(&iterate))?)
                 }
@@ -323,6 +358,10 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state.q.copy_from(&self.q1)?;
         state.v.copy_from(&self.v1)?;
         state.a.copy_from(&self.a1)?;
+        match &state.linear {
+            Some(z) => z.copy_from(&self.z)?,
+            None => state.linear = Some(self.z.try_clone()?),
+        }
         state.time = t1;
         state.step += 1;
         Ok(())

@@ -346,6 +346,7 @@ pub fn run<'p>(
         q,
         v,
         a,
+        linear: None,
     };
     initial_acceleration(input.m, input.c, &k0, &mut state, forces, &mass)?;
     drop(mass);
@@ -808,6 +809,7 @@ impl<'p> Checkpoint<'p> {
                 ("signal_rows", out.time.len() as f64),
                 ("state_rows", out.states as f64),
                 ("jacobian_state", f64::from(u8::from(jacobian_at.is_some()))),
+                ("linear_state", f64::from(u8::from(s.linear.is_some()))),
             ];
             for (name, value) in numbers {
                 f.set_number(name, value).map_err(io_error)?;
@@ -815,6 +817,9 @@ impl<'p> Checkpoint<'p> {
             let n = s.q.global_len();
             let range = s.q.ownership();
             let mut vectors = vec![("q", &s.q), ("v", &s.v), ("a", &s.a)];
+            if let Some(z) = &s.linear {
+                vectors.push(("linear", z));
+            }
             if let Some((q, v)) = jacobian_at {
                 vectors.push(("jacobian_q", q));
                 vectors.push(("jacobian_v", v));
@@ -884,6 +889,11 @@ impl<'p> Checkpoint<'p> {
             q: vector("q")?,
             v: vector("v")?,
             a: vector("a")?,
+            linear: if number("linear_state")? != 0.0 {
+                Some(vector("linear")?)
+            } else {
+                None
+            },
         };
         let jacobian_at = if number("jacobian_state")? != 0.0 {
             Some((vector("jacobian_q")?, vector("jacobian_v")?))

@@ -118,6 +118,7 @@ fn cut_and_restore(
         q: vector(petsc, &[g0])?,
         v: vector(petsc, &[0.0])?,
         a: vector(petsc, &[0.0])?,
+        linear: None,
     };
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
@@ -327,6 +328,7 @@ fn integrate<'p>(
         q: vector(petsc, q0)?,
         v: vector(petsc, &zeros)?,
         a: vector(petsc, &zeros)?,
+        linear: None,
     };
     initial_acceleration(m, Damping::None, k, &mut state, forces, &mass).map_err(e)?;
     observe(&state)?;
