@@ -1170,7 +1170,15 @@ fn reduction_stage<'p>(
         .iter()
         .flat_map(|i| [i.master.as_str(), i.slave.as_str()])
         .collect();
-    let kept = crate::reduce::kept_dofs(mesh, dofs, &surfaces).map_err(RunError::Model)?;
+    // The DOFs some contact point couples (every point is known on every rank).
+    let mut coupled = vec![false; dofs.global_dofs()];
+    for &d in contact.point_columns.iter().flatten() {
+        if d >= 0 {
+            coupled[d as usize] = true;
+        }
+    }
+    let kept =
+        crate::reduce::kept_dofs(mesh, dofs, &surfaces, Some(&coupled)).map_err(RunError::Model)?;
     let model = crate::reduce::reduce(
         petsc,
         k0,

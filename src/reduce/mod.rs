@@ -66,13 +66,33 @@ impl ReductionSettings {
 }
 
 /// Which full-model DOFs the reduction keeps: every DOF of every element with a face on one of
-/// `surfaces`. Indexed by global DOF.
-pub fn kept_dofs(mesh: &Mesh, dofs: &DofMap, surfaces: &[&str]) -> Result<Vec<bool>, String> {
+/// `surfaces` that touches the contact zone, i.e. has a node whose DOFs a contact point
+/// couples (`coupled`, indexed by global DOF; None: the whole surfaces). The disc's friction
+/// rings are whole annuli, but the contact points sit under the pads (the disc turns through
+/// them in this frame): keeping only the elements under the points keeps the superelement's
+/// interface to the size of the contact zone. Indexed by global DOF.
+pub fn kept_dofs(
+    mesh: &Mesh,
+    dofs: &DofMap,
+    surfaces: &[&str],
+    coupled: Option<&[bool]>,
+) -> Result<Vec<bool>, String> {
     let mut kept = vec![false; dofs.global_dofs()];
+    let touches = |node: usize| {
+        coupled.is_none_or(|c| {
+            dofs.node_dofs[node]
+                .iter()
+                .any(|&d| d >= 0 && c[d as usize])
+        })
+    };
     for name in surfaces {
         for &(element, _) in mesh.surface(name)? {
             let (block, local) = mesh.locate_element(element);
-            for &node in mesh.blocks[block].element(local) {
+            let nodes = mesh.blocks[block].element(local);
+            if !nodes.iter().any(|&n| touches(n)) {
+                continue;
+            }
+            for &node in nodes {
                 for &d in &dofs.node_dofs[node] {
                     if d >= 0 {
                         kept[d as usize] = true;

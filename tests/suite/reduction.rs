@@ -53,9 +53,11 @@ fn run(
 /// shape (asserted 1e-10). Time response: the braking-torque fluctuation of the reduced model
 /// (kept contact zone + 60 or 120 modal coordinates) against the full model over 300 steps
 /// of 2 us; the error falls as modes are added (truncation of the b part only): measured
-/// 8.5e-2 (60 modes) and 2.5e-2 (120 modes) of the fluctuation (2.75e-4 N m) on 1 and 2
-/// ranks; asserted: falling, and below 5e-2 with 120 modes. The kept zone is 3,300 of 5,754
-/// DOF on this small brake (its linings and disc layer are a large share of it).
+/// 1.1e-1 (60 modes) and 3.8e-2 (120 modes) of the fluctuation (2.75e-4 N m) on 1 and 2
+/// ranks, pad velocity 6.6e-2 and 1.6e-2 of its largest value; asserted: falling, and below
+/// 5e-2 (torque) and 1e-1 (velocity) with 120 modes. The kept zone (elements touching the
+/// contact points: linings, the disc under the pads, the joints' contact patches) is 1,998
+/// of 5,754 DOF on this small brake.
 fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
     let (full, reference, reference_velocity) = run(petsc, &scene(60, false), "reduction-full")?;
     let largest_velocity = reference_velocity
