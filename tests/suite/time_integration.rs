@@ -616,15 +616,9 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
 /// largest value, asserted 1e-5).
 fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
     let scene = |steps: usize| {
-        format!(
-            "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
-             [contact]\ndisc_speed = 6.2832\n\
-             [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
-             friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
-             [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 40\n[reduction]\n\
-             [transient]\nstep = 2.0e-6\nsteps = {steps}\nmode = 2\namplitude = 1.0e-8\n\
-             state_interval = 2.0e-5\ncheckpoint_every = 50\n\
-             [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
+        small_brake_scene(
+            steps,
+            "mode = 2\namplitude = 1.0e-8\nstate_interval = 2.0e-5\ncheckpoint_every = 50",
         )
     };
     let go = |text: &str, dir: &str, restart: bool| -> Result<std::path::PathBuf, String> {
@@ -727,15 +721,11 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
 /// nearly exact), the full Newton one factorization per iteration.
 fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
     let scene = |newton: &str| {
-        format!(
-            "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
-             [contact]\ndisc_speed = 6.2832\n\
-             [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
-             friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
-             [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 40\n[reduction]\n\
-             [transient]\nstep = 2.0e-6\nsteps = 100\nmode = 2\namplitude = 1.0e-7\n\
-             tolerance = 1.0e-10\nnewton = \"{newton}\"\nstate_interval = 0.0\n\
-             [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
+        small_brake_scene(
+            100,
+            &format!(
+                "mode = 2\namplitude = 1.0e-7\ntolerance = 1.0e-10\nnewton = \"{newton}\"\nstate_interval = 0.0"
+            ),
         )
     };
     let mut runs = Vec::new();
@@ -789,16 +779,16 @@ fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
     Ok(())
 }
 
-/// The reduced 6k brake (40 modes) for the start tests: 2 us steps, pad sensor.
-fn small_brake_scene(steps: usize, start: &str) -> String {
+/// The preloaded 6k brake reduced on 40 modes, 2 us steps, a pad sensor; `transient` holds
+/// the test's own [transient] keys.
+fn small_brake_scene(steps: usize, transient: &str) -> String {
     format!(
         "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
          [contact]\ndisc_speed = 6.2832\n\
          [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
          friction = {{ law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }}\n\
          [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 40\n[reduction]\n\
-         [transient]\nstep = 2.0e-6\nsteps = {steps}\nstate_interval = 0.0\ncheckpoint_every = 0\n\
-         {start}\n\
+         [transient]\nstep = 2.0e-6\nsteps = {steps}\n{transient}\n\
          [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
     )
 }
@@ -846,7 +836,10 @@ fn largest(x: &[f64]) -> f64 {
 /// state agrees to ~1e-12 of itself across rank counts, and the fluctuation is 4e-5 of the
 /// torque: measured 6e-8) and 1e-6 of the largest pad velocity.
 fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
-    let text = small_brake_scene(100, "start = \"random\"\nseed = 7\namplitude = 1.0e-8");
+    let text = small_brake_scene(
+        100,
+        "state_interval = 0.0\ncheckpoint_every = 0\nstart = \"random\"\nseed = 7\namplitude = 1.0e-8",
+    );
     let series = run_series(
         petsc,
         &text,
@@ -940,7 +933,7 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
 fn impulse_start(petsc: &Petsc) -> Result<(), String> {
     let run = |scale: f64, dir: &str| {
         let start = format!(
-            "start = \"impulse\"\n[transient.impulse]\npoint = [0.12, 0.0, 0.0295]\nvalue = [0.0, {:e}, {:e}]",
+            "state_interval = 0.0\ncheckpoint_every = 0\nstart = \"impulse\"\n[transient.impulse]\npoint = [0.12, 0.0, 0.0295]\nvalue = [0.0, {:e}, {:e}]",
             0.5e-5 * scale,
             1.0e-5 * scale
         );
