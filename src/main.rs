@@ -246,7 +246,7 @@ fn print_summary(s: &RunSummary) {
     }
     if let Some(r) = &s.reduction {
         println!(
-            "reduction: {} -> {} DOF ({} kept in the contact zone + {} modal coordinates of {} offered, {} dropped), {:.2} s; reduced real modes vs full: max relative error {:.1e} over {}; static state represented to {:.1e}; basis M-orthonormal to {:.1e}",
+            "reduction: {} -> {} DOF ({} kept in the contact zone + {} modal coordinates of {} offered, {} dropped), {:.2} s; reduced real modes vs full: max relative error {:.1e} over {}; static state represented to {:.1e}; basis M-orthonormal to {:.1e}; reduced unknowns per rank {:?}",
             r.full_dofs,
             r.kept + r.modal,
             r.kept,
@@ -257,12 +257,13 @@ fn print_summary(s: &RunSummary) {
             r.mode_error,
             r.mode_check.len(),
             r.static_error,
-            r.orthonormality
+            r.orthonormality,
+            r.rows_per_rank
         );
     }
     if let Some(t) = &s.transient {
         println!(
-            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2})",
+            "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
             t.steps,
             t.simulated,
             t.mean_iterations,
@@ -275,7 +276,9 @@ fn print_summary(s: &RunSummary) {
             t.seconds_factorizing,
             1e3 * t.seconds_per_iteration,
             1e3 * t.seconds_per_solve,
-            t.seconds_per_iteration / t.seconds_per_solve.max(1e-300)
+            t.seconds_per_iteration / t.seconds_per_solve.max(1e-300),
+            1e3 * t.seconds_forces_per_step,
+            1e3 * t.seconds_products_per_step
         );
     }
     if let Some(sw) = &s.sweep {

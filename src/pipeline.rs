@@ -110,6 +110,10 @@ pub struct ReductionSummary {
     /// (full Hz, reduced Hz) of the real modes in the basis, and the largest relative gap.
     pub mode_check: Vec<(f64, f64)>,
     pub mode_error: f64,
+    /// Stored entries of the reduced stiffness (the per-step product streams them).
+    pub stiffness_entries: f64,
+    /// Reduced unknowns per rank (the transient's load balance).
+    pub rows_per_rank: Vec<usize>,
     pub seconds: f64,
 }
 
@@ -278,6 +282,8 @@ pub struct TransientSummary {
     pub simulated: f64,
     pub mean_iterations: f64,
     pub max_iterations: usize,
+    /// Per step of this process's run, the Jacobian factorizations excluded (they are
+    /// `seconds_factorizing`, paid once, or again at a refresh).
     pub seconds_per_step: f64,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
@@ -287,6 +293,11 @@ pub struct TransientSummary {
     /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
     pub seconds_per_iteration: f64,
     pub seconds_per_solve: f64,
+    /// Per step: force evaluations (contact), operator products (the predictor's linear
+    /// force, the contact tangent's correction), and the rest (vector updates, reductions,
+    /// recording).
+    pub seconds_forces_per_step: f64,
+    pub seconds_products_per_step: f64,
 }
 
 /// A parameter sweep, for the summary.
@@ -707,7 +718,7 @@ pub fn run_with(
         write_sweep(petsc, &file, sw, output)?;
     }
     let reduction_summary = match &reduced {
-        Some(r) => Some(write_reduction(&file, r, dofs)?),
+        Some(r) => Some(write_reduction(petsc, &file, r, dofs)?),
         None => None,
     };
     let before_transient = start.elapsed().as_secs_f64();
@@ -889,19 +900,23 @@ pub fn run_with(
         transient: transient.as_ref().map(|t| {
             // Index 0 of the signals is the start; steps follow.
             let its = &t.iterations[1.min(t.iterations.len())..];
+            // The factorizations are counted once, not spread over the steps.
+            let stepping = (t.seconds_stepping - t.seconds_jacobians).max(0.0);
             TransientSummary {
                 steps: its.len(),
                 simulated: t.time.last().copied().unwrap_or(0.0),
                 mean_iterations: its.iter().sum::<usize>() as f64 / its.len().max(1) as f64,
                 max_iterations: its.iter().copied().max().unwrap_or(0),
-                seconds_per_step: t.seconds_stepping / its.len().max(1) as f64,
+                seconds_per_step: stepping / t.steps_run.max(1) as f64,
                 factor_entries: t.factor_entries,
                 seconds_factorizing: t.seconds_factorizing,
                 cuts: t.cuts,
                 refreshes: t.refreshes,
                 factorizations: t.factorizations,
-                seconds_per_iteration: t.seconds_stepping / t.iterations_run.max(1) as f64,
+                seconds_per_iteration: stepping / t.iterations_run.max(1) as f64,
                 seconds_per_solve: t.seconds_solving / t.iterations_run.max(1) as f64,
+                seconds_forces_per_step: t.seconds_in_forces / t.steps_run.max(1) as f64,
+                seconds_products_per_step: t.seconds_in_products / t.steps_run.max(1) as f64,
             }
         }),
         reduction: reduction_summary,
@@ -1094,11 +1109,15 @@ fn sensor_rows<'p>(
 
 /// Writes /reduced (sizes, checks) and returns the summary.
 fn write_reduction(
+    petsc: &Petsc,
     file: &ResultsFile,
     r: &ReducedStage,
     full_dofs: usize,
 ) -> Result<ReductionSummary, RunError> {
     let red = &r.model.reduction;
+    let mut rows = vec![0.0; petsc.size() as usize];
+    rows[petsc.rank() as usize] = red.columns.len() as f64;
+    crate::parallel::sum_in_place(petsc.world(), &mut rows);
     let mode_error = r
         .mode_check
         .iter()
@@ -1114,6 +1133,8 @@ fn write_reduction(
         static_error: r.static_error,
         mode_check: r.mode_check.clone(),
         mode_error,
+        stiffness_entries: r.model.stiffness.info()?.nonzeros,
+        rows_per_rank: rows.iter().map(|&x| x as usize).collect(),
         seconds: red.seconds,
     };
     let g = "reduced";
@@ -1125,6 +1146,7 @@ fn write_reduction(
     file.set_number(g, "basis_dropped", red.dropped as f64)?;
     file.set_number(g, "mass_orthonormality", red.orthonormality)?;
     file.set_number(g, "static_state_error", r.static_error)?;
+    file.set_number(g, "stiffness_entries", summary.stiffness_entries)?;
     file.set_number(g, "seconds", red.seconds)?;
     let full: Vec<f64> = r.mode_check.iter().map(|m| m.0).collect();
     let reduced: Vec<f64> = r.mode_check.iter().map(|m| m.1).collect();
@@ -1890,6 +1912,8 @@ fn write_transient(
     file.set_number(g, "states_written", tr.states as f64)?;
     file.set_number(g, "seconds_stepping", tr.seconds_stepping)?;
     file.set_number(g, "seconds_in_solves", tr.seconds_solving)?;
+    file.set_number(g, "seconds_in_forces", tr.seconds_in_forces)?;
+    file.set_number(g, "seconds_in_products", tr.seconds_in_products)?;
     file.set_number(g, "iterations_run", tr.iterations_run as f64)?;
     if let Some(t) = tr.resumed_at {
         file.set_number(g, "restarted_at_s", t)?;

@@ -369,6 +369,41 @@ impl<'p> SparseMatrix<'p> {
         call!(MatZeroEntries(self.raw))
     }
 
+    /// The same matrix (same global numbering, pattern and values) with this rank owning the
+    /// rows and columns `rows` instead: a new contiguous row distribution.
+    ///
+    /// # Collective
+    pub fn redistributed(
+        &self,
+        petsc: &'p Petsc,
+        rows: std::ops::Range<usize>,
+    ) -> Result<SparseMatrix<'p>> {
+        let mut is = std::ptr::null_mut();
+        call!(ISCreateStride(
+            petsc.comm(),
+            rows.len() as ffi::PetscInt,
+            rows.start as ffi::PetscInt,
+            1,
+            &mut is
+        ))?;
+        let mut raw = std::ptr::null_mut();
+        let made = call!(MatCreateSubMatrix(
+            self.raw,
+            is,
+            is,
+            ffi::MAT_INITIAL_MATRIX,
+            &mut raw
+        ));
+        report_destroy(call!(ISDestroy(&mut is)));
+        made?;
+        Ok(SparseMatrix {
+            raw,
+            format: self.format,
+            block_size: self.block_size,
+            _petsc: PhantomData,
+        })
+    }
+
     /// Same layout, pattern and values.
     ///
     /// # Collective

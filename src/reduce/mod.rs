@@ -9,11 +9,15 @@
 //! every full real mode in the basis lies in span(T): the reduced model has those modes
 //! exactly (Rayleigh-Ritz with an exact subspace).
 //!
-//! Layout of the reduced unknowns: every rank keeps its own kept DOFs (in full-model order),
-//! and the last rank also owns the modal coordinates, placed after all kept DOFs. The reduced
-//! operators are distributed AIJ matrices: the kept block sparse as in the full model, the
-//! modal block dense, the coupling only in the rows and columns of kept DOFs on the border of
-//! the kept zone.
+//! Numbering of the reduced unknowns: the kept DOFs in full-model order, then the modal
+//! coordinates. The operators are first assembled in the "natural" layout (every rank owns its
+//! own kept DOFs, the last rank also the modal coordinates) and then redistributed so that
+//! every rank holds about the same share of the reduced stiffness's entries: the kept zone is
+//! a small part of the model that the full model's partition may leave almost all on one rank
+//! (3,355 of 3,421 reduced unknowns on one of 2 ranks at 12k DOF), and the time integration
+//! works on the reduced operators only. The reduced operators are distributed AIJ matrices:
+//! the kept block sparse as in the full model, the modal block dense, the coupling only in the
+//! rows and columns of kept DOFs on the border of the kept zone.
 
 use std::ops::Range;
 use std::time::Instant;
@@ -114,8 +118,11 @@ pub struct Reduction {
     /// Basis vectors offered (modes + static shape) and dropped as dependent.
     pub offered: usize,
     pub dropped: usize,
-    /// This rank's reduced unknowns.
+    /// This rank's reduced unknowns (the balanced layout of the operators and vectors).
     pub columns: Range<usize>,
+    /// This rank's reduced unknowns in the natural layout: its own kept DOFs, and on the last
+    /// rank the modal coordinates.
+    natural: Range<usize>,
     /// Local offsets (in this rank's full DOFs) of its kept and of its reduced DOFs.
     kept_local: Vec<usize>,
     reduced_local: Vec<usize>,
@@ -190,7 +197,7 @@ impl Reduction {
         kept: &[f64],
         eta: &[f64],
     ) -> Result<Vector<'p>, LaError> {
-        let x = self.new_vector(petsc)?;
+        let x = Vector::new(petsc, self.natural.len())?;
         {
             let mut out = x.local_mut()?;
             out[..kept.len()].copy_from_slice(kept);
@@ -198,7 +205,7 @@ impl Reduction {
                 out[kept.len()..].copy_from_slice(eta);
             }
         }
-        Ok(x)
+        relayout(petsc, &x, self.columns.len())
     }
 
     /// The modal coordinates of a reduced vector, on every rank.
@@ -206,10 +213,13 @@ impl Reduction {
     /// # Collective
     pub fn modal_coordinates(&self, petsc: &Petsc, x: &Vector) -> Result<Vec<f64>, LaError> {
         let mut eta = vec![0.0; self.modal];
-        if self.last_rank {
-            let local = x.local()?;
-            eta.copy_from_slice(&local[self.kept_local.len()..]);
+        let local = x.local()?;
+        for (i, &v) in local.iter().enumerate() {
+            if let Some(j) = (self.columns.start + i).checked_sub(self.kept) {
+                eta[j] = v;
+            }
         }
+        drop(local);
         crate::parallel::sum_in_place(petsc.world(), &mut eta);
         Ok(eta)
     }
@@ -220,7 +230,8 @@ impl Reduction {
     pub fn recover(&self, petsc: &Petsc, x: &Vector, q: &Vector) -> Result<(), LaError> {
         let eta = self.modal_coordinates(petsc, x)?;
         let qb = lapack::gemm_nn(self.reduced_local.len(), self.modal, 1, &self.basis, &eta);
-        let xl = x.local()?;
+        let natural = relayout(petsc, x, self.natural.len())?;
+        let xl = natural.local()?;
         let mut out = q.local_mut()?;
         for (k, &i) in self.kept_local.iter().enumerate() {
             out[i] = xl[k];
@@ -331,6 +342,7 @@ pub fn reduce<'p>(
         offered,
         dropped: 0,
         columns: 0..0,
+        natural: 0..0,
         kept_local,
         reduced_local,
         full_local: own.len(),
@@ -398,7 +410,7 @@ pub fn reduce<'p>(
     let stiffness_products = products(&partial, k0, &work, &product)?;
 
     let local_reduced = partial.kept_local.len() + if last_rank { modal } else { 0 };
-    partial.columns = first_kept..first_kept + local_reduced;
+    partial.natural = first_kept..first_kept + local_reduced;
     let operators = reduced_operators(
         petsc,
         &partial,
@@ -407,12 +419,62 @@ pub fn reduce<'p>(
     let [stiffness, mass]: [SparseMatrix<'p>; 2] = operators
         .try_into()
         .map_err(|_| LaError::Invalid("reduction: two operators expected".into()))?;
+    partial.columns = balanced_rows(petsc, &stiffness, partial.natural.clone())?;
+    let stiffness = stiffness.redistributed(petsc, partial.columns.clone())?;
+    let mass = mass.redistributed(petsc, partial.columns.clone())?;
     partial.seconds = start.elapsed().as_secs_f64();
     Ok(ReducedModel {
         reduction: partial,
         stiffness,
         mass,
     })
+}
+
+/// Extra weight of a row (in stored entries) for the vector work that comes with it.
+const ROW_WEIGHT: f64 = 30.0;
+
+/// A contiguous split of the reduced unknowns with about the same stored entries of `a` (plus
+/// ROW_WEIGHT per row) on every rank: this rank's range. `a` is in the natural layout.
+///
+/// # Collective
+fn balanced_rows(
+    petsc: &Petsc,
+    a: &SparseMatrix,
+    natural: Range<usize>,
+) -> Result<Range<usize>, LaError> {
+    let world = petsc.world();
+    let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let mut weights = Vec::with_capacity(natural.len());
+    a.for_each_local_row(|_, cols, _| weights.push(cols.len() as f64 + ROW_WEIGHT))?;
+    let mut totals = vec![0.0; size];
+    totals[rank] = weights.iter().sum();
+    crate::parallel::sum_in_place(world, &mut totals);
+    let total: f64 = totals.iter().sum();
+    let mut at: f64 = totals[..rank].iter().sum();
+    // Each row goes to the rank whose share of the total holds the row's middle: monotone in
+    // the row number, so every rank's rows stay contiguous.
+    let mut counts = vec![0.0; size];
+    for w in weights {
+        let middle = at + 0.5 * w;
+        let target = ((middle / total.max(f64::MIN_POSITIVE)) * size as f64) as usize;
+        counts[target.min(size - 1)] += 1.0;
+        at += w;
+    }
+    crate::parallel::sum_in_place(world, &mut counts);
+    let start = counts[..rank].iter().sum::<f64>() as usize;
+    Ok(start..start + counts[rank] as usize)
+}
+
+/// The same global vector with `local` entries on this rank (a contiguous relayout).
+///
+/// # Collective
+fn relayout<'p>(petsc: &'p Petsc, x: &Vector<'p>, local: usize) -> Result<Vector<'p>, LaError> {
+    let y = Vector::new(petsc, local)?;
+    y.set_all(0.0)?;
+    let indices: Vec<i32> = x.ownership().map(|i| i as i32).collect();
+    y.add_values(&indices, &x.local()?)?;
+    y.assemble()?;
+    Ok(y)
 }
 
 /// A B for every basis column (full local rows x modal, column-major).
@@ -443,7 +505,7 @@ fn reduced_operators<'p>(
     let nb = r.reduced_local.len();
     let nk = r.kept_local.len();
     let modal_start = r.kept;
-    let cols = &r.columns;
+    let cols = &r.natural;
     // Coupling pattern: kept rows where any operator's A B is nonzero.
     let coupled: Vec<usize> = (0..nk)
         .filter(|&k| {

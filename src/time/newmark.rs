@@ -56,8 +56,12 @@ pub struct StepReport {
     /// Final residual and the reference it was compared with.
     pub residual: f64,
     pub reference: f64,
-    /// Time inside the factor's solves (the rest of an iteration: forces and products).
+    /// Time inside the factor's solves, the force evaluations (contact) and the products
+    /// with the model's operators (predictor) and with the Jacobian's extra part; the rest of
+    /// a step is vector updates and reductions.
     pub solve_seconds: f64,
+    pub force_seconds: f64,
+    pub product_seconds: f64,
     /// The last force evaluation was at the accepted state (the caller may reuse what it
     /// computed there); false when the step ended on the correction criterion.
     pub forces_current: bool,
@@ -272,17 +276,22 @@ impl<'a, 'p> Newmark<'a, 'p> {
         self.q1.axpy(h, &state.v)?;
         self.q1.axpy(0.5 * h * h, &state.a)?;
         self.kinematics(state)?;
+        let clock = std::time::Instant::now();
         match &state.linear {
             Some(z_n) if !state.step.is_multiple_of(LINEAR_FORCE_REFRESH) => {
                 self.predicted_linear_force(state, z_n)?
             }
             _ => self.linear_force()?,
         }
+        let mut product_seconds = clock.elapsed().as_secs_f64();
         let mut iterations = 0;
         let mut solve_seconds = 0.0;
+        let mut force_seconds = 0.0;
         loop {
             // R = z - f
+            let clock = std::time::Instant::now();
             forces(t1, &self.q1, &self.v1, &self.f)?;
+            force_seconds += clock.elapsed().as_secs_f64();
             self.r.copy_from(&self.z)?;
             self.r.axpy(-1.0, &self.f)?;
             let r = self.r.norm2()?;
@@ -293,6 +302,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 residual: r,
                 reference,
                 solve_seconds,
+                force_seconds,
+                product_seconds,
                 forces_current: true,
             };
             if r <= target {
@@ -332,7 +343,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
             // z <- z - L dq = z - R + X dq
             self.z.axpy(-1.0, &self.r)?;
             if let Some(extra) = &jacobian.extra {
+                let clock = std::time::Instant::now();
                 extra.mult_add(&self.dq, &self.z)?;
+                product_seconds += clock.elapsed().as_secs_f64();
             }
             iterations += 1;
             // Converged in q1 (the residual's round-off floor reached): accept.
@@ -346,6 +359,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 return Ok(StepReport {
                     iterations,
                     solve_seconds,
+                    force_seconds,
+                    product_seconds,
                     forces_current: false,
                     ..report
                 });

@@ -261,9 +261,15 @@ pub struct Transient {
     pub factorizations: usize,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
+    /// The stepping loop, and the Jacobian factorizations within it.
     pub seconds_stepping: f64,
+    pub seconds_jacobians: f64,
     /// Time in the factor's solves, steps and iterations (solves), over this process's steps.
     pub seconds_solving: f64,
+    /// Time in the force evaluations and in the operator products (predictor, contact
+    /// tangent), steps and iterations.
+    pub seconds_in_forces: f64,
+    pub seconds_in_products: f64,
     pub steps_run: usize,
     pub iterations_run: usize,
 }
@@ -365,7 +371,10 @@ pub fn run<'p>(
         factor_entries: 0.0,
         seconds_factorizing,
         seconds_stepping: 0.0,
+        seconds_jacobians: 0.0,
         seconds_solving: 0.0,
+        seconds_in_forces: 0.0,
+        seconds_in_products: 0.0,
         steps_run: 0,
         iterations_run: 0,
         states: 0,
@@ -554,6 +563,7 @@ pub fn run<'p>(
     // Every factorization (adaptive ones, and one per iterate with a full Newton).
     let mut built = 0usize;
     let mut seconds_factorizing = seconds_factorizing;
+    let mut seconds_jacobians = 0.0;
     // J with the contact tangent of a state: K_c + K_stick + K_f (friction: unsymmetric, LU)
     // and the friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
     // through gamma / (beta h). The state J was built at is kept for the checkpoint (a restart
@@ -615,6 +625,7 @@ pub fn run<'p>(
             factor_entries = factor.report().factor_entries;
             built += 1;
             seconds_factorizing += t.elapsed().as_secs_f64();
+            seconds_jacobians += t.elapsed().as_secs_f64();
             Ok(Jacobian {
                 factor,
                 extra: Some(Box::new(extra)),
@@ -626,6 +637,8 @@ pub fn run<'p>(
         |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<(), TimeError> {
             let h = settings.step / f64::from(1u32 << c.level);
             out.seconds_solving += report.solve_seconds;
+            out.seconds_in_forces += report.force_seconds;
+            out.seconds_in_products += report.product_seconds;
             out.steps_run += 1;
             out.iterations_run += report.iterations;
             let evaluated = last_contact.borrow();
@@ -704,6 +717,7 @@ pub fn run<'p>(
     out.seconds_stepping = t.elapsed().as_secs_f64();
     out.factor_entries = factor_entries;
     out.seconds_factorizing = seconds_factorizing;
+    out.seconds_jacobians = seconds_jacobians;
     out.cuts = control.cuts;
     out.refreshes = control.refreshes;
     out.factorizations = control.factorizations.max(built);

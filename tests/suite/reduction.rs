@@ -120,6 +120,14 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
                 r.full_dofs
             ));
         }
+        // The reduced unknowns are spread over the ranks (split by stored entries), not
+        // left where the full model's partition put the kept zone.
+        let rows = &r.rows_per_rank;
+        let smallest = rows.iter().copied().min().unwrap_or(0) as f64;
+        let mean = (r.kept + r.modal) as f64 / rows.len() as f64;
+        if rows.iter().sum::<usize>() != r.kept + r.modal || smallest < 0.25 * mean {
+            return Err(format!("reduced unknowns per rank {rows:?}: unbalanced"));
+        }
         errors.push(error);
         velocity_errors.push(velocity_error);
     }
