@@ -788,6 +788,21 @@ pub fn run_with(
         } else {
             crate::time::newmark::Damping::None
         };
+        let modal_damping = if damping.has_modal() {
+            let reduction = reduced.as_ref().map(|r| &r.model.reduction);
+            let modal = modal_damping(petsc, &damping, modes, m_t, reduction)?;
+            if petsc.rank() == 0 {
+                let [low, high] = damping.modal_band_hz.unwrap_or_default();
+                println!(
+                    "modal damping: ratio {} on the {} real modes in [{low}, {high}] Hz",
+                    damping.modal_ratio,
+                    modal.modes()
+                );
+            }
+            Some(modal)
+        } else {
+            None
+        };
         let (signals, failure) = timings.time("transient", || {
             crate::time::transient::run(
                 petsc,
@@ -807,6 +822,7 @@ pub fn run_with(
                         _ => crate::time::transient::Kick::Displacement(kick_t),
                     },
                     sensors: sensors.as_ref(),
+                    modal_damping: modal_damping.as_ref(),
                 },
                 &crate::time::transient::TransientFiles::in_directory(output, options.restart),
             )
@@ -1105,6 +1121,54 @@ fn sensor_rows<'p>(
     let mut order: Vec<usize> = (0..names.len()).collect();
     order.sort_by_key(|&i| owners[i]);
     Ok(crate::time::transient::Sensors { names, rows, order })
+}
+
+/// The modal damping of `[damping]` over the real modes in its band, in the integrated
+/// unknowns: M phi_i of the full model, or M_r x_i with x_i the reduced coordinates of phi_i
+/// (exact: the modes lie in the reduction's span).
+///
+/// # Collective
+fn modal_damping<'p>(
+    petsc: &'p Petsc,
+    damping: &DampingSettings,
+    modes: &crate::eigen::real_modes::RealModes<'p>,
+    m: &SparseMatrix<'p>,
+    reduction: Option<&crate::reduce::Reduction>,
+) -> Result<crate::time::newmark::ModalDamping<'p>, RunError> {
+    let [low, high] = damping.modal_band_hz.unwrap_or([0.0, 0.0]);
+    let highest = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
+    if high > highest {
+        return Err(RunError::Model(format!(
+            "key 'damping.modal_band_hz' = [{low}, {high}]: the band reaches {high} Hz but the {} real modes stop at {highest:.1} Hz; raise 'real_modes.count' (or lower the band)",
+            modes.frequencies_hz.len()
+        )));
+    }
+    let mut shapes = Vec::new();
+    let mut coefficients = Vec::new();
+    for (shape, &f) in modes.shapes.iter().zip(&modes.frequencies_hz) {
+        let c = damping.modal_coefficient(2.0 * std::f64::consts::PI * f);
+        if c <= 0.0 {
+            continue;
+        }
+        let x = match reduction {
+            Some(r) => r.restrict(petsc, shape)?,
+            None => shape.try_clone()?,
+        };
+        let mass_shape = x.duplicate()?;
+        m.mult(&x, &mass_shape)?;
+        shapes.push(mass_shape);
+        coefficients.push(c);
+    }
+    if shapes.is_empty() {
+        return Err(RunError::Model(format!(
+            "key 'damping.modal_band_hz' = [{low}, {high}]: no real mode in the band (modes from {:.1} to {highest:.1} Hz)",
+            modes.frequencies_hz.first().copied().unwrap_or(0.0)
+        )));
+    }
+    Ok(crate::time::newmark::ModalDamping::new(
+        shapes,
+        coefficients,
+    ))
 }
 
 /// Writes /reduced (sizes, checks) and returns the summary.

@@ -305,6 +305,12 @@ impl Scene {
         }
         if let Some(d) = &self.damping {
             d.validate()?;
+            if d.has_modal() && (self.complex_modes.is_some() || self.sweep.is_some()) {
+                return Err("key 'damping.modal_ratio': modal damping is applied by [transient] only; the complex modes and the sweep use the assembled operators (Rayleigh damping). Run them from a scene without it".into());
+            }
+            if d.has_modal() && self.transient.is_none() {
+                return Err("key 'damping.modal_ratio': modal damping is applied by [transient]; this scene has none".into());
+            }
         }
         if let Some(c) = &self.complex_modes {
             c.validate()?;
@@ -392,6 +398,48 @@ mod tests {
             }
         }
         assert!(count >= 4, "{count} scenes");
+    }
+
+    #[test]
+    fn modal_damping_keys_are_checked() {
+        let base = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/brake-transient.toml"),
+        )
+        .unwrap();
+        let with = |damping: &str| {
+            base.replace(
+                "rayleigh_beta = 1.0e-7",
+                &format!("rayleigh_beta = 1.0e-7\n{damping}"),
+            )
+        };
+        let ok = Scene::parse(
+            &with("modal_ratio = 0.01\nmodal_band_hz = [1000.0, 8000.0]"),
+            "t",
+        )
+        .unwrap();
+        let d = ok.damping.unwrap();
+        let omega = 2.0 * std::f64::consts::PI * 4000.0;
+        assert_eq!(d.modal_coefficient(omega), 2.0 * 0.01 * omega);
+        assert_eq!(
+            d.modal_coefficient(2.0 * std::f64::consts::PI * 9000.0),
+            0.0
+        );
+        for (damping, key) in [
+            ("modal_ratio = 0.01", "damping.modal_band_hz"),
+            (
+                "modal_ratio = -0.01\nmodal_band_hz = [1.0, 2.0]",
+                "damping.modal_ratio",
+            ),
+            (
+                "modal_ratio = 0.01\nmodal_band_hz = [2.0, 1.0]",
+                "damping.modal_band_hz",
+            ),
+        ] {
+            let e = Scene::parse(&with(damping), "t.toml")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(key) && e.contains("t.toml"), "{damping}: {e}");
+        }
     }
 
     #[test]

@@ -106,7 +106,10 @@ impl ComplexModeSettings {
     }
 }
 
-/// The `[damping]` table: Rayleigh damping C = alpha M + beta K0.
+/// The `[damping]` table: Rayleigh damping C = alpha M + beta K0, plus modal damping
+/// C_m = M Phi diag(2 zeta omega_i) Phi^T M over the real modes whose frequency lies in
+/// `modal_band_hz` (M-orthonormal Phi: each of those modes gets the damping ratio
+/// `modal_ratio` on top of Rayleigh's, the others none).
 #[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DampingSettings {
@@ -114,10 +117,55 @@ pub struct DampingSettings {
     pub rayleigh_alpha: f64,
     #[serde(default)]
     pub rayleigh_beta: f64,
+    #[serde(default)]
+    pub modal_ratio: f64,
+    #[serde(default)]
+    pub modal_band_hz: Option<[f64; 2]>,
 }
 
 impl DampingSettings {
+    /// Modal damping is asked for.
+    pub fn has_modal(&self) -> bool {
+        self.modal_ratio > 0.0
+    }
+
+    /// 2 zeta omega for a mode of circular frequency `omega` (rad/s): the modal damping's
+    /// coefficient, zero outside the band.
+    pub fn modal_coefficient(&self, omega: f64) -> f64 {
+        match self.modal_band_hz {
+            Some([low, high]) if self.has_modal() => {
+                let f = omega / (2.0 * std::f64::consts::PI);
+                if f >= low && f <= high {
+                    2.0 * self.modal_ratio * omega
+                } else {
+                    0.0
+                }
+            }
+            _ => 0.0,
+        }
+    }
+
     pub fn validate(&self) -> Result<(), String> {
+        if !(self.modal_ratio >= 0.0 && self.modal_ratio < 1.0) {
+            return Err(format!(
+                "key 'damping.modal_ratio' = {}: must be in [0, 1) (a damping ratio, e.g. 0.01)",
+                self.modal_ratio
+            ));
+        }
+        match self.modal_band_hz {
+            Some([low, high]) if !(low >= 0.0 && high > low && high.is_finite()) => {
+                return Err(format!(
+                    "key 'damping.modal_band_hz' = [{low}, {high}]: must be [low, high] in Hz with 0 <= low < high"
+                ));
+            }
+            None if self.has_modal() => {
+                return Err(
+                    "key 'damping.modal_ratio' needs 'damping.modal_band_hz' = [low, high] (Hz): the modes it damps"
+                        .into(),
+                );
+            }
+            _ => {}
+        }
         for (key, v) in [
             ("rayleigh_alpha", self.rayleigh_alpha),
             ("rayleigh_beta", self.rayleigh_beta),

@@ -104,6 +104,38 @@ impl<'p> Vector<'p> {
         Ok(d)
     }
 
+    /// The dot products with every vector of `xs`, in one reduction.
+    ///
+    /// # Collective
+    pub fn mdot(&self, xs: &[&Vector]) -> Result<Vec<f64>> {
+        let raws: Vec<ffi::Vec> = xs.iter().map(|x| x.raw).collect();
+        let mut out = vec![0.0; xs.len()];
+        if !xs.is_empty() {
+            call!(VecMDot(
+                self.raw,
+                xs.len() as ffi::PetscInt,
+                raws.as_ptr(),
+                out.as_mut_ptr()
+            ))?;
+        }
+        Ok(out)
+    }
+
+    /// `self += sum_i alphas[i] xs[i]`
+    pub fn maxpy(&self, alphas: &[f64], xs: &[&Vector]) -> Result<()> {
+        debug_assert_eq!(alphas.len(), xs.len());
+        let mut raws: Vec<ffi::Vec> = xs.iter().map(|x| x.raw).collect();
+        if xs.is_empty() {
+            return Ok(());
+        }
+        call!(VecMAXPY(
+            self.raw,
+            xs.len() as ffi::PetscInt,
+            alphas.as_ptr(),
+            raws.as_mut_ptr()
+        ))
+    }
+
     /// # Collective
     pub fn norm2(&self) -> Result<f64> {
         let mut n = 0.0;

@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::newmark::{
     initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Damping, Forces, Jacobian,
-    NewmarkSettings, State, StepControl, StepReport, TimeError,
+    ModalDamping, NewmarkSettings, State, StepControl, StepReport, TimeError,
 };
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, InterfaceSummary};
@@ -285,6 +285,8 @@ pub struct TransientInputs<'a, 'p> {
     pub static_state: &'a crate::contact::ContactState,
     pub kick: Kick<'a, 'p>,
     pub sensors: Option<&'a Sensors<'p>>,
+    /// Modal damping over a band, applied as a force (on top of `c`).
+    pub modal_damping: Option<&'a ModalDamping<'p>>,
 }
 
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
@@ -327,7 +329,11 @@ pub fn run<'p>(
             contact.force(&state, &fc)?;
             *last_contact.borrow_mut() = Some(state);
             f.copy_from(input.f_ext)?;
-            f.axpy(1.0, &fc)
+            f.axpy(1.0, &fc)?;
+            match input.modal_damping {
+                Some(modal) => modal.subtract_force(v, f),
+                None => Ok(()),
+            }
         };
     let forces: &mut Forces<'_, 'p> = &mut forces;
 
