@@ -17,7 +17,7 @@ use squeal::eigen::complex_modes::{
     full, projected, ComplexMode, ComplexModeSettings, ModalProjection, Operators,
 };
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
-use squeal::fem::system::assemble_system_as;
+use squeal::la::fem_assembly::assemble_system_as;
 use squeal::la::{MatrixFormat, Petsc};
 use squeal::pipeline::build_model;
 use squeal::scene::Scene;

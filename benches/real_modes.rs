@@ -12,9 +12,10 @@ use clap::Parser;
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
 use squeal::fem::material::Material;
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::{assemble_system, Clamp};
+use squeal::la::fem_assembly::assemble_system;
 use squeal::la::{DirectSolver, Factorization, Petsc};
 use squeal::mesh::structured::block;
+use squeal::mesh::Clamp;
 use squeal::parallel;
 
 #[derive(Parser)]

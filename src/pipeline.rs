@@ -10,15 +10,16 @@ use crate::eigen::complex_modes::{
 };
 use crate::eigen::real_modes::{real_modes, RealModes};
 use crate::eigen::sweep::{SweepParameter, SweepSettings};
-use crate::fem::system::{assemble_system_as, AssembledSystem, Clamp, SystemError};
 use crate::io::matrix_market::{self, MatrixMarketError};
 use crate::io::results::{ResultsError, ResultsFile};
 use crate::io::user_matrices::load_sum;
 use crate::io::xdmf::{self, NodalField};
+use crate::la::fem_assembly::{assemble_system_as, AssembledSystem, SystemError};
 use crate::la::{LaError, Petsc, SparseMatrix};
 use crate::mesh::partition;
 use crate::mesh::quality::{self, BlockQuality};
 use crate::mesh::structured::{annulus, block};
+use crate::mesh::Clamp;
 use crate::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
 use crate::scene::{ModelSource, Scene};
 

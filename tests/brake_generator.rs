@@ -225,8 +225,8 @@ impl squeal::fem::assembly::MatrixSink for MapSink {
     }
 }
 
-fn assembled(mesh: &Mesh, clamps: &[squeal::fem::system::Clamp]) -> (MapSink, MapSink) {
-    let dofs = squeal::fem::system::dof_map(mesh, clamps, 1, 0).unwrap();
+fn assembled(mesh: &Mesh, clamps: &[squeal::mesh::Clamp]) -> (MapSink, MapSink) {
+    let dofs = squeal::fem::dofmap::dof_map(mesh, clamps, 1, 0).unwrap();
     let (mut k, mut m) = (MapSink::default(), MapSink::default());
     squeal::fem::assembly::assemble(mesh, &dofs, &mut k, &mut m).unwrap();
     (k, m)
@@ -259,10 +259,10 @@ fn generated_brake_written_as_inp_and_read_back_gives_the_same_k_and_m() {
         let read = squeal::mesh::abaqus_inp::read(&path).unwrap();
         assert_eq!(read.mesh.surfaces, model.mesh.surfaces);
         assert_eq!(read.mesh.node_count(), model.mesh.node_count());
-        let read_clamps: Vec<squeal::fem::system::Clamp> = read
+        let read_clamps: Vec<squeal::mesh::Clamp> = read
             .clamps
             .iter()
-            .map(|(s, c)| squeal::fem::system::Clamp {
+            .map(|(s, c)| squeal::mesh::Clamp {
                 node_set: s.clone(),
                 components: *c,
             })

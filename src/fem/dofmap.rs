@@ -139,3 +139,28 @@ mod tests {
         }
     }
 }
+
+/// The DOF map of a mesh with the given clamps on `ranks` ranks; the error names the node set.
+pub fn dof_map(
+    mesh: &crate::mesh::Mesh,
+    clamps: &[crate::mesh::Clamp],
+    ranks: usize,
+    rank: usize,
+) -> Result<DofMap, String> {
+    let mut fixed = vec![[false; 3]; mesh.node_count()];
+    for clamp in clamps {
+        let set = mesh.node_set(&clamp.node_set)?;
+        if set.is_empty() {
+            return Err(format!(
+                "node set '{}' is empty: nothing would be clamped",
+                clamp.node_set
+            ));
+        }
+        for &n in set {
+            for c in 0..3 {
+                fixed[n][c] |= clamp.components[c];
+            }
+        }
+    }
+    Ok(DofMap::new(&fixed, ranks, rank))
+}

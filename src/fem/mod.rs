@@ -8,4 +8,3 @@ pub mod element;
 pub mod material;
 pub mod quadrature;
 pub mod shape;
-pub mod system;

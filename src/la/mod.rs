@@ -6,6 +6,7 @@
 
 pub mod eigen;
 pub(crate) mod error;
+pub mod fem_assembly;
 pub mod lapack;
 pub mod matrix;
 pub mod observation;

@@ -3,10 +3,13 @@
 
 pub mod abaqus_inp;
 pub mod brake;
+pub mod clamp;
 pub mod gmsh_msh;
 pub mod partition;
 pub mod quality;
 pub mod structured;
+
+pub use clamp::Clamp;
 
 use std::collections::BTreeMap;
 

@@ -2,8 +2,9 @@
 
 use squeal::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
 use squeal::fem::material::Material;
-use squeal::fem::system::{assemble_system, AssembledSystem, Clamp};
+use squeal::la::fem_assembly::{assemble_system, AssembledSystem};
 use squeal::la::Petsc;
+use squeal::mesh::Clamp;
 use squeal::mesh::Mesh;
 
 pub fn steel() -> Material {

@@ -20,9 +20,10 @@
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::{assemble_system_as, AssembledSystem, Clamp};
+use squeal::la::fem_assembly::{assemble_system_as, AssembledSystem};
 use squeal::la::{MatrixFormat, Petsc};
 use squeal::mesh::structured::block;
+use squeal::mesh::Clamp;
 use squeal::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
 use squeal::statics::{pressure_load, solve, StaticSettings};
 

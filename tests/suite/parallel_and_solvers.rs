@@ -12,13 +12,14 @@ use std::path::{Path, PathBuf};
 
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::{assemble_system, Clamp};
 use squeal::io::matrix_market;
 use squeal::io::user_matrices::{load_sum, MatrixTerm};
+use squeal::la::fem_assembly::assemble_system;
 use squeal::la::{
     solve_quadratic, MatrixFormat, Petsc, Preallocation, QuadraticOptions, SparseMatrix,
 };
 use squeal::mesh::structured::block;
+use squeal::mesh::Clamp;
 
 use super::common::{rel, say, solve_modes, steel, suite_dir};
 

@@ -11,9 +11,9 @@
 
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::Clamp;
 use squeal::la::Petsc;
 use squeal::mesh::structured::{annulus, block};
+use squeal::mesh::Clamp;
 
 use super::common::{rel, say, solve_modes, steel};
 

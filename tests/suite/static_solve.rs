@@ -7,9 +7,10 @@
 //! restrains the Poisson contraction).
 
 use squeal::fem::shape::ElementKind;
-use squeal::fem::system::{assemble_system_as, Clamp};
+use squeal::la::fem_assembly::assemble_system_as;
 use squeal::la::{DirectSolver, Factorization, MatrixFormat, Petsc};
 use squeal::mesh::structured::block;
+use squeal::mesh::Clamp;
 
 use super::common::{rel, say, steel};
 

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::fem::material::{Elasticity, Material};
 use crate::fem::shape::ElementKind;
-use crate::fem::system::Clamp;
+use crate::mesh::Clamp;
 use crate::mesh::Mesh;
 pub use crate::mesh::{Interface, InterfaceKind, PressureLoad};
 use grid::{Grid, GridMesh};

@@ -1,27 +1,12 @@
-//! Distributed assembly of K and M of a mesh with Dirichlet constraints eliminated.
+//! The PETSc adapter of `fem`'s generic assembly: distributed K and M of a mesh with its
+//! Dirichlet constraints eliminated (as dolfinx's fem/petsc; the kernels never see PETSc).
 
 use std::time::Instant;
 
-use super::assembly::{assemble, preallocation, AssemblyError};
-use super::dofmap::DofMap;
-use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
-use crate::mesh::Mesh;
-
-/// A component-wise Dirichlet constraint u_c = 0 on a node set.
-#[derive(Debug, Clone)]
-pub struct Clamp {
-    pub node_set: String,
-    pub components: [bool; 3],
-}
-
-impl Clamp {
-    pub fn all(node_set: &str) -> Self {
-        Clamp {
-            node_set: node_set.into(),
-            components: [true; 3],
-        }
-    }
-}
+use super::{LaError, MatrixFormat, Petsc, SparseMatrix};
+use crate::fem::assembly::{assemble, preallocation, AssemblyError};
+use crate::fem::dofmap::{dof_map, DofMap};
+use crate::mesh::{Clamp, Mesh};
 
 #[derive(Debug, thiserror::Error)]
 pub enum SystemError {
@@ -50,33 +35,6 @@ impl AssembledSystem<'_> {
     }
 }
 
-/// The DOF map of a mesh with the given clamps on `ranks` ranks.
-pub fn dof_map(
-    mesh: &Mesh,
-    clamps: &[Clamp],
-    ranks: usize,
-    rank: usize,
-) -> Result<DofMap, SystemError> {
-    let mut fixed = vec![[false; 3]; mesh.node_count()];
-    for clamp in clamps {
-        let set = mesh
-            .node_set(&clamp.node_set)
-            .map_err(SystemError::Constraint)?;
-        if set.is_empty() {
-            return Err(SystemError::Constraint(format!(
-                "node set '{}' is empty: nothing would be clamped",
-                clamp.node_set
-            )));
-        }
-        for &n in set {
-            for c in 0..3 {
-                fixed[n][c] |= clamp.components[c];
-            }
-        }
-    }
-    Ok(DofMap::new(&fixed, ranks, rank))
-}
-
 /// Assembles K and M in parallel: each rank computes its own elements; PETSc sends the
 /// entries of rows owned elsewhere. Block mode gives SBAIJ (block size 3), else symmetric AIJ.
 ///
@@ -100,7 +58,8 @@ pub fn assemble_system_as<'p>(
     format: Option<MatrixFormat>,
 ) -> Result<AssembledSystem<'p>, SystemError> {
     let start = Instant::now();
-    let dofs = dof_map(mesh, clamps, petsc.size() as usize, petsc.rank() as usize)?;
+    let dofs = dof_map(mesh, clamps, petsc.size() as usize, petsc.rank() as usize)
+        .map_err(SystemError::Constraint)?;
     let prealloc = preallocation(mesh, &dofs);
     let format = format.unwrap_or(if dofs.block_mode {
         MatrixFormat::Sbaij
