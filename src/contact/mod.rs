@@ -5,19 +5,18 @@
 
 pub mod kernel;
 pub mod law;
+pub mod linearize;
 pub mod pairing;
 pub mod surface;
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
 use crate::fem::dofmap::DofMap;
-use crate::la::{
-    LaError, MatrixFormat, ObservationMatrix, Petsc, Preallocation, SparseMatrix, Vector,
-};
+use crate::la::{LaError, ObservationMatrix, Petsc, Vector};
 use crate::mesh::{Interface, InterfaceKind, Mesh};
-use kernel::{Channel, Observed, Part, PointResponse, PointRows, Status};
+use kernel::{Channel, Observed, PointResponse, PointRows, Status};
 use law::{FrictionLaw, NormalLaw};
 use pairing::{Axis, ContactPoint};
 
@@ -252,48 +251,6 @@ fn point_work<'p>(c: &ObservationMatrix<'p>) -> Result<[Vector<'p>; 5], LaError>
         c.new_point_vector()?,
         c.new_point_vector()?,
     ])
-}
-
-/// A contact tangent sum_points sum_terms coef c_a c_b^T applied as C_a^T diag(coef) C_b x
-/// (see [`ContactModel::tangent_operator`]).
-pub struct TangentOperator<'c, 'p> {
-    contact: &'c ContactModel<'p>,
-    /// (a, b, coefficient per local point), sorted by a then b, the same pairs on every rank.
-    blocks: Vec<(Channel, Channel, Vec<f64>)>,
-    /// C_b x per channel, and the weighted point vector of one channel a.
-    work: [Vector<'p>; 4],
-    weighted: Vector<'p>,
-}
-
-impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
-    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<(), LaError> {
-        for b in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
-            if self.blocks.iter().any(|t| t.1 == b) {
-                self.contact
-                    .observation(b)
-                    .mult(x, &self.work[b as usize])?;
-            }
-        }
-        for a in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
-            if !self.blocks.iter().any(|t| t.0 == a) {
-                continue;
-            }
-            {
-                let mut w = self.weighted.local_mut()?;
-                w.iter_mut().for_each(|x| *x = 0.0);
-                for (_, b, coef) in self.blocks.iter().filter(|t| t.0 == a) {
-                    let observed = self.work[*b as usize].local()?;
-                    for ((w, c), o) in w.iter_mut().zip(coef).zip(observed.iter()) {
-                        *w += c * o;
-                    }
-                }
-            }
-            self.contact
-                .observation(a)
-                .mult_transpose_add(&self.weighted, y, y)?;
-        }
-        Ok(())
-    }
 }
 
 /// The contact response of this rank's points at one state.
@@ -556,129 +513,6 @@ impl<'p> ContactModel<'p> {
         self.c_tan2.mult_transpose_add(wt2, out, out)
     }
 
-    /// Adds the chosen tangent parts of this rank's points to `matrix` (entries of other
-    /// ranks' rows travel at assembly; call `assemble` after).
-    pub fn add_tangent(
-        &self,
-        state: &ContactState,
-        parts: &[Part],
-        matrix: &mut SparseMatrix,
-    ) -> Result<(), LaError> {
-        let mut dense = Vec::new();
-        for (k, &id) in self.local.iter().enumerate() {
-            let rows = &self.rows[k];
-            let n = rows.dofs.len();
-            dense.clear();
-            dense.resize(n * n, 0.0);
-            let sliding = self.interfaces[self.points[id].interface]
-                .friction
-                .is_sliding();
-            let omega = if sliding { self.disc_speed } else { 0.0 };
-            for &part in parts {
-                kernel::add_tangent(
-                    rows,
-                    self.points[id].weight,
-                    omega,
-                    &state.observed[k],
-                    &state.response[k],
-                    part,
-                    &mut dense,
-                );
-            }
-            matrix.add_values(&rows.dofs, &rows.dofs, &dense)?;
-        }
-        Ok(())
-    }
-
-    /// The rank-one terms of every local point's tangent `parts` (see
-    /// [`kernel::tangent_terms`]), in local point order.
-    pub fn tangent_terms(
-        &self,
-        state: &ContactState,
-        parts: &[Part],
-    ) -> Vec<Vec<(f64, Channel, Channel)>> {
-        self.local
-            .iter()
-            .enumerate()
-            .map(|(k, &id)| {
-                let point = &self.points[id];
-                let sliding = self.interfaces[point.interface].friction.is_sliding();
-                let omega = if sliding { self.disc_speed } else { 0.0 };
-                parts
-                    .iter()
-                    .flat_map(|&part| {
-                        kernel::tangent_terms(
-                            point.weight,
-                            omega,
-                            &state.observed[k],
-                            &state.response[k],
-                            part,
-                        )
-                    })
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// The chosen tangent parts at `state` as an operator applied through the observation
-    /// rows, without assembling it: each `(parts, scale)` adds `scale` times those parts.
-    /// Applying it costs four observation products and three transposed ones; an assembled
-    /// contact tangent has |point DOFs|^2 entries per point.
-    ///
-    /// # Collective
-    pub fn tangent_operator<'c>(
-        &'c self,
-        petsc: &Petsc,
-        state: &ContactState,
-        parts: &[(&[Part], f64)],
-    ) -> Result<TangentOperator<'c, 'p>, LaError> {
-        let n = self.local.len();
-        // One coefficient column per (a, b) channel pair that occurs on any rank.
-        let mut blocks: Vec<(Channel, Channel, Vec<f64>)> = Vec::new();
-        for &(part_list, scale) in parts {
-            for (k, terms) in self.tangent_terms(state, part_list).into_iter().enumerate() {
-                for (coef, a, b) in terms {
-                    let i = match blocks.iter().position(|x| x.0 == a && x.1 == b) {
-                        Some(i) => i,
-                        None => {
-                            blocks.push((a, b, vec![0.0; n]));
-                            blocks.len() - 1
-                        }
-                    };
-                    blocks[i].2[k] += scale * coef;
-                }
-            }
-        }
-        // Every rank takes part in the same products (they are collective).
-        let mut present = [0.0; 16];
-        for (a, b, _) in &blocks {
-            present[4 * *a as usize + *b as usize] = 1.0;
-        }
-        crate::parallel::max_in_place(petsc.world(), &mut present);
-        for a in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
-            for b in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
-                let missing = !blocks.iter().any(|x| x.0 == a && x.1 == b);
-                if present[4 * a as usize + b as usize] > 0.0 && missing {
-                    blocks.push((a, b, vec![0.0; n]));
-                }
-            }
-        }
-        blocks.sort_by_key(|x| (x.0 as usize, x.1 as usize));
-        let work = [
-            self.c_nor.new_point_vector()?,
-            self.c_nor.new_point_vector()?,
-            self.c_nor.new_point_vector()?,
-            self.c_nor.new_point_vector()?,
-        ];
-        let weighted = self.c_nor.new_point_vector()?;
-        Ok(TangentOperator {
-            contact: self,
-            blocks,
-            work,
-            weighted,
-        })
-    }
-
     fn observation(&self, c: Channel) -> &ObservationMatrix<'p> {
         match c {
             Channel::Nor => &self.c_nor,
@@ -707,108 +541,6 @@ impl<'p> ContactModel<'p> {
             }
         }
         Ok(out)
-    }
-
-    /// Preallocation of a matrix with the pattern of `base` (if any) joined with every
-    /// contact point's coupling.
-    ///
-    /// # Collective (when `base` is given)
-    pub fn pattern(&self, base: Option<&SparseMatrix>) -> Result<Preallocation, LaError> {
-        let own = self.columns.clone();
-        let mut extra: HashMap<usize, Vec<i32>> = HashMap::new();
-        let mut d = Vec::new();
-        for cols in &self.point_columns {
-            d.clear();
-            d.extend(cols.iter().copied().filter(|&x| x >= 0));
-            for &r in &d {
-                if own.contains(&(r as usize)) {
-                    extra
-                        .entry(r as usize - own.start)
-                        .or_default()
-                        .extend_from_slice(&d);
-                }
-            }
-        }
-        let n = own.len();
-        let mut pre = Preallocation {
-            diag: vec![0; n],
-            off: vec![0; n],
-            diag_upper: vec![0; n],
-            off_upper: vec![0; n],
-        };
-        let mut count = |row: usize, cols: &mut Vec<i32>| {
-            cols.sort_unstable();
-            cols.dedup();
-            let dg = cols
-                .iter()
-                .filter(|&&c| own.contains(&(c as usize)))
-                .count();
-            pre.diag[row] = dg as i32;
-            pre.off[row] = (cols.len() - dg) as i32;
-            pre.diag_upper[row] = pre.diag[row];
-            pre.off_upper[row] = pre.off[row];
-        };
-        match base {
-            Some(b) => {
-                b.for_each_local_row(|row, cols, _| {
-                    let local = row - own.start;
-                    let mut all = cols.to_vec();
-                    if let Some(e) = extra.get(&local) {
-                        all.extend_from_slice(e);
-                    }
-                    count(local, &mut all);
-                })?;
-            }
-            None => {
-                for (row, cols) in extra.iter_mut() {
-                    count(*row, cols);
-                }
-            }
-        }
-        Ok(pre)
-    }
-
-    /// A new assembled AIJ matrix with the values of `base` on the pattern of `base` joined
-    /// with every contact coupling (explicit zeros there), ready for `copy_values_from(base)`
-    /// and `add_tangent` again and again.
-    ///
-    /// # Collective
-    pub fn joined_matrix(
-        &self,
-        petsc: &'p Petsc,
-        base: &SparseMatrix,
-    ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(Some(base))?;
-        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, self.columns.len(), &pre)?;
-        let mut failed = Ok(());
-        base.for_each_local_row(|row, cols, vals| {
-            if failed.is_ok() {
-                failed = m.add_values(&[row as i32], cols, vals);
-            }
-        })?;
-        failed?;
-        for rows in &self.rows {
-            let zeros = vec![0.0; rows.dofs.len() * rows.dofs.len()];
-            m.add_values(&rows.dofs, &rows.dofs, &zeros)?;
-        }
-        m.assemble()?;
-        Ok(m)
-    }
-
-    /// A new AIJ matrix holding only the given contact tangent parts at `state`.
-    ///
-    /// # Collective
-    pub fn tangent_matrix(
-        &self,
-        petsc: &'p Petsc,
-        state: &ContactState,
-        parts: &[Part],
-    ) -> Result<SparseMatrix<'p>, LaError> {
-        let pre = self.pattern(None)?;
-        let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, self.columns.len(), &pre)?;
-        self.add_tangent(state, parts, &mut m)?;
-        m.assemble()?;
-        Ok(m)
     }
 
     /// Per-interface sums over all ranks.

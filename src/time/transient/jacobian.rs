@@ -1,0 +1,145 @@
+//! The transient's Jacobians: J = M/(beta h^2) + gamma/(beta h) C + K0 + K_mock, factorized by
+//! MUMPS. The first uses the static state's contact stiffness (normal and stick: symmetric,
+//! Cholesky) as the mock contact stiffness of DESIGN.md; a refresh uses the tangent of the
+//! current state, friction and friction damping included (unsymmetric, LU).
+
+use std::time::Instant;
+
+use crate::contact::kernel::Part;
+use crate::contact::linearize::Base;
+use crate::contact::{ContactModel, ContactState};
+use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::time::newmark::{jacobian, Damping, Jacobian, NewmarkSettings, State};
+
+/// Builds and factorizes Jacobians, and keeps what a checkpoint needs to rebuild the current
+/// one (the state it was built at).
+pub(super) struct JacobianBuilder<'a, 'p> {
+    petsc: &'p Petsc<'p>,
+    contact: &'a ContactModel<'p>,
+    /// K0 on the pattern joined with the contact couplings (the input K0 for that pattern).
+    k0: &'a SparseMatrix<'p>,
+    k0_input: &'a SparseMatrix<'p>,
+    m: &'a SparseMatrix<'p>,
+    c: Damping<'a, 'p>,
+    static_state: &'a ContactState,
+    /// The static mock contact stiffness (normal and stick).
+    mock: SparseMatrix<'p>,
+    /// A restart's saved Jacobian state, used by the first factorization.
+    restart_at: Option<(Vector<'p>, Vector<'p>)>,
+    /// The state the current Jacobian was built at (None: the static mock).
+    pub built_at: Option<(Vector<'p>, Vector<'p>)>,
+    pub factor_entries: f64,
+    pub built: usize,
+    /// All factorizations, and those within the stepping loop.
+    pub seconds_factorizing: f64,
+    pub seconds_in_loop: f64,
+}
+
+impl<'a, 'p> JacobianBuilder<'a, 'p> {
+    /// # Collective
+    #[allow(clippy::too_many_arguments)] // the operators J is made of
+    pub fn new(
+        petsc: &'p Petsc<'p>,
+        contact: &'a ContactModel<'p>,
+        k0: &'a SparseMatrix<'p>,
+        k0_input: &'a SparseMatrix<'p>,
+        m: &'a SparseMatrix<'p>,
+        c: Damping<'a, 'p>,
+        static_state: &'a ContactState,
+        restart_at: Option<(Vector<'p>, Vector<'p>)>,
+    ) -> Result<Self, LaError> {
+        let mock = contact.linearize(
+            petsc,
+            Base::PatternOf(k0_input),
+            static_state,
+            &[Part::Normal, Part::Stick],
+        )?;
+        Ok(JacobianBuilder {
+            petsc,
+            contact,
+            k0,
+            k0_input,
+            m,
+            c,
+            static_state,
+            mock,
+            restart_at,
+            built_at: None,
+            factor_entries: 0.0,
+            built: 0,
+            seconds_factorizing: 0.0,
+            seconds_in_loop: 0.0,
+        })
+    }
+
+    /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
+    /// mock; a restart's saved state takes precedence once. The contact tangent beyond K0
+    /// comes back as an operator applied through the observation rows (the iteration's
+    /// correction of the carried linear force).
+    ///
+    /// # Collective
+    pub fn factorize(
+        &mut self,
+        ns: &NewmarkSettings,
+        at: Option<&State<'p>>,
+    ) -> Result<Jacobian<'a, 'p>, LaError> {
+        let t = Instant::now();
+        let saved = self.restart_at.take();
+        let at: Option<(&Vector<'p>, &Vector<'p>)> = match (&saved, at) {
+            (Some((q, v)), _) => Some((q, v)),
+            (None, Some(s)) => Some((&s.q, &s.v)),
+            (None, None) => None,
+        };
+        let contact = self.contact;
+        // The friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
+        // enters through gamma / (beta h).
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        let (j, extra) = if let Some((q, v)) = at {
+            let cs = contact.evaluate(q, Some(v), 1.0)?;
+            let parts = [Part::Normal, Part::Stick, Part::Friction];
+            let mut tangent =
+                contact.linearize(self.petsc, Base::PatternOf(self.k0_input), &cs, &parts)?;
+            let damping = contact.linearize(
+                self.petsc,
+                Base::PatternOf(self.k0_input),
+                &cs,
+                &[Part::Damping],
+            )?;
+            tangent.axpy(c1, &damping)?;
+            self.built_at = Some((q.try_clone()?, v.try_clone()?));
+            let extra = contact.tangent_operator(
+                self.petsc,
+                &cs,
+                &[(&parts, 1.0), (&[Part::Damping], c1)],
+            )?;
+            (
+                jacobian(ns, self.m, self.c, self.k0, Some(&tangent))?,
+                extra,
+            )
+        } else {
+            let extra = contact.tangent_operator(
+                self.petsc,
+                self.static_state,
+                &[(&[Part::Normal, Part::Stick], 1.0)],
+            )?;
+            let j = jacobian(ns, self.m, self.c, self.k0, Some(&self.mock))?;
+            j.set_symmetric(true)?;
+            (j, extra)
+        };
+        // The static mock is symmetric (Cholesky); a state's tangent has the friction part.
+        let kind = if at.is_some() {
+            Factorization::Lu
+        } else {
+            Factorization::Cholesky
+        };
+        let factor = DirectSolver::factorize(self.petsc, &j, kind, "time_")?;
+        self.factor_entries = factor.report().factor_entries;
+        self.built += 1;
+        self.seconds_factorizing += t.elapsed().as_secs_f64();
+        self.seconds_in_loop += t.elapsed().as_secs_f64();
+        Ok(Jacobian {
+            factor,
+            extra: Some(Box::new(extra)),
+        })
+    }
+}

@@ -1,0 +1,389 @@
+//! The transient stage: nonlinear time response of the model (full, or the reduced model of
+//! the superelement reduction) from the static state plus a perturbation, with the contact and
+//! friction forces of the contact stage, and observation signals (braking torque, normal and
+//! friction force per interface, sensors) at every step, streamed to transient.h5.
+//!
+//! `run` wires the parts: `settings` (the scene table), `jacobian` (J and its refreshes),
+//! `recorder` (signals, states, the stream), `checkpoint` (restart).
+
+mod checkpoint;
+mod jacobian;
+mod recorder;
+mod settings;
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::newmark::{
+    initial_acceleration, integrate_adaptive, Adaptivity, Damping, Forces, ModalDamping,
+    NewmarkSettings, State, StepControl, StepReport, TimeError,
+};
+use crate::contact::{ContactModel, ContactState};
+use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use checkpoint::Checkpoint;
+use jacobian::JacobianBuilder;
+use recorder::Recorder;
+pub use settings::{random_coefficients, Impulse, Newton, Start, TransientSettings};
+
+/// The kick in the integrated unknowns.
+pub enum Kick<'a, 'p> {
+    /// Added to the static displacement, scaled so its largest entry is `amplitude`.
+    Displacement(&'a Vector<'p>),
+    /// A force impulse (N s): the initial velocity is M^-1 times it.
+    Impulse(&'a Vector<'p>),
+}
+
+/// Sensor rows: three per sensor (x, y, z of its node) over the integrated unknowns.
+pub struct Sensors<'p> {
+    pub names: Vec<String>,
+    pub rows: crate::la::ObservationMatrix<'p>,
+    /// Rows are grouped by owning rank: row block k belongs to sensor `order[k]`.
+    pub order: Vec<usize>,
+}
+
+/// The time response: signals at every step (index 0 = start).
+pub struct Transient {
+    pub time: Vec<f64>,
+    /// Per interface (in the contact model's order): normal force, friction force, torque.
+    pub normal_force: Vec<Vec<f64>>,
+    pub friction_force: Vec<Vec<f64>>,
+    pub torque: Vec<Vec<f64>>,
+    pub iterations: Vec<usize>,
+    /// The step size of each step (0 at the start).
+    pub step_size: Vec<f64>,
+    /// Per sensor: displacement, velocity, acceleration (x, y, z per sample, row-major).
+    pub sensor_names: Vec<String>,
+    pub sensor_values: Vec<[Vec<f64>; 3]>,
+    /// States written (every state_interval), and the time a restart resumed from.
+    pub states: usize,
+    pub resumed_at: Option<f64>,
+    /// Step cuts after failed steps, and Jacobian factorizations in all.
+    pub cuts: usize,
+    pub refreshes: usize,
+    pub factorizations: usize,
+    pub factor_entries: f64,
+    pub seconds_factorizing: f64,
+    /// The stepping loop, and the Jacobian factorizations within it.
+    pub seconds_stepping: f64,
+    pub seconds_jacobians: f64,
+    /// Time in the factor's solves, steps and iterations (solves), over this process's steps.
+    pub seconds_solving: f64,
+    /// Time in the force evaluations and in the operator products (predictor, contact
+    /// tangent), steps and iterations.
+    pub seconds_in_forces: f64,
+    pub seconds_in_products: f64,
+    pub steps_run: usize,
+    pub iterations_run: usize,
+}
+
+/// Everything the stage needs.
+pub struct TransientInputs<'a, 'p> {
+    pub k0: &'a SparseMatrix<'p>,
+    pub m: &'a SparseMatrix<'p>,
+    pub c: Damping<'a, 'p>,
+    pub contact: &'a ContactModel<'p>,
+    pub f_ext: &'a Vector<'p>,
+    pub q_static: &'a Vector<'p>,
+    pub static_state: &'a crate::contact::ContactState,
+    pub kick: Kick<'a, 'p>,
+    pub sensors: Option<&'a Sensors<'p>>,
+    /// Modal damping over a band, applied as a force (on top of `c`).
+    pub modal_damping: Option<&'a ModalDamping<'p>>,
+}
+
+impl Transient {
+    /// The braking torque (sum over the interfaces) at every recorded step.
+    pub fn braking_torque(&self) -> Vec<f64> {
+        self.braking_torque_from(0)
+    }
+
+    /// The braking torque from step row `from` on.
+    pub fn braking_torque_from(&self, from: usize) -> Vec<f64> {
+        (from..self.time.len())
+            .map(|k| self.torque.iter().map(|t| t[k]).sum())
+            .collect()
+    }
+
+    fn empty(steps: usize, interfaces: usize, sensor_names: Vec<String>) -> Self {
+        let series = || vec![Vec::with_capacity(steps + 1); interfaces];
+        Transient {
+            time: Vec::with_capacity(steps + 1),
+            step_size: Vec::with_capacity(steps + 1),
+            normal_force: series(),
+            friction_force: series(),
+            torque: series(),
+            iterations: Vec::with_capacity(steps + 1),
+            cuts: 0,
+            refreshes: 0,
+            factorizations: 0,
+            factor_entries: 0.0,
+            seconds_factorizing: 0.0,
+            seconds_stepping: 0.0,
+            seconds_jacobians: 0.0,
+            seconds_solving: 0.0,
+            seconds_in_forces: 0.0,
+            seconds_in_products: 0.0,
+            steps_run: 0,
+            iterations_run: 0,
+            states: 0,
+            resumed_at: None,
+            sensor_values: vec![Default::default(); sensor_names.len()],
+            sensor_names,
+        }
+    }
+}
+
+/// Where the stream and the checkpoint go, and whether to resume from the checkpoint.
+pub struct TransientFiles {
+    pub stream: PathBuf,
+    pub checkpoint: PathBuf,
+    pub restart: bool,
+}
+
+impl TransientFiles {
+    pub fn in_directory(dir: &Path, restart: bool) -> Self {
+        TransientFiles {
+            stream: dir.join("transient.h5"),
+            checkpoint: dir.join("checkpoint.h5"),
+            restart,
+        }
+    }
+}
+
+fn io_error(e: crate::io::results::ResultsError) -> TimeError {
+    TimeError::Output(e.to_string())
+}
+
+/// Runs the transient. A step that fails ends the run: the signals up to the last converged
+/// step come back with the error, so the caller can write them before reporting it.
+///
+/// # Collective
+pub fn run<'p>(
+    petsc: &'p Petsc,
+    settings: &TransientSettings,
+    input: TransientInputs<'_, 'p>,
+    files: &TransientFiles,
+) -> Result<(Transient, Option<TimeError>), TimeError> {
+    let newmark = NewmarkSettings {
+        step: settings.step,
+        tolerance: settings.tolerance,
+        max_iterations: settings.max_iterations,
+        ..Default::default()
+    };
+    let contact = input.contact;
+    let t = Instant::now();
+    let k0 = contact.joined_matrix(petsc, input.k0)?;
+    let mut state = start_state(petsc, settings, &input, &k0)?;
+    let seconds_start = t.elapsed().as_secs_f64();
+
+    // The contact state of the last force evaluation: the step's record reuses it when the
+    // step ended there.
+    let last_contact = RefCell::new(None::<ContactState>);
+    let fc = input.f_ext.duplicate()?;
+    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| {
+        contact_forces(&input, &fc, q, v, f, &last_contact)
+    };
+
+    // A fresh stream, or the checkpoint's state, step control and Jacobian state with the
+    // stream cut back to the checkpoint's rows.
+    let sensor_names = input.sensors.map(|s| s.names.clone()).unwrap_or_default();
+    let out = Transient::empty(settings.steps, contact.interfaces.len(), sensor_names);
+    let interval = settings.state_interval;
+    let mut control = StepControl::default();
+    let (mut recorder, restart_at) = if files.restart {
+        let checkpoint = Checkpoint::read(petsc, files, settings, &state)?;
+        let r = Recorder::resume(
+            petsc,
+            files,
+            contact,
+            input.sensors,
+            interval,
+            out,
+            &checkpoint,
+        )?;
+        control = checkpoint.control;
+        state = checkpoint.state;
+        (r, checkpoint.jacobian_at)
+    } else {
+        let r = Recorder::create(petsc, files, contact, input.sensors, interval, out, &state)?;
+        (r, None)
+    };
+    let builder = RefCell::new(JacobianBuilder::new(
+        petsc,
+        contact,
+        &k0,
+        input.k0,
+        input.m,
+        input.c,
+        input.static_state,
+        restart_at,
+    )?);
+    let mut factorize =
+        |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);
+
+    let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
+    let first_step = ((state.time / settings.step).round() as usize).min(settings.steps);
+    bar.resume_from(first_step);
+    let t = Instant::now();
+    let end_time = settings.steps as f64 * settings.step;
+    let mut checkpoint_failure = None;
+    let mut on_step =
+        |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<(), TimeError> {
+            let h = settings.step / f64::from(1u32 << c.level);
+            let out = &mut recorder.out;
+            out.seconds_solving += report.solve_seconds;
+            out.seconds_in_forces += report.force_seconds;
+            out.seconds_in_products += report.product_seconds;
+            out.steps_run += 1;
+            out.iterations_run += report.iterations;
+            let evaluated = last_contact.borrow();
+            let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
+            recorder.record(s, h, report.iterations, evaluated)?;
+            recorder.sample_state(s, h)?;
+            let at_end = s.time >= end_time - 0.25 * h;
+            recorder.flush_if_due(at_end)?;
+            if settings.checkpoint_every > 0
+                && (c.steps.is_multiple_of(settings.checkpoint_every) || at_end)
+            {
+                recorder.flush()?;
+                // After a step restore J is rebuilt at this state; otherwise it stays the one
+                // built at `built_at`.
+                let b = builder.borrow();
+                let j = if c.good == 0 {
+                    None
+                } else {
+                    b.built_at.as_ref()
+                };
+                if let Err(e) = Checkpoint::write(petsc, files, settings, s, c, j, &recorder.out) {
+                    checkpoint_failure = Some(e.to_string());
+                }
+            }
+            let out = &recorder.out;
+            if out.time.len().is_multiple_of(50) || at_end {
+                let recent = &out.iterations[out.iterations.len().saturating_sub(500)..];
+                let mean = recent.iter().sum::<usize>() as f64 / recent.len().max(1) as f64;
+                let done = ((s.time / settings.step).round() as usize).min(settings.steps);
+                let rate = (done - first_step) as f64 / t.elapsed().as_secs_f64().max(1e-9);
+                bar.update(
+                    done,
+                    &format!(
+                        "t = {:.3e} s, {rate:.1} steps/s, {mean:.2} iterations/step",
+                        s.time
+                    ),
+                );
+            }
+            Ok(())
+        };
+    let rank0 = petsc.rank() == 0;
+    let mut log = |line: &str| {
+        if rank0 {
+            println!("  transient: {line}");
+        }
+    };
+    let forces: &mut Forces<'_, 'p> = &mut forces;
+    let result = integrate_adaptive(
+        newmark,
+        input.m,
+        input.c,
+        &k0,
+        &mut factorize,
+        &mut state,
+        forces,
+        end_time,
+        Adaptivity {
+            max_cuts: settings.max_cuts,
+            restore_after: 100,
+            refresh: settings.refresh,
+            full_newton: settings.newton == Newton::Full,
+        },
+        &mut control,
+        &mut on_step,
+        &mut log,
+    );
+    bar.finish();
+    // Whatever happened, the signals recorded so far go to the file, and a failed run leaves
+    // a checkpoint at its last converged step (to restart with other settings).
+    recorder.flush()?;
+    let b = builder.into_inner();
+    if result.is_err() && settings.checkpoint_every > 0 {
+        let at = b.built_at.as_ref();
+        Checkpoint::write(petsc, files, settings, &state, &control, at, &recorder.out)?;
+    }
+    if let Some(e) = checkpoint_failure {
+        return Err(TimeError::Output(e));
+    }
+    let mut out = recorder.out;
+    out.seconds_stepping = t.elapsed().as_secs_f64();
+    out.factor_entries = b.factor_entries;
+    out.seconds_factorizing = seconds_start + b.seconds_factorizing;
+    out.seconds_jacobians = b.seconds_in_loop;
+    out.cuts = control.cuts;
+    out.refreshes = control.refreshes;
+    out.factorizations = control.factorizations.max(b.built);
+    Ok((out, result.err()))
+}
+
+/// The start: the static state + amplitude x the kick's shape (scaled to its largest entry),
+/// or at rest there with the velocity of an impulse; the acceleration from the equation of
+/// motion.
+///
+/// # Collective
+fn start_state<'p>(
+    petsc: &'p Petsc,
+    settings: &TransientSettings,
+    input: &TransientInputs<'_, 'p>,
+    k0: &SparseMatrix<'p>,
+) -> Result<State<'p>, TimeError> {
+    let mass = DirectSolver::factorize(petsc, input.m, Factorization::Lu, "time_mass_")?;
+    let q = input.q_static.try_clone()?;
+    let v = q.duplicate()?;
+    v.set_all(0.0)?;
+    match input.kick {
+        Kick::Displacement(shape) => {
+            let largest = shape.norm_inf()?;
+            if largest > 0.0 {
+                q.axpy(settings.amplitude / largest, shape)?;
+            }
+        }
+        Kick::Impulse(impulse) => mass.solve(impulse, &v)?,
+    }
+    let a = q.duplicate()?;
+    let mut state = State {
+        time: 0.0,
+        step: 0,
+        q,
+        v,
+        a,
+        linear: None,
+    };
+    let fc = input.f_ext.duplicate()?;
+    let last = RefCell::new(None);
+    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| {
+        contact_forces(input, &fc, q, v, f, &last)
+    };
+    initial_acceleration(input.m, input.c, k0, &mut state, &mut forces, &mass)?;
+    Ok(state)
+}
+
+/// f = f_ext + f_contact(q, v) - modal damping force; keeps the contact state evaluated.
+///
+/// # Collective
+fn contact_forces<'p>(
+    input: &TransientInputs<'_, 'p>,
+    fc: &Vector<'p>,
+    q: &Vector<'p>,
+    v: &Vector<'p>,
+    f: &Vector<'p>,
+    last: &RefCell<Option<ContactState>>,
+) -> Result<(), LaError> {
+    let state = input.contact.evaluate(q, Some(v), 1.0)?;
+    input.contact.force(&state, fc)?;
+    *last.borrow_mut() = Some(state);
+    f.copy_from(input.f_ext)?;
+    f.axpy(1.0, fc)?;
+    match input.modal_damping {
+        Some(modal) => modal.subtract_force(v, f),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,298 @@
+//! What the transient keeps of every step: the signals (time, step size, iterations, forces
+//! and torque per interface, sensors) in memory and streamed to transient.h5 in chunks, and
+//! the states every `state_interval` of simulated time.
+
+use super::checkpoint::Checkpoint;
+use super::{io_error, Sensors, Transient, TransientFiles};
+use crate::contact::{ContactModel, ContactState, InterfaceSummary};
+use crate::io::series::SeriesFile;
+use crate::la::{LaError, Petsc, Vector};
+use crate::time::newmark::{State, TimeError};
+
+/// Signal rows buffered before they are appended to the file.
+const FLUSH_ROWS: usize = 1000;
+const STATE_PATHS: [&str; 3] = ["states/time", "states/displacement", "states/velocity"];
+
+/// The full-rate series of the stream.
+fn signal_paths(interfaces: &[String]) -> Vec<String> {
+    let mut v: Vec<String> = ["time", "step_size", "iterations", "braking_torque"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for name in interfaces {
+        for s in ["normal_force", "friction_force", "torque"] {
+            v.push(format!("interfaces/{name}/{s}"));
+        }
+    }
+    v
+}
+
+/// Displacement, velocity, acceleration series of every sensor (3 per sensor, in order).
+fn sensor_paths(names: &[String]) -> Vec<String> {
+    names
+        .iter()
+        .flat_map(|n| {
+            ["displacement", "velocity", "acceleration"].map(|k| format!("sensors/{n}/{k}"))
+        })
+        .collect()
+}
+
+/// The signals of the run so far and their stream.
+pub(super) struct Recorder<'a, 'p> {
+    petsc: &'p Petsc<'p>,
+    contact: &'a ContactModel<'p>,
+    sensors: Option<&'a Sensors<'p>>,
+    sensor_buffer: Option<Vector<'p>>,
+    stream: SeriesFile,
+    names: Vec<String>,
+    /// Signal rows already in the stream.
+    written: usize,
+    /// Simulated time between stored states (0: none).
+    interval: f64,
+    pub out: Transient,
+}
+
+impl<'a, 'p> Recorder<'a, 'p> {
+    /// A fresh stream with the start recorded (and stored as the first state).
+    ///
+    /// # Collective
+    pub fn create(
+        petsc: &'p Petsc<'p>,
+        files: &TransientFiles,
+        contact: &'a ContactModel<'p>,
+        sensors: Option<&'a Sensors<'p>>,
+        interval: f64,
+        out: Transient,
+        start: &State<'p>,
+    ) -> Result<Self, TimeError> {
+        let stream = SeriesFile::create(petsc.world(), &files.stream).map_err(io_error)?;
+        let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
+        for path in signal_paths(&r.names) {
+            let units = match path.rsplit('/').next().unwrap_or("") {
+                "time" | "step_size" => "s",
+                "iterations" => "1",
+                "torque" | "braking_torque" => "N m",
+                _ => "N",
+            };
+            r.stream.create_series(&path, 1, units).map_err(io_error)?;
+        }
+        for (k, path) in sensor_paths(&r.out.sensor_names).iter().enumerate() {
+            let units = ["m", "m/s", "m/s^2"][k % 3];
+            r.stream.create_series(path, 3, units).map_err(io_error)?;
+        }
+        let n = start.q.global_len();
+        for (path, width, units) in [
+            ("states/time", 1, "s"),
+            ("states/displacement", n, "m"),
+            ("states/velocity", n, "m/s"),
+        ] {
+            r.stream
+                .create_series(path, width, units)
+                .map_err(io_error)?;
+        }
+        r.record(start, 0.0, 0, None)?;
+        if interval > 0.0 {
+            r.write_state(start)?;
+            r.out.states = 1;
+        }
+        Ok(r)
+    }
+
+    /// The existing stream cut back to the checkpoint's rows, its signals read back (for the
+    /// summary and the plots).
+    ///
+    /// # Collective
+    pub fn resume(
+        petsc: &'p Petsc<'p>,
+        files: &TransientFiles,
+        contact: &'a ContactModel<'p>,
+        sensors: Option<&'a Sensors<'p>>,
+        interval: f64,
+        out: Transient,
+        checkpoint: &Checkpoint<'p>,
+    ) -> Result<Self, TimeError> {
+        let stream = SeriesFile::open(petsc.world(), &files.stream).map_err(io_error)?;
+        let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
+        let rows = checkpoint.signal_rows;
+        let sensor_series = sensor_paths(&r.out.sensor_names);
+        for path in signal_paths(&r.names).iter().chain(&sensor_series) {
+            r.stream.truncate(path, rows).map_err(io_error)?;
+        }
+        for path in STATE_PATHS {
+            r.stream
+                .truncate(path, checkpoint.state_rows)
+                .map_err(io_error)?;
+        }
+        r.stream.flush().map_err(io_error)?;
+        let read = |p: &str| r.stream.read(p).map_err(io_error);
+        let out = &mut r.out;
+        out.time = read("time")?;
+        out.step_size = read("step_size")?;
+        out.iterations = read("iterations")?
+            .into_iter()
+            .map(|x| x as usize)
+            .collect();
+        for (i, name) in r.names.iter().enumerate() {
+            out.normal_force[i] = read(&format!("interfaces/{name}/normal_force"))?;
+            out.friction_force[i] = read(&format!("interfaces/{name}/friction_force"))?;
+            out.torque[i] = read(&format!("interfaces/{name}/torque"))?;
+        }
+        for (i, chunk) in sensor_series.chunks(3).enumerate() {
+            for (kind, path) in chunk.iter().enumerate() {
+                out.sensor_values[i][kind] = read(path)?;
+            }
+        }
+        out.states = checkpoint.state_rows;
+        out.resumed_at = Some(checkpoint.state_time);
+        r.written = r.stream.rows("time").map_err(io_error)?;
+        Ok(r)
+    }
+
+    fn new(
+        petsc: &'p Petsc<'p>,
+        contact: &'a ContactModel<'p>,
+        sensors: Option<&'a Sensors<'p>>,
+        interval: f64,
+        out: Transient,
+        stream: SeriesFile,
+    ) -> Result<Self, TimeError> {
+        let sensor_buffer = match sensors {
+            Some(s) => Some(s.rows.new_point_vector()?),
+            None => None,
+        };
+        Ok(Recorder {
+            petsc,
+            contact,
+            sensors,
+            sensor_buffer,
+            stream,
+            names: contact.interfaces.iter().map(|i| i.name.clone()).collect(),
+            written: 0,
+            interval,
+            out,
+        })
+    }
+
+    /// Appends one step's signals; `evaluated` is the contact state at `s` when the last
+    /// force evaluation was there (saves one evaluation per step).
+    ///
+    /// # Collective
+    pub fn record(
+        &mut self,
+        s: &State<'p>,
+        h: f64,
+        iterations: usize,
+        evaluated: Option<&ContactState>,
+    ) -> Result<(), LaError> {
+        let contact = self.contact;
+        let sums: Vec<InterfaceSummary> = match evaluated {
+            Some(cs) => contact.summarize(self.petsc, cs),
+            None => contact.summarize(self.petsc, &contact.evaluate(&s.q, Some(&s.v), 1.0)?),
+        };
+        let out = &mut self.out;
+        out.time.push(s.time);
+        out.step_size.push(h);
+        out.iterations.push(iterations);
+        for (i, sum) in sums.iter().enumerate() {
+            out.normal_force[i].push(sum.normal_force);
+            out.friction_force[i].push(sum.friction_force);
+            out.torque[i].push(sum.torque);
+        }
+        if let (Some(sensors), Some(y)) = (self.sensors, &self.sensor_buffer) {
+            // Each rank's rows into their place, then one sum over the ranks for all three.
+            let n = y.global_len();
+            let mut values = vec![0.0; 3 * n];
+            let range = y.ownership();
+            for (kind, x) in [&s.q, &s.v, &s.a].into_iter().enumerate() {
+                sensors.rows.mult(x, y)?;
+                values[kind * n + range.start..kind * n + range.end].copy_from_slice(&y.local()?);
+            }
+            crate::parallel::sum_in_place(self.petsc.world(), &mut values);
+            for (kind, values) in values.chunks(n).enumerate() {
+                for (k, v) in values.chunks(3).enumerate() {
+                    out.sensor_values[sensors.order[k]][kind].extend_from_slice(v);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Stores the state when the next sampling time is reached.
+    ///
+    /// # Collective
+    pub fn sample_state(&mut self, s: &State<'p>, h: f64) -> Result<(), TimeError> {
+        let next = self.out.states as f64 * self.interval;
+        if self.interval > 0.0 && s.time >= next - 1e-3 * h {
+            self.write_state(s)?;
+            self.out.states += 1;
+        }
+        Ok(())
+    }
+
+    fn write_state(&self, s: &State<'p>) -> Result<(), TimeError> {
+        let range = s.q.ownership();
+        let stream = &self.stream;
+        stream.append("states/time", &[s.time]).map_err(io_error)?;
+        stream
+            .append_distributed("states/displacement", &s.q.local()?, range.clone())
+            .map_err(io_error)?;
+        stream
+            .append_distributed("states/velocity", &s.v.local()?, range)
+            .map_err(io_error)
+    }
+
+    /// Rows recorded but not yet in the stream.
+    pub fn unwritten(&self) -> usize {
+        self.out.time.len() - self.written
+    }
+
+    /// Appends the rows recorded since the last flush to the stream and flushes it.
+    ///
+    /// # Collective
+    pub fn flush(&mut self) -> Result<(), TimeError> {
+        let from = self.written;
+        let out = &self.out;
+        let its: Vec<f64> = out.iterations[from..].iter().map(|&i| i as f64).collect();
+        let torque = out.braking_torque_from(from);
+        let mut series: Vec<(String, &[f64])> = vec![
+            ("time".into(), &out.time[from..]),
+            ("step_size".into(), &out.step_size[from..]),
+            ("iterations".into(), &its),
+            ("braking_torque".into(), &torque),
+        ];
+        for (i, name) in self.names.iter().enumerate() {
+            series.push((
+                format!("interfaces/{name}/normal_force"),
+                &out.normal_force[i][from..],
+            ));
+            series.push((
+                format!("interfaces/{name}/friction_force"),
+                &out.friction_force[i][from..],
+            ));
+            series.push((format!("interfaces/{name}/torque"), &out.torque[i][from..]));
+        }
+        for (path, values) in series {
+            self.stream.append(&path, values).map_err(io_error)?;
+        }
+        let sensor_series = sensor_paths(&out.sensor_names);
+        for (i, chunk) in sensor_series.chunks(3).enumerate() {
+            for (kind, path) in chunk.iter().enumerate() {
+                let v = &out.sensor_values[i][kind];
+                self.stream.append(path, &v[3 * from..]).map_err(io_error)?;
+            }
+        }
+        self.stream.flush().map_err(io_error)?;
+        self.written = out.time.len();
+        Ok(())
+    }
+
+    /// Flushes when a chunk is full or at the end.
+    ///
+    /// # Collective
+    pub fn flush_if_due(&mut self, at_end: bool) -> Result<(), TimeError> {
+        if self.unwritten() >= FLUSH_ROWS || at_end {
+            self.flush()?;
+        }
+        Ok(())
+    }
+}

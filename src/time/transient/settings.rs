@@ -1,0 +1,249 @@
+//! The `[transient]` table of a scene: step, length, start, output rates, Newton variant.
+
+use serde::{Deserialize, Serialize};
+
+/// The `[transient]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransientSettings {
+    /// Time step (s).
+    #[serde(default = "default_step")]
+    pub step: f64,
+    /// Number of steps.
+    pub steps: usize,
+    /// Relative tolerance of the fixed-Jacobian iterations.
+    #[serde(default = "default_tolerance")]
+    pub tolerance: f64,
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// The perturbation of the static state the run starts from (see [`Start`]).
+    #[serde(default)]
+    pub start: Start,
+    /// `start = "mode"`: the real mode (1-based).
+    #[serde(default = "default_mode")]
+    pub mode: usize,
+    /// `start = "mode"` or `"random"`: the largest nodal displacement of the kick (m).
+    #[serde(default = "default_amplitude")]
+    pub amplitude: f64,
+    /// `start = "random"`: the seed of the modal coefficients.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// `start = "impulse"`: where and how much.
+    #[serde(default)]
+    pub impulse: Option<Impulse>,
+    /// A failed step is halved (Jacobian refactorized) at most this many levels deep.
+    #[serde(default = "default_max_cuts")]
+    pub max_cuts: usize,
+    /// Before cutting, rebuild the Jacobian with the contact tangent of the current state
+    /// (normal and stick stiffness, friction damping of nearly sticking points).
+    #[serde(default = "default_refresh")]
+    pub refresh: bool,
+    /// `"modified"` (default): the fixed Jacobian; `"full"`: J rebuilt with the contact tangent
+    /// at every iterate (the reference the fixed-Jacobian iterations are checked against).
+    #[serde(default)]
+    pub newton: Newton,
+    /// Displacement and velocity states go to transient.h5 every this much simulated time
+    /// (s; 0: none). Default 1e-5 s (100 kHz).
+    #[serde(default = "default_state_interval")]
+    pub state_interval: f64,
+    /// A checkpoint (checkpoint.h5, for `squeal run --restart`) every this many steps, and at
+    /// the end or the failure of the run (0: never).
+    #[serde(default = "default_checkpoint_every")]
+    pub checkpoint_every: usize,
+    /// Sensor points by name: displacement, velocity and acceleration (x, y, z) of the node
+    /// nearest to each position (m) at every step.
+    #[serde(default)]
+    pub sensors: std::collections::BTreeMap<String, [f64; 3]>,
+    /// Upper frequency of the spectrogram plot (Hz).
+    #[serde(default = "default_spectrogram_max_hz")]
+    pub spectrogram_max_hz: f64,
+}
+
+/// How the transient leaves the static state (the growth of unstable modes needs a seed).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Start {
+    /// Displaced along one real mode shape (`mode`, `amplitude`).
+    #[default]
+    Mode,
+    /// Displaced along a random combination of every computed real mode: coefficients
+    /// uniform in [-1, 1] from `seed` (the same on any number of ranks), scaled to
+    /// `amplitude`. Smooth (modal) rather than a per-DOF noise, whose strain energy would sit
+    /// in the mesh's highest frequencies.
+    Random,
+    /// At rest at the static state, hit by an impulse (`[transient.impulse]`): v0 = M^-1 I.
+    Impulse,
+}
+
+/// A force impulse at the node nearest to `point`.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Impulse {
+    /// Position (m).
+    pub point: [f64; 3],
+    /// Impulse vector (N s).
+    pub value: [f64; 3],
+}
+
+/// Coefficients uniform in [-1, 1] (splitmix64: one definition, identical on every platform
+/// and rank count).
+pub fn random_coefficients(seed: u64, n: usize) -> Vec<f64> {
+    let mut x = seed;
+    (0..n)
+        .map(|_| {
+            x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            let mut z = x;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            z ^= z >> 31;
+            // 53 random bits to [0, 1), then to [-1, 1).
+            2.0 * ((z >> 11) as f64 / (1u64 << 53) as f64) - 1.0
+        })
+        .collect()
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+fn default_spectrogram_max_hz() -> f64 {
+    20_000.0
+}
+
+fn default_state_interval() -> f64 {
+    1e-5
+}
+fn default_checkpoint_every() -> usize {
+    10_000
+}
+
+/// The Newton variant of the transient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Newton {
+    #[default]
+    Modified,
+    Full,
+}
+
+fn default_refresh() -> bool {
+    true
+}
+
+fn default_max_cuts() -> usize {
+    6
+}
+
+fn default_step() -> f64 {
+    1e-6
+}
+fn default_tolerance() -> f64 {
+    1e-8
+}
+fn default_max_iterations() -> usize {
+    30
+}
+fn default_mode() -> usize {
+    1
+}
+fn default_amplitude() -> f64 {
+    1e-7
+}
+
+impl TransientSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(self.step > 0.0 && self.step.is_finite()) {
+            return Err(format!(
+                "key 'transient.step' = {}: must be a positive time step (s)",
+                self.step
+            ));
+        }
+        if self.steps == 0 {
+            return Err("key 'transient.steps' must be at least 1".into());
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
+            return Err(format!(
+                "key 'transient.tolerance' = {}: must be in (0, 0.01)",
+                self.tolerance
+            ));
+        }
+        if self.mode == 0 {
+            return Err("key 'transient.mode' is 1-based: the first real mode is 1".into());
+        }
+        for (name, p) in &self.sensors {
+            if p.iter().any(|x| !x.is_finite()) {
+                return Err(format!(
+                    "key 'transient.sensors.{name}': the position must be three finite coordinates (m)"
+                ));
+            }
+        }
+        if self.spectrogram_max_hz.is_nan() || self.spectrogram_max_hz <= 0.0 {
+            return Err("key 'transient.spectrogram_max_hz' must be positive (Hz)".into());
+        }
+        if !(self.state_interval >= 0.0 && self.state_interval.is_finite()) {
+            return Err(format!(
+                "key 'transient.state_interval' = {}: must be a time (s) >= 0 (0: no states)",
+                self.state_interval
+            ));
+        }
+        if !self.amplitude.is_finite() {
+            return Err("key 'transient.amplitude' must be finite".into());
+        }
+        match (self.start, &self.impulse) {
+            (Start::Impulse, None) => {
+                return Err(
+                    "key 'transient.start' = \"impulse\" needs [transient.impulse] with point = [x, y, z] (m) and value = [Ix, Iy, Iz] (N s)"
+                        .into(),
+                )
+            }
+            (_, Some(i)) if i.point.iter().chain(&i.value).any(|x| !x.is_finite()) => {
+                return Err(
+                    "key 'transient.impulse': point and value must be three finite numbers each"
+                        .into(),
+                )
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(text: &str) -> TransientSettings {
+        toml::from_str(text).expect("transient settings parse")
+    }
+
+    #[test]
+    fn impulse_start_without_an_impulse_names_the_key() {
+        let err = settings("steps = 10\nstart = \"impulse\"")
+            .validate()
+            .unwrap_err();
+        assert!(err.contains("transient.impulse"), "{err}");
+        let ok = settings(
+            "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, 0.0, 0.0]\nvalue = [0.0, 0.0, 1.0e-3]",
+        );
+        assert!(ok.validate().is_ok());
+        let nan = settings(
+            "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, nan, 0.0]\nvalue = [0.0, 0.0, 1.0]",
+        );
+        assert!(nan.validate().unwrap_err().contains("finite"));
+        assert!(toml::from_str::<TransientSettings>("steps = 1\nstart = \"noise\"").is_err());
+    }
+
+    #[test]
+    fn random_coefficients_are_seeded_uniform_and_reproducible() {
+        let a = random_coefficients(7, 20_000);
+        assert_eq!(a, random_coefficients(7, 20_000));
+        assert_ne!(a[..10], random_coefficients(8, 10)[..]);
+        assert!(a.iter().all(|x| (-1.0..1.0).contains(x)));
+        // Uniform on [-1, 1): mean 0 and variance 1/3, to a few standard errors.
+        let n = a.len() as f64;
+        let mean = a.iter().sum::<f64>() / n;
+        let variance = a.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n;
+        assert!(mean.abs() < 4.0 * (1.0f64 / 3.0 / n).sqrt(), "mean {mean}");
+        assert!((variance - 1.0 / 3.0).abs() < 0.01, "variance {variance}");
+    }
+}
