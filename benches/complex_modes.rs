@@ -13,10 +13,9 @@ use std::time::Instant;
 use clap::Parser;
 use squeal::contact::kernel::Part;
 use squeal::contact::ContactModel;
-use squeal::eigen::complex_modes::{
-    full, projected, ComplexMode, ComplexModeSettings, ModalProjection, Operators,
-};
+use squeal::eigen::complex_modes::{full, projected, ComplexMode, ComplexModeSettings, Operators};
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
+use squeal::eigen::stability::ModalProjection;
 use squeal::la::fem_assembly::assemble_system_as;
 use squeal::la::{MatrixFormat, Petsc};
 use squeal::pipeline::build_model;

@@ -18,5 +18,6 @@ pub mod post;
 pub mod progress;
 pub mod reduce;
 pub mod scene;
+pub mod stages;
 pub mod statics;
 pub mod time;

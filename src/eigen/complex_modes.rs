@@ -17,7 +17,6 @@
 use std::f64::consts::PI;
 use std::time::Instant;
 
-use mpi::topology::SimpleCommunicator;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::kernel::Channel;
@@ -382,19 +381,6 @@ pub fn full<'p>(
     })
 }
 
-/// The real-mode basis of the projected route, with the contact observation of every mode.
-pub struct ModalProjection {
-    /// Modes in the basis.
-    pub size: usize,
-    pub omega2: Vec<f64>,
-    /// P_a = C_a Phi for the four channels: local points x modes, column-major.
-    channels: [Vec<f64>; 4],
-    points: usize,
-    /// Phi^T (contact part of K_s) Phi, summed over ranks: removed again from diag(omega^2)
-    /// when the contact state changes.
-    reference: Vec<f64>,
-}
-
 /// A complex number as (re, im).
 pub type Complex = (f64, f64);
 /// An eigenvalue with its modal coordinates.
@@ -404,99 +390,6 @@ pub type ProjectedOperators = (Vec<f64>, Vec<f64>, Vec<f64>);
 
 /// Point terms `(coefficient, channel a, channel b)` of every local point.
 pub type PointTerms = [Vec<(f64, Channel, Channel)>];
-
-impl ModalProjection {
-    /// `omega2`: eigenvalues of the basis modes (M-orthonormal eigenvectors of K_s);
-    /// `channels`: their observation (see [`crate::contact::ContactModel::observe_shapes`]);
-    /// `reference`: the point terms of the symmetric contact part inside K_s.
-    ///
-    /// # Collective
-    pub fn new(
-        comm: &SimpleCommunicator,
-        omega2: Vec<f64>,
-        channels: [Vec<f64>; 4],
-        points: usize,
-        reference: &PointTerms,
-    ) -> Self {
-        let size = omega2.len();
-        for c in &channels {
-            assert_eq!(c.len(), points * size, "observed shapes: points x modes");
-        }
-        let mut p = ModalProjection {
-            size,
-            omega2,
-            channels,
-            points,
-            reference: Vec::new(),
-        };
-        p.reference = p.project(comm, reference);
-        p
-    }
-
-    /// Sum over points of the terms, projected: m x m column-major, summed over ranks.
-    ///
-    /// # Collective
-    pub fn project(&self, comm: &SimpleCommunicator, terms: &PointTerms) -> Vec<f64> {
-        let (n, m) = (self.points, self.size);
-        assert_eq!(terms.len(), n, "one term list per local point");
-        let mut out = vec![0.0; m * m];
-        // Group by channel pair: out += P_a^T diag(g) P_b, one GEMM per pair present.
-        let mut weights = vec![vec![0.0f64; n]; 16];
-        let mut present = [false; 16];
-        for (j, list) in terms.iter().enumerate() {
-            for &(g, a, b) in list {
-                let pair = a as usize * 4 + b as usize;
-                weights[pair][j] += g;
-                present[pair] = true;
-            }
-        }
-        let mut scaled = vec![0.0; n * m];
-        for pair in (0..16).filter(|&p| present[p]) {
-            let (a, b) = (pair / 4, pair % 4);
-            let g = &weights[pair];
-            for k in 0..m {
-                for j in 0..n {
-                    scaled[k * n + j] = g[j] * self.channels[b][k * n + j];
-                }
-            }
-            let product = lapack::gemm_tn(n, m, m, &self.channels[a], &scaled);
-            for (o, p) in out.iter_mut().zip(&product) {
-                *o += p;
-            }
-        }
-        crate::parallel::sum_in_place(comm, &mut out);
-        out
-    }
-
-    /// Projected stiffness and damping of a contact state: K_p = diag(omega^2) - reference +
-    /// Phi^T (stiffness terms) Phi; C_p = alpha I + beta K0_p + Phi^T (damping terms) Phi, with
-    /// K0_p = diag(omega^2) - reference.
-    ///
-    /// # Collective
-    pub fn operators(
-        &self,
-        comm: &SimpleCommunicator,
-        stiffness: &PointTerms,
-        damping_terms: &PointTerms,
-        damping: &DampingSettings,
-    ) -> (Vec<f64>, Vec<f64>) {
-        let m = self.size;
-        let mut k0 = self.reference.iter().map(|x| -x).collect::<Vec<f64>>();
-        for i in 0..m {
-            k0[i * m + i] += self.omega2[i];
-        }
-        let contact = self.project(comm, stiffness);
-        let kp: Vec<f64> = k0.iter().zip(&contact).map(|(a, b)| a + b).collect();
-        let mut cp = self.project(comm, damping_terms);
-        for (c, k) in cp.iter_mut().zip(&k0) {
-            *c += damping.rayleigh_beta * k;
-        }
-        for i in 0..m {
-            cp[i * m + i] += damping.rayleigh_alpha;
-        }
-        (kp, cp)
-    }
-}
 
 /// Projects the full operators on `shapes` by products (for models without contact
 /// observation, e.g. user matrices): returns (K_p, C_p, M_p), column-major.
@@ -642,22 +535,6 @@ pub fn projected_coordinates(
     Ok(pairs)
 }
 
-/// Modal assurance criterion of two complex vectors: |a^H b|^2 / (|a|^2 |b|^2).
-pub fn mac(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
-    let (mut re, mut im, mut na, mut nb) = (0.0, 0.0, 0.0, 0.0);
-    for (&(ar, ai), &(br, bi)) in a.iter().zip(b) {
-        re += ar * br + ai * bi;
-        im += ar * bi - ai * br;
-        na += ar * ar + ai * ai;
-        nb += br * br + bi * bi;
-    }
-    if na == 0.0 || nb == 0.0 {
-        0.0
-    } else {
-        (re * re + im * im) / (na * nb)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -692,17 +569,6 @@ mod tests {
                 "oscillator {i}: {found:?} vs {exact:?} ({err:e})"
             );
         }
-    }
-
-    #[test]
-    fn mac_is_one_for_complex_multiples_and_zero_for_orthogonal() {
-        let a = [(1.0, 0.5), (-0.3, 2.0)];
-        let b: Vec<(f64, f64)> = a
-            .iter()
-            .map(|&(r, i)| (0.3 * r - 1.2 * i, 0.3 * i + 1.2 * r))
-            .collect();
-        assert!((mac(&a, &b) - 1.0).abs() < 1e-14);
-        assert!(mac(&[(1.0, 0.0), (0.0, 0.0)], &[(0.0, 0.0), (0.0, 1.0)]) < 1e-30);
     }
 
     #[test]

@@ -118,28 +118,6 @@ impl DofMap {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ranges_are_balanced_and_cover_all_dofs() {
-        let mut fixed = vec![[false; 3]; 101];
-        fixed[0] = [true; 3];
-        fixed[50] = [true, false, true];
-        for ranks in 1..5 {
-            let maps: Vec<DofMap> = (0..ranks).map(|r| DofMap::new(&fixed, ranks, r)).collect();
-            let total: usize = maps.iter().map(DofMap::local_dofs).sum();
-            assert_eq!(total, 3 * 101 - 5);
-            assert!(!maps[0].block_mode);
-            let sizes: Vec<usize> = maps.iter().map(DofMap::local_dofs).collect();
-            let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
-            // Cuts fall between nodes: each side can be off by up to one node (3 DOF).
-            assert!(hi - lo <= 6, "{sizes:?}");
-        }
-    }
-}
-
 /// The DOF map of a mesh with the given clamps on `ranks` ranks; the error names the node set.
 pub fn dof_map(
     mesh: &crate::mesh::Mesh,
@@ -163,4 +141,26 @@ pub fn dof_map(
         }
     }
     Ok(DofMap::new(&fixed, ranks, rank))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ranges_are_balanced_and_cover_all_dofs() {
+        let mut fixed = vec![[false; 3]; 101];
+        fixed[0] = [true; 3];
+        fixed[50] = [true, false, true];
+        for ranks in 1..5 {
+            let maps: Vec<DofMap> = (0..ranks).map(|r| DofMap::new(&fixed, ranks, r)).collect();
+            let total: usize = maps.iter().map(DofMap::local_dofs).sum();
+            assert_eq!(total, 3 * 101 - 5);
+            assert!(!maps[0].block_mode);
+            let sizes: Vec<usize> = maps.iter().map(DofMap::local_dofs).collect();
+            let (lo, hi) = (sizes.iter().min().unwrap(), sizes.iter().max().unwrap());
+            // Cuts fall between nodes: each side can be off by up to one node (3 DOF).
+            assert!(hi - lo <= 6, "{sizes:?}");
+        }
+    }
 }

@@ -2,6 +2,7 @@
 
 pub mod contact_map;
 pub mod matrix_market;
+pub mod output;
 pub mod plot;
 pub mod preview;
 pub mod results;

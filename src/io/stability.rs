@@ -6,7 +6,7 @@ use std::path::Path;
 use super::plot::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::eigen::complex_modes::ComplexMode;
 use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
-use crate::eigen::sweep::Tracks;
+use crate::eigen::tracking::Tracks;
 
 /// Writes the diagram of `modes` as a PNG.
 pub fn write_diagram(path: &Path, modes: &[ComplexMode], title: &str) -> std::io::Result<()> {

@@ -1,3 +1,5 @@
-//! Post-processing of time signals.
+//! Analyses of a trajectory (DESIGN.md §2b): spectra today; modal energies, the limit cycle,
+//! dynamic stability along the cycle and pseudo trajectories belong here too. Writers of their
+//! results live in `io::output`.
 
 pub mod spectrum;

@@ -106,6 +106,82 @@ pub fn spectrogram(y: &[f64], t0: f64, dt: f64, window: usize, hop: usize) -> Sp
     out
 }
 
+/// The signal a transient's spectrogram shows: the sensor displacement component that moves
+/// most, or the braking torque without sensors; with its label.
+pub fn spectrogram_signal(tr: &crate::time::transient::Transient) -> (Vec<f64>, String) {
+    let spread = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        v.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+    };
+    let mut best: Option<(f64, Vec<f64>, String)> = None;
+    for (name, values) in tr.sensor_names.iter().zip(&tr.sensor_values) {
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            let c: Vec<f64> = values[0].iter().skip(k).step_by(3).copied().collect();
+            let sp = spread(&c);
+            if best.as_ref().is_none_or(|b| sp > b.0) {
+                best = Some((sp, c, format!("{name} {axis} displacement")));
+            }
+        }
+    }
+    match best {
+        Some((_, c, what)) => (c, what),
+        None => (tr.braking_torque(), "braking torque".into()),
+    }
+}
+
+/// A spectrogram in dB up to `max_hz`, ready to draw: `db` is columns (times) x rows
+/// (frequencies), column-major.
+pub struct SpectrogramDb {
+    pub columns: usize,
+    pub rows: usize,
+    pub db: Vec<f64>,
+    /// Centre of the first and last column (s), and the bin width (Hz).
+    pub first_time: f64,
+    pub last_time: f64,
+    pub column_width: f64,
+    pub bin_hz: f64,
+    pub top_db: f64,
+}
+
+/// The spectrogram of a transient's signal `y` at times `t`, on the nominal step grid `dt`
+/// (Hann windows of about a quarter of the run, a power of two; 1/8 hop); None when the run is
+/// too short for one.
+pub fn spectrogram_db(t: &[f64], y: &[f64], dt: f64, max_hz: f64) -> Option<SpectrogramDb> {
+    let uniform = resample(t, y, dt);
+    let window = (uniform.len() / 4).clamp(64, 4096).next_power_of_two() / 2;
+    if uniform.len() < 2 * window || window < 32 {
+        return None;
+    }
+    let s = spectrogram(&uniform, t[0], dt, window, window / 8);
+    let rows = s
+        .frequencies
+        .iter()
+        .take_while(|&&f| f <= max_hz)
+        .count()
+        .max(2);
+    let bins = s.frequencies.len();
+    let columns = s.times.len();
+    let mut db = Vec::with_capacity(columns * rows);
+    for c in 0..columns {
+        db.extend(
+            s.power[c * bins..c * bins + rows]
+                .iter()
+                .map(|p| 10.0 * p.max(1e-300).log10()),
+        );
+    }
+    let top_db = db.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    Some(SpectrogramDb {
+        columns,
+        rows,
+        db,
+        first_time: s.times[0],
+        last_time: s.times[columns - 1],
+        column_width: s.times.get(1).map_or(1.0, |x| x - s.times[0]),
+        bin_hz: s.frequencies[1],
+        top_db,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

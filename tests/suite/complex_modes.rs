@@ -15,9 +15,8 @@
 
 use squeal::contact::kernel::{self, Channel, Observed, Part, PointRows};
 use squeal::contact::law::{FrictionLaw, NormalLaw};
-use squeal::eigen::complex_modes::{
-    full, solve_dense, ComplexModeSettings, ModalProjection, Operators,
-};
+use squeal::eigen::complex_modes::{full, solve_dense, ComplexModeSettings, Operators};
+use squeal::eigen::stability::ModalProjection;
 use squeal::la::{MatrixFormat, Petsc, Preallocation, SparseMatrix};
 
 use super::common::{rel, say};

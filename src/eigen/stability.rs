@@ -1,0 +1,187 @@
+//! Stability of a contact state on a fixed real-mode basis: linearize the contact at the
+//! state, project the tangent on the nominal real modes through the observation rows
+//! (O(points x modes^2), no factorization of size n), and solve the dense complex modes. The
+//! recipe behind the projected route, the parameter sweeps and stability along a trajectory.
+
+use mpi::topology::SimpleCommunicator;
+
+use super::complex_modes::{solve_dense, DampingSettings, DenseEigenpair, PointTerms};
+use super::real_modes::RealModes;
+use crate::contact::kernel::Part;
+use crate::contact::{ContactModel, ContactState};
+use crate::la::{lapack, LaError};
+
+/// The real-mode basis of the projected route, with the contact observation of every mode.
+pub struct ModalProjection {
+    /// Modes in the basis.
+    pub size: usize,
+    pub omega2: Vec<f64>,
+    /// P_a = C_a Phi for the four channels: local points x modes, column-major.
+    channels: [Vec<f64>; 4],
+    points: usize,
+    /// Phi^T (contact part of K_s) Phi, summed over ranks: removed again from diag(omega^2)
+    /// when the contact state changes.
+    reference: Vec<f64>,
+}
+
+impl ModalProjection {
+    /// `omega2`: eigenvalues of the basis modes (M-orthonormal eigenvectors of K_s);
+    /// `channels`: their observation (see [`crate::contact::ContactModel::observe_shapes`]);
+    /// `reference`: the point terms of the symmetric contact part inside K_s.
+    ///
+    /// # Collective
+    pub fn new(
+        comm: &SimpleCommunicator,
+        omega2: Vec<f64>,
+        channels: [Vec<f64>; 4],
+        points: usize,
+        reference: &PointTerms,
+    ) -> Self {
+        let size = omega2.len();
+        for c in &channels {
+            assert_eq!(c.len(), points * size, "observed shapes: points x modes");
+        }
+        let mut p = ModalProjection {
+            size,
+            omega2,
+            channels,
+            points,
+            reference: Vec::new(),
+        };
+        p.reference = p.project(comm, reference);
+        p
+    }
+
+    /// Sum over points of the terms, projected: m x m column-major, summed over ranks.
+    ///
+    /// # Collective
+    pub fn project(&self, comm: &SimpleCommunicator, terms: &PointTerms) -> Vec<f64> {
+        let (n, m) = (self.points, self.size);
+        assert_eq!(terms.len(), n, "one term list per local point");
+        let mut out = vec![0.0; m * m];
+        // Group by channel pair: out += P_a^T diag(g) P_b, one GEMM per pair present.
+        let mut weights = vec![vec![0.0f64; n]; 16];
+        let mut present = [false; 16];
+        for (j, list) in terms.iter().enumerate() {
+            for &(g, a, b) in list {
+                let pair = a as usize * 4 + b as usize;
+                weights[pair][j] += g;
+                present[pair] = true;
+            }
+        }
+        let mut scaled = vec![0.0; n * m];
+        for pair in (0..16).filter(|&p| present[p]) {
+            let (a, b) = (pair / 4, pair % 4);
+            let g = &weights[pair];
+            for k in 0..m {
+                for j in 0..n {
+                    scaled[k * n + j] = g[j] * self.channels[b][k * n + j];
+                }
+            }
+            let product = lapack::gemm_tn(n, m, m, &self.channels[a], &scaled);
+            for (o, p) in out.iter_mut().zip(&product) {
+                *o += p;
+            }
+        }
+        crate::parallel::sum_in_place(comm, &mut out);
+        out
+    }
+
+    /// Projected stiffness and damping of a contact state: K_p = diag(omega^2) - reference +
+    /// Phi^T (stiffness terms) Phi; C_p = alpha I + beta K0_p + Phi^T (damping terms) Phi, with
+    /// K0_p = diag(omega^2) - reference.
+    ///
+    /// # Collective
+    pub fn operators(
+        &self,
+        comm: &SimpleCommunicator,
+        stiffness: &PointTerms,
+        damping_terms: &PointTerms,
+        damping: &DampingSettings,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let m = self.size;
+        let mut k0 = self.reference.iter().map(|x| -x).collect::<Vec<f64>>();
+        for i in 0..m {
+            k0[i * m + i] += self.omega2[i];
+        }
+        let contact = self.project(comm, stiffness);
+        let kp: Vec<f64> = k0.iter().zip(&contact).map(|(a, b)| a + b).collect();
+        let mut cp = self.project(comm, damping_terms);
+        for (c, k) in cp.iter_mut().zip(&k0) {
+            *c += damping.rayleigh_beta * k;
+        }
+        for i in 0..m {
+            cp[i * m + i] += damping.rayleigh_alpha;
+        }
+        (kp, cp)
+    }
+}
+
+/// The contact parts of the projected stiffness (symmetric contact, sticking, sliding
+/// friction) and of the damping (friction damping).
+const STIFFNESS: [Part; 3] = [Part::Normal, Part::Stick, Part::Friction];
+const DAMPING: [Part; 1] = [Part::Damping];
+
+/// Stability of contact states on the nominal real modes. The observation of the modes is
+/// computed once; the laws of the contact model may change between states (a sweep).
+pub struct ProjectedStability {
+    pub projection: ModalProjection,
+    damping: DampingSettings,
+}
+
+impl ProjectedStability {
+    /// The basis: the real modes of the symmetric tangent at `nominal` (its contact part,
+    /// normal and stick, is what a new state's tangent replaces).
+    ///
+    /// # Collective
+    pub fn new(
+        comm: &SimpleCommunicator,
+        contact: &ContactModel,
+        modes: &RealModes,
+        nominal: &ContactState,
+        damping: DampingSettings,
+    ) -> Result<Self, LaError> {
+        let projection = ModalProjection::new(
+            comm,
+            modes.eigenvalues.clone(),
+            contact.observe_shapes(&modes.shapes)?,
+            contact.local.len(),
+            &contact.tangent_terms(nominal, &[Part::Normal, Part::Stick]),
+        );
+        Ok(ProjectedStability {
+            projection,
+            damping,
+        })
+    }
+
+    /// Projected stiffness and damping (column-major) of the tangent at `state`.
+    ///
+    /// # Collective
+    pub fn operators_at(
+        &self,
+        comm: &SimpleCommunicator,
+        contact: &ContactModel,
+        state: &ContactState,
+    ) -> (Vec<f64>, Vec<f64>) {
+        self.projection.operators(
+            comm,
+            &contact.tangent_terms(state, &STIFFNESS),
+            &contact.tangent_terms(state, &DAMPING),
+            &self.damping,
+        )
+    }
+
+    /// The complex modes at `state` (of `contact`, whose points and rows are the basis'):
+    /// eigenvalues with their modal coordinates, unsorted.
+    ///
+    /// # Collective
+    pub fn modes_at(
+        &self,
+        comm: &SimpleCommunicator,
+        contact: &ContactModel,
+        state: &ContactState,
+    ) -> Result<Vec<DenseEigenpair>, String> {
+        let (kp, cp) = self.operators_at(comm, contact, state);
+        solve_dense(self.projection.size, &kp, &cp)
+    }
+}

@@ -1,0 +1,166 @@
+//! Mode tracking by MAC (modal assurance criterion) across a sequence of eigen-solutions in
+//! one fixed basis: sweep points, or linearizations along a trajectory.
+
+use super::complex_modes::{Complex, DenseEigenpair};
+
+/// Modal assurance criterion of two complex vectors: |a^H b|^2 / (|a|^2 |b|^2).
+pub fn mac(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
+    let (mut re, mut im, mut na, mut nb) = (0.0, 0.0, 0.0, 0.0);
+    for (&(ar, ai), &(br, bi)) in a.iter().zip(b) {
+        re += ar * br + ai * bi;
+        im += ar * bi - ai * br;
+        na += ar * ar + ai * ai;
+        nb += br * br + bi * bi;
+    }
+    if na == 0.0 || nb == 0.0 {
+        0.0
+    } else {
+        (re * re + im * im) / (na * nb)
+    }
+}
+
+/// Mode tracks over the sweep points: `tracks[t][i]` is track t's eigenvalue at point i and
+/// its MAC with the track's mode at the previous point (1 at the first point).
+#[derive(Debug, Clone, Default)]
+pub struct Tracks {
+    pub tracks: Vec<Vec<Option<(Complex, f64)>>>,
+}
+
+/// Relative eigenvalue spacing below which modes form a cluster (a doublet of the disc).
+const CLUSTER: f64 = 2e-3;
+
+/// Pairs the modes of one point with those of the next: for each previous mode, the index of
+/// its continuation and the MAC (or None). Greedy on the cost (1 - MAC) + |s_i - s_j| / |s_i|,
+/// where for a mode inside a cluster (a doublet: eigenvalues within 2e-3) the MAC is taken
+/// with the cluster's whole plane. So the shape decides at crossings (frequencies meet,
+/// shapes differ), and inside a doublet, whose two shapes may rotate freely within their plane
+/// from one point to the next, the eigenvalue decides: its tracks keep their order, no swaps.
+pub fn pair_modes(
+    previous: &[DenseEigenpair],
+    next: &[DenseEigenpair],
+) -> Vec<Option<(usize, f64)>> {
+    let close = |a: Complex, b: Complex| {
+        (a.0 - b.0).hypot(a.1 - b.1) <= CLUSTER * a.0.hypot(a.1).max(b.0.hypot(b.1))
+    };
+    let mut candidates = Vec::with_capacity(previous.len() * next.len());
+    for (i, (si, _)) in previous.iter().enumerate() {
+        let scale = si.0.hypot(si.1).max(1e-300);
+        let cluster: Vec<usize> = (0..previous.len())
+            .filter(|&k| close(previous[k].0, *si))
+            .collect();
+        for (j, (sj, yj)) in next.iter().enumerate() {
+            let m = cluster
+                .iter()
+                .map(|&k| mac(&previous[k].1, yj))
+                .sum::<f64>()
+                .min(1.0);
+            let ds = (si.0 - sj.0).hypot(si.1 - sj.1) / scale;
+            candidates.push(((1.0 - m) + ds, i, j, m));
+        }
+    }
+    candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out = vec![None; previous.len()];
+    let mut taken = vec![false; next.len()];
+    for (_, i, j, m) in candidates {
+        if out[i].is_none() && !taken[j] {
+            out[i] = Some((j, m));
+            taken[j] = true;
+        }
+    }
+    out
+}
+
+/// Tracks modes through the points (each point's modes with their modal coordinates in one
+/// fixed basis). Tracks start at the first point; a mode of a later point that continues no
+/// track is dropped (its track would start mid-sweep).
+pub fn track(points: &[Vec<DenseEigenpair>]) -> Tracks {
+    let Some(first) = points.first() else {
+        return Tracks::default();
+    };
+    let mut tracks: Vec<Vec<Option<(Complex, f64)>>> =
+        first.iter().map(|(s, _)| vec![Some((*s, 1.0))]).collect();
+    // The current mode of each track (index into the latest point), None once lost.
+    let mut current: Vec<Option<usize>> = (0..first.len()).map(Some).collect();
+    for w in points.windows(2) {
+        let (prev, next) = (&w[0], &w[1]);
+        let alive: Vec<usize> = current.iter().filter_map(|c| *c).collect();
+        let subset: Vec<DenseEigenpair> = alive.iter().map(|&i| prev[i].clone()).collect();
+        let pairs = pair_modes(&subset, next);
+        let by_prev: std::collections::HashMap<usize, Option<(usize, f64)>> =
+            alive.iter().copied().zip(pairs).collect();
+        for (t, c) in current.iter_mut().enumerate() {
+            match c.and_then(|i| by_prev.get(&i).copied().flatten()) {
+                Some((j, m)) => {
+                    tracks[t].push(Some((next[j].0, m)));
+                    *c = Some(j);
+                }
+                None => {
+                    tracks[t].push(None);
+                    *c = None;
+                }
+            }
+        }
+    }
+    Tracks { tracks }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit(k: usize, n: usize) -> Vec<Complex> {
+        (0..n).map(|i| (f64::from(u8::from(i == k)), 0.0)).collect()
+    }
+
+    #[test]
+    fn mac_is_one_for_complex_multiples_and_zero_for_orthogonal() {
+        let a = [(1.0, 0.5), (-0.3, 2.0)];
+        let b: Vec<(f64, f64)> = a
+            .iter()
+            .map(|&(r, i)| (0.3 * r - 1.2 * i, 0.3 * i + 1.2 * r))
+            .collect();
+        assert!((mac(&a, &b) - 1.0).abs() < 1e-14);
+        assert!(mac(&[(1.0, 0.0), (0.0, 0.0)], &[(0.0, 0.0), (0.0, 1.0)]) < 1e-30);
+    }
+
+    /// Two distinct modes whose frequencies cross (shapes e0 and e1 stay), and a doublet (e2,
+    /// e3 plane) whose members rotate by 60 degrees per point while splitting slightly: the
+    /// crossing is followed by shape, the doublet keeps its frequency order, no swaps.
+    #[test]
+    fn crossings_follow_shapes_and_doublets_do_not_swap() {
+        let n = 4;
+        let mut points = Vec::new();
+        for p in 0..5 {
+            let x = p as f64;
+            let angle = (60.0 * x).to_radians();
+            let (c, s) = (angle.cos(), angle.sin());
+            let rotated = |a: f64, b: f64| -> Vec<Complex> {
+                vec![(0.0, 0.0), (0.0, 0.0), (a, 0.0), (b, 0.0)]
+            };
+            let split = 1e-4 * (1.0 + x);
+            points.push(vec![
+                ((0.0, 100.0 + 10.0 * x), unit(0, n)), // rising
+                ((0.0, 140.0 - 10.0 * x), unit(1, n)), // falling: crosses the first at x = 2
+                ((0.0, 500.0 * (1.0 - split)), rotated(c, s)),
+                ((0.0, 500.0 * (1.0 + split)), rotated(-s, c)),
+            ]);
+        }
+        let t = track(&points);
+        assert_eq!(t.tracks.len(), 4);
+        for (k, track) in t.tracks.iter().enumerate() {
+            let freqs: Vec<f64> = track.iter().map(|p| p.unwrap().0 .1).collect();
+            match k {
+                0 => assert!(freqs.windows(2).all(|w| w[1] > w[0]), "rising: {freqs:?}"),
+                1 => assert!(freqs.windows(2).all(|w| w[1] < w[0]), "falling: {freqs:?}"),
+                2 => assert!(
+                    freqs.iter().all(|&f| f < 500.0),
+                    "lower doublet member: {freqs:?}"
+                ),
+                _ => assert!(
+                    freqs.iter().all(|&f| f > 500.0),
+                    "upper doublet member: {freqs:?}"
+                ),
+            }
+        }
+    }
+}

@@ -1,0 +1,182 @@
+//! One writer per stage output (DESIGN.md §5): HDF5 groups of results.h5, CSV, PNG, XDMF.
+//! Writers only write: what they show was computed by the stages or by `post`.
+
+pub mod modes;
+pub mod reduction;
+pub mod statics;
+pub mod sweep;
+pub mod transient;
+
+use std::path::{Path, PathBuf};
+
+use crate::eigen::complex_modes::ComplexModes;
+use crate::eigen::real_modes::RealModes;
+use crate::io::results::{ResultsError, ResultsFile};
+use crate::io::xdmf::{self, NodalField};
+use crate::la::LaError;
+use crate::mesh::quality::BlockQuality;
+use crate::stages::complex::route_name;
+use crate::stages::model::Model;
+use crate::stages::operators::LoadBalance;
+use crate::stages::Timings;
+
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    #[error(transparent)]
+    Results(#[from] ResultsError),
+    #[error(transparent)]
+    La(#[from] LaError),
+    #[error(transparent)]
+    MatrixMarket(#[from] crate::io::matrix_market::MatrixMarketError),
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// The run's identity at the root of results.h5: the scene, the PETSc options, the version,
+/// the ranks and the model size (for reproducibility).
+///
+/// # Collective
+pub fn write_header(
+    file: &ResultsFile,
+    scene_text: &str,
+    petsc_options: &[String],
+    ranks: usize,
+    dofs: usize,
+) -> Result<(), WriteError> {
+    file.set_text("/", "scene", scene_text)?;
+    file.set_text("/", "petsc_options", &petsc_options.join(" "))?;
+    file.set_text("/", "squeal_version", env!("CARGO_PKG_VERSION"))?;
+    file.set_number("/", "ranks", ranks as f64)?;
+    file.set_number("/", "dofs", dofs as f64)?;
+    Ok(())
+}
+
+/// /model (mesh, interfaces, loads, quality) and /partition.
+///
+/// # Collective
+pub fn write_model(
+    file: &ResultsFile,
+    model: &Model,
+    quality: &[BlockQuality],
+    balance: Option<&LoadBalance>,
+) -> Result<(), WriteError> {
+    file.write_mesh(&model.mesh)?;
+    for i in &model.interfaces {
+        let group = format!("model/interfaces/{}", i.name);
+        file.set_text(&group, "master", &i.master)?;
+        file.set_text(&group, "slave", &i.slave)?;
+        file.set_text(&group, "kind", &format!("{:?}", i.kind).to_lowercase())?;
+    }
+    for l in &model.loads {
+        let group = format!("model/loads/{}", l.surface);
+        file.set_number(&group, "hydraulic_area_m2", l.area)?;
+        file.set_number(&group, "pressure_pa", model.pressure)?;
+    }
+    for q in quality {
+        let group = format!("model/quality/{}", q.block);
+        file.set_number(&group, "elements", q.elements as f64)?;
+        file.set_number(&group, "min_scaled_jacobian", q.min_scaled_jacobian)?;
+        file.set_number(&group, "max_aspect_ratio", q.max_aspect_ratio)?;
+        file.set_number(&group, "mean_aspect_ratio", q.mean_aspect_ratio)?;
+        file.set_number(&group, "max_warping_deg", q.max_warping_deg)?;
+    }
+    if let Some(b) = balance {
+        let rows: Vec<f64> = b.rows.iter().map(|&r| r as f64).collect();
+        let elements: Vec<f64> = b.elements.iter().map(|&e| e as f64).collect();
+        file.write_table("partition/rows_per_rank", &rows, "1")?;
+        file.write_table("partition/elements_per_rank", &elements, "1")?;
+    }
+    Ok(())
+}
+
+/// model.inp: the model as an Abaqus input (rank 0 only).
+pub fn write_inp(output: &Path, model: &Model) -> Result<(), WriteError> {
+    let path = output.join("model.inp");
+    let named: Vec<(String, [bool; 3])> = model
+        .clamps
+        .iter()
+        .map(|c| (c.node_set.clone(), c.components))
+        .collect();
+    crate::mesh::abaqus_inp::write(&path, &model.mesh, &named)
+        .map_err(|source| WriteError::Io { path, source })
+}
+
+/// results.xdmf (the mesh with the real mode shapes and the first route's complex shapes as
+/// real and imaginary parts) and model.png (rank 0 only).
+pub fn write_xdmf_and_preview(
+    output: &Path,
+    model: &Model,
+    modes: Option<&RealModes>,
+    complex: &[ComplexModes],
+) -> Result<(), WriteError> {
+    let real = modes.iter().flat_map(|modes| {
+        modes
+            .frequencies_hz
+            .iter()
+            .enumerate()
+            .map(|(i, f)| NodalField {
+                label: format!("mode {:03} ({f:.1} Hz)", i + 1),
+                dataset: format!("/modes/real/shapes/mode_{:04}", i + 1),
+            })
+    });
+    let complex = complex.iter().take(1).flat_map(|c| {
+        c.modes
+            .iter()
+            .take(c.shapes.len())
+            .enumerate()
+            .flat_map(move |(i, mode)| {
+                ["re", "im"].map(|part| NodalField {
+                    label: format!(
+                        "{} {part} ({:.1} Hz, zeta {:.2e})",
+                        mode.name, mode.frequency_hz, mode.damping_ratio
+                    ),
+                    dataset: format!(
+                        "/modes/complex/{}/shapes/mode_{:04}_{part}",
+                        route_name(c.route),
+                        i + 1
+                    ),
+                })
+            })
+    });
+    let fields: Vec<NodalField> = real.chain(complex).collect();
+    let path = output.join("results.xdmf");
+    xdmf::write(&path, "results.h5", &model.mesh, &fields)
+        .map_err(|source| WriteError::Io { path, source })?;
+    let path = output.join("model.png");
+    crate::io::preview::write_png(&path, &model.mesh, 1200, 900)
+        .map_err(|source| WriteError::Io { path, source })
+}
+
+/// K.<format> and M.<format> (`mtx`: Matrix Market, else PETSc binary) of the stiffness the
+/// real modes use and the mass.
+///
+/// # Collective
+pub fn export_matrices(
+    petsc: &crate::la::Petsc,
+    format: &str,
+    k: &crate::la::SparseMatrix,
+    m: &crate::la::SparseMatrix,
+    output: &Path,
+) -> Result<(), WriteError> {
+    for (name, a) in [("K", k), ("M", m)] {
+        if format == "mtx" {
+            crate::io::matrix_market::write(petsc.world(), a, &output.join(format!("{name}.mtx")))?;
+        } else {
+            a.save_binary(petsc, &output.join(format!("{name}.petsc")))?;
+        }
+    }
+    Ok(())
+}
+
+/// /timings: seconds per stage.
+///
+/// # Collective
+pub fn write_timings(file: &ResultsFile, timings: &Timings) -> Result<(), WriteError> {
+    for (name, secs) in &timings.stages {
+        file.set_number("timings", &name.replace(' ', "_"), *secs)?;
+    }
+    Ok(())
+}

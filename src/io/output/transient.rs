@@ -1,0 +1,113 @@
+//! Writer of the transient: the run's figures under /transient_run (the signals and states are
+//! in transient.h5, linked as /transient), `torque.png` and `spectrogram.png`.
+
+use std::path::Path;
+
+use super::WriteError;
+use crate::io::results::ResultsFile;
+use crate::la::Petsc;
+use crate::post::spectrum::{spectrogram_db, spectrogram_signal};
+use crate::time::transient::{Transient, TransientSettings};
+
+/// # Collective
+pub fn write_transient(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    tr: &Transient,
+    settings: &TransientSettings,
+    output: &Path,
+) -> Result<(), WriteError> {
+    file.link_external("transient", "transient.h5")?;
+    let g = "transient_run";
+    let numbers = [
+        ("steps", tr.iterations.len().saturating_sub(1) as f64),
+        ("simulated_time_s", tr.time.last().copied().unwrap_or(0.0)),
+        ("step_cuts", tr.cuts as f64),
+        ("jacobian_refreshes", tr.refreshes as f64),
+        ("factorizations", tr.factorizations as f64),
+        ("factor_entries", tr.factor_entries),
+        ("states_written", tr.states as f64),
+        ("seconds_stepping", tr.seconds_stepping),
+        ("seconds_in_solves", tr.seconds_solving),
+        ("seconds_in_forces", tr.seconds_in_forces),
+        ("seconds_in_products", tr.seconds_in_products),
+        ("iterations_run", tr.iterations_run as f64),
+    ];
+    for (name, value) in numbers {
+        file.set_number(g, name, value)?;
+    }
+    if let Some(t) = tr.resumed_at {
+        file.set_number(g, "restarted_at_s", t)?;
+    }
+    if petsc.rank() == 0 {
+        write_torque_plot(tr, output)?;
+        write_spectrogram(tr, settings, output)?;
+    }
+    Ok(())
+}
+
+/// torque.png: the braking torque against time.
+fn write_torque_plot(tr: &Transient, output: &Path) -> Result<(), WriteError> {
+    use crate::io::plot::{padded, Figure, BLUE};
+    let torque = tr.braking_torque();
+    let (lo, hi) = torque
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let mut fig = Figure::new(
+        1000,
+        500,
+        padded(0.0, tr.time.last().copied().unwrap_or(1.0), 0.0),
+        padded(lo, hi, 0.05),
+        "braking torque",
+        "time (s)",
+        "torque (N m)",
+    );
+    let points: Vec<(f64, f64)> = tr.time.iter().copied().zip(torque).collect();
+    fig.line(&points, BLUE);
+    let path = output.join("torque.png");
+    fig.save(&path)
+        .map_err(|source| WriteError::Io { path, source })
+}
+
+/// spectrogram.png: the short-time spectrum (80 dB range) of the signal `post` chooses, on the
+/// nominal step grid; nothing when the run is too short.
+fn write_spectrogram(
+    tr: &Transient,
+    settings: &TransientSettings,
+    output: &Path,
+) -> Result<(), WriteError> {
+    let (signal, what) = spectrogram_signal(tr);
+    let Some(s) = spectrogram_db(
+        &tr.time,
+        &signal,
+        settings.step,
+        settings.spectrogram_max_hz,
+    ) else {
+        return Ok(());
+    };
+    let dt = s.column_width;
+    let x = (s.first_time - 0.5 * dt, s.last_time + 0.5 * dt);
+    let y = (0.0, s.rows as f64 * s.bin_hz);
+    let mut fig = crate::io::plot::Figure::new(
+        1000,
+        500,
+        x,
+        y,
+        &format!("spectrogram: {what} (dB)"),
+        "time (s)",
+        "frequency (Hz)",
+    );
+    fig.heatmap(
+        s.columns,
+        s.rows,
+        &s.db,
+        x,
+        (y.0 - 0.5 * s.bin_hz, y.1 - 0.5 * s.bin_hz),
+        (s.top_db - 80.0, s.top_db),
+    );
+    let path = output.join("spectrogram.png");
+    fig.save(&path)
+        .map_err(|source| WriteError::Io { path, source })
+}
