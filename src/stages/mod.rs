@@ -2,11 +2,12 @@
 //! the previous stages' typed results to its own, callable from tests:
 //!
 //! Scene -> [`model::Model`] -> [`operators::Operators`] -> [`statics::Preloaded`] ->
-//! [`modes::real_modes`] -> [`complex::ComplexModes`] | [`sweep::SweepOutput`] ->
+//! [`modes::real_modes`] -> [`complex::complex_modes`] | [`sweep::SweepOutput`] ->
 //! [`reduce::Reduced`] -> [`transient::Trajectory`]
 //!
-//! The driver that runs what a scene asks is `crate::pipeline`; writers of each stage's
-//! output live in `crate::io::output`; the run's summary is [`summary::RunSummary`].
+//! [`analyses`] runs the stages before the transient in chain order; `crate::pipeline` is the
+//! driver of a whole run; writers of each stage's output live in `crate::io::output`; the
+//! run's summary is [`summary::RunSummary`].
 
 pub mod complex;
 pub mod model;
@@ -18,14 +19,15 @@ pub mod summary;
 pub mod sweep;
 pub mod transient;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::io::matrix_market::MatrixMarketError;
 use crate::io::output::WriteError;
 use crate::io::results::ResultsError;
 use crate::la::fem_assembly::SystemError;
-use crate::la::LaError;
+use crate::la::{LaError, Petsc};
+use crate::scene::Scene;
 
 /// Why a run stopped; every variant names the stage (and the key or file where one applies).
 #[derive(Debug, thiserror::Error)]
@@ -81,6 +83,25 @@ impl RunError {
     }
 }
 
+/// The model (None for user matrices), its mesh quality per block, and its operators.
+pub type ModelAndOperators<'p> = (
+    Option<model::Model>,
+    Vec<crate::mesh::quality::BlockQuality>,
+    operators::Operators<'p>,
+);
+
+/// What the stages before the transient produced (each None / empty when not asked for).
+pub struct Analyses<'p> {
+    pub model: Option<model::Model>,
+    pub quality: Vec<crate::mesh::quality::BlockQuality>,
+    pub ops: operators::Operators<'p>,
+    pub preload: Option<statics::Preloaded<'p>>,
+    pub modes: Option<crate::eigen::real_modes::RealModes<'p>>,
+    pub complex: Vec<crate::eigen::complex_modes::ComplexModes<'p>>,
+    pub sweep: Option<sweep::SweepOutput>,
+    pub reduced: Option<reduce::Reduced<'p>>,
+}
+
 /// Wall-clock seconds per stage, in order.
 #[derive(Debug, Clone, Default)]
 pub struct Timings {
@@ -95,4 +116,90 @@ impl Timings {
             .push((name.to_string(), start.elapsed().as_secs_f64()));
         out
     }
+}
+
+/// A stage's prerequisite (the scene's validation already asked for it).
+pub(crate) fn need<T>(x: Option<T>, key: &'static str, what: &str) -> Result<T, RunError> {
+    x.ok_or_else(|| RunError::scene(key, format!("needs {what}")))
+}
+
+/// The stages before the transient, as the scene asks: model and operators, preload, real
+/// modes, complex modes, sweep, reduction.
+///
+/// # Collective
+pub fn analyses<'p>(
+    petsc: &'p Petsc,
+    scene: &Scene,
+    scene_dir: &Path,
+    output: &Path,
+    timings: &mut Timings,
+) -> Result<Analyses<'p>, RunError> {
+    let damping = scene.damping.unwrap_or_default();
+    let (model, quality, ops) = operators::from_scene(petsc, scene, scene_dir, timings)?;
+    let mut preload = match (&scene.statics, &model) {
+        (Some(settings), Some(model)) => {
+            let contact = scene.contact.clone().unwrap_or_default();
+            let p = statics::preload(petsc, model, &ops, &contact, settings, timings)?;
+            Some(p)
+        }
+        (Some(_), None) => return Err(RunError::scene("statics", "needs a mesh model")),
+        _ => None,
+    };
+    for format in &scene.output.export_matrices {
+        let k = modes::symmetric_stiffness(&ops, preload.as_ref());
+        timings.time("export matrices", || {
+            crate::io::output::export_matrices(petsc, format, k, &ops.m, output)
+        })?;
+    }
+    let modes = match &scene.real_modes {
+        Some(request) => Some(timings.time("real modes", || {
+            modes::real_modes(petsc, &ops, preload.as_ref(), request)
+        })?),
+        None => None,
+    };
+    let complex = match &scene.complex_modes {
+        Some(settings) => {
+            let (p, m) = (preload.as_ref(), modes.as_ref());
+            complex::complex_modes(petsc, settings, &damping, &ops, p, m, timings)?
+        }
+        None => Vec::new(),
+    };
+    let sweep = match &scene.sweep {
+        Some(sweep) => {
+            let input = sweep::SweepInputs {
+                k0: &ops.k0,
+                dofs: need(ops.dofs.as_ref(), "sweep", "a mesh model")?,
+                modes: need(modes.as_ref(), "sweep", "[real_modes]")?,
+                pressure_bar: model.as_ref().map_or(0.0, |m| m.pressure / 1e5),
+            };
+            let preload = need(preload.as_mut(), "sweep", "[statics]")?;
+            let statics = need(scene.statics.as_ref(), "sweep", "[statics]")?;
+            let settings = scene.complex_modes.clone().unwrap_or_default();
+            Some(timings.time("sweep", || {
+                sweep::sweep(petsc, sweep, &settings, &damping, statics, preload, input)
+            })?)
+        }
+        None => None,
+    };
+    let reduced = match &scene.reduction {
+        Some(settings) => {
+            let model = need(model.as_ref(), "reduction", "a mesh model")?;
+            let preload = need(preload.as_ref(), "reduction", "[statics]")?;
+            let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
+            Some(timings.time("reduction", || {
+                reduce::reduce(petsc, settings, model, &ops, preload, modes)
+            })?)
+        }
+        None => None,
+    };
+    Ok(Analyses {
+        model,
+        quality,
+        ops,
+        preload,
+        modes,
+        complex,
+        sweep,
+        reduced,
+    })
 }

@@ -4,13 +4,13 @@
 use std::path::Path;
 
 use super::model::Model;
-use super::RunError;
+use super::{RunError, Timings};
 use crate::fem::dofmap::DofMap;
 use crate::io::user_matrices::{load_sum, MatrixTerm};
 use crate::la::fem_assembly::{assemble_system_as, AssembledSystem};
 use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
 use crate::mesh::partition;
-use crate::scene::ModelSource;
+use crate::scene::{ModelSource, Scene};
 
 /// K0 and M with what later stages need to know about them.
 pub struct Operators<'p> {
@@ -147,4 +147,32 @@ fn load_balance(petsc: &Petsc, s: &AssembledSystem) -> LoadBalance {
         rows,
         elements,
     }
+}
+
+/// The model (generated or imported, quality-checked) and its assembled operators, or the
+/// user's matrices.
+///
+/// # Collective
+pub fn from_scene<'p>(
+    petsc: &'p Petsc,
+    scene: &Scene,
+    scene_dir: &Path,
+    timings: &mut Timings,
+) -> Result<super::ModelAndOperators<'p>, RunError> {
+    if let source @ ModelSource::Matrices { .. } = &scene.model {
+        let complex = scene.complex_modes.is_some();
+        let ops = timings.time("read matrices", || {
+            read_matrices(petsc, source, complex, scene_dir)
+        })?;
+        return Ok((None, Vec::new(), ops));
+    }
+    let model = timings.time("mesh", || {
+        super::model::build_model(&scene.model, scene_dir)
+    })?;
+    let model = model.ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
+    let quality = timings.time("mesh quality", || crate::mesh::quality::check(&model.mesh))?;
+    // The static Newton's tangent K0 + contact is unsymmetric (LU): AIJ then.
+    let format = scene.statics.as_ref().map(|_| MatrixFormat::Aij);
+    let ops = timings.time("assembly", || assemble(petsc, &model, format))?;
+    Ok((Some(model), quality, ops))
 }

@@ -10,7 +10,7 @@ use super::operators::{LoadBalance, Operators};
 use super::reduce::Reduced;
 use super::statics::Preloaded;
 use super::sweep::SweepOutput;
-use super::Timings;
+use super::{Analyses, Timings};
 use crate::eigen::complex_modes::{ComplexMode, ComplexModes};
 use crate::eigen::real_modes::RealModes;
 use crate::la::{LaError, Petsc};
@@ -168,6 +168,45 @@ impl RunSummary {
             transient: None,
             reduction: None,
         }
+    }
+}
+
+impl RunSummary {
+    /// The summary of a run's stages.
+    ///
+    /// # Collective
+    pub fn of(
+        petsc: &Petsc,
+        mut a: Analyses,
+        signals: Option<&Transient>,
+        timings: Timings,
+        peak_memory_per_rank: f64,
+        output: &Path,
+    ) -> Result<Self, LaError> {
+        let quality = std::mem::take(&mut a.quality);
+        let model = a.model.as_ref();
+        let mut s = RunSummary::new(
+            &a.ops,
+            model,
+            quality,
+            a.modes.as_ref(),
+            timings,
+            peak_memory_per_rank,
+            output,
+        );
+        s.statics = a
+            .preload
+            .as_ref()
+            .zip(model)
+            .map(|(p, m)| StaticSummary::of(p, m));
+        s.complex = a.complex.iter().map(ComplexSummary::of).collect();
+        s.sweep = a.sweep.as_ref().map(SweepSummary::of);
+        s.reduction = match &a.reduced {
+            Some(r) => Some(ReductionSummary::of(petsc, r, a.ops.dofs())?),
+            None => None,
+        };
+        s.transient = signals.map(TransientSummary::of);
+        Ok(s)
     }
 }
 

@@ -18,7 +18,8 @@ use crate::mesh::quality::BlockQuality;
 use crate::stages::complex::route_name;
 use crate::stages::model::Model;
 use crate::stages::operators::LoadBalance;
-use crate::stages::Timings;
+use crate::stages::summary::ReductionSummary;
+use crate::stages::{Analyses, Timings};
 
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
@@ -51,6 +52,45 @@ pub fn write_header(
     file.set_text("/", "squeal_version", env!("CARGO_PKG_VERSION"))?;
     file.set_number("/", "ranks", ranks as f64)?;
     file.set_number("/", "dofs", dofs as f64)?;
+    Ok(())
+}
+
+/// Everything the stages before the transient found: the header, /model, /static, /modes,
+/// /sweep, /reduced, with their CSV files and plots (and model.inp when asked).
+///
+/// # Collective
+pub fn write_analyses(
+    petsc: &crate::la::Petsc,
+    file: &ResultsFile,
+    a: &Analyses,
+    (scene_text, petsc_options): (&str, &[String]),
+    write_inp_file: bool,
+    output: &Path,
+) -> Result<(), WriteError> {
+    let ranks = petsc.size() as usize;
+    write_header(file, scene_text, petsc_options, ranks, a.ops.dofs())?;
+    if let Some(model) = &a.model {
+        write_model(file, model, &a.quality, a.ops.balance.as_ref())?;
+        if write_inp_file && petsc.rank() == 0 {
+            write_inp(output, model)?;
+        }
+    }
+    if let (Some(p), Some(model), Some(dofs)) = (&a.preload, &a.model, &a.ops.dofs) {
+        statics::write_static(petsc, file, p, dofs, model, output)?;
+    }
+    if let Some(modes) = &a.modes {
+        file.write_real_modes(modes, a.ops.dofs.as_ref())?;
+    }
+    for c in &a.complex {
+        modes::write_complex(petsc, file, c, a.ops.dofs.as_ref(), output)?;
+    }
+    if let Some(sw) = &a.sweep {
+        sweep::write_sweep(petsc, file, sw, output)?;
+    }
+    if let Some(r) = &a.reduced {
+        let summary = ReductionSummary::of(petsc, r, a.ops.dofs())?;
+        reduction::write_reduction(file, r, &summary)?;
+    }
     Ok(())
 }
 
