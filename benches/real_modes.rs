@@ -119,13 +119,13 @@ fn main() {
                 .expect("factorization");
         let t_fac = parallel::max(petsc.world(), t.elapsed().as_secs_f64());
         let report = solver.report();
-        let b = system.stiffness.new_vector().unwrap();
+        let mut b = system.stiffness.new_vector().unwrap();
         b.set_all(1.0).unwrap();
-        let x = b.duplicate().unwrap();
+        let mut x = b.duplicate().unwrap();
         let reps = 5;
         let t = Instant::now();
         for _ in 0..reps {
-            solver.solve(&b, &x).unwrap();
+            solver.solve(&b, &mut x).unwrap();
         }
         let t_solve = parallel::max(petsc.world(), t.elapsed().as_secs_f64()) / reps as f64;
         drop(solver);

@@ -3,6 +3,7 @@
 //! pattern of K0 joined with the contact couplings, or applied as an operator through the
 //! observation rows.
 
+use std::cell::RefCell;
 use std::collections::HashMap;
 
 use super::kernel::{self, Channel, Part};
@@ -24,17 +25,18 @@ pub struct TangentOperator<'c, 'p> {
     /// (a, b, coefficient per local point), sorted by a then b, the same pairs on every rank.
     blocks: Vec<(Channel, Channel, Vec<f64>)>,
     /// C_b x per channel, and the weighted point vector of one channel a.
-    work: [Vector<'p>; 4],
-    weighted: Vector<'p>,
+    work: RefCell<([Vector<'p>; 4], Vector<'p>)>,
 }
 
 impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
-    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<(), LaError> {
+    fn mult_add(&self, x: &Vector<'p>, y: &mut Vector<'p>) -> Result<(), LaError> {
+        let mut work = self.work.borrow_mut();
+        let (observed, weighted) = &mut *work;
         for b in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
             if self.blocks.iter().any(|t| t.1 == b) {
                 self.contact
                     .observation(b)
-                    .mult(x, &self.work[b as usize])?;
+                    .mult(x, &mut observed[b as usize])?;
             }
         }
         for a in [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv] {
@@ -42,18 +44,18 @@ impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
                 continue;
             }
             {
-                let mut w = self.weighted.local_mut()?;
+                let mut w = weighted.local_mut()?;
                 w.iter_mut().for_each(|x| *x = 0.0);
                 for (_, b, coef) in self.blocks.iter().filter(|t| t.0 == a) {
-                    let observed = self.work[*b as usize].local()?;
-                    for ((w, c), o) in w.iter_mut().zip(coef).zip(observed.iter()) {
+                    let o = observed[*b as usize].local()?;
+                    for ((w, c), o) in w.iter_mut().zip(coef).zip(o.iter()) {
                         *w += c * o;
                     }
                 }
             }
             self.contact
                 .observation(a)
-                .mult_transpose_add(&self.weighted, y, y)?;
+                .mult_transpose_add(weighted, y)?;
         }
         Ok(())
     }
@@ -178,8 +180,7 @@ impl<'p> ContactModel<'p> {
         Ok(TangentOperator {
             contact: self,
             blocks,
-            work,
-            weighted,
+            work: RefCell::new((work, weighted)),
         })
     }
     /// Preallocation of a matrix with the pattern of `base` (if any) joined with every

@@ -239,7 +239,7 @@ pub struct ContactModel<'p> {
     pub pairing_seconds: f64,
     /// Point vectors reused by `evaluate` and `force` (the transient calls them every
     /// iteration; creating PETSc vectors there cost a tenth of an iteration).
-    work: [Vector<'p>; 5],
+    work: std::cell::RefCell<[Vector<'p>; 5]>,
 }
 
 /// Five point vectors of the observation matrices' row layout.
@@ -353,7 +353,7 @@ impl<'p> ContactModel<'p> {
             point_columns,
             disc_speed: settings.disc_speed,
             pairing_seconds: start.elapsed().as_secs_f64(),
-            work,
+            work: work.into(),
         })
     }
 
@@ -422,7 +422,7 @@ impl<'p> ContactModel<'p> {
             point_columns,
             disc_speed: self.disc_speed,
             pairing_seconds: self.pairing_seconds,
-            work,
+            work: work.into(),
         })
     }
 
@@ -445,7 +445,8 @@ impl<'p> ContactModel<'p> {
         v: Option<&Vector>,
         friction_scale: f64,
     ) -> Result<ContactState, LaError> {
-        let [g, s1, s2, conv, w] = &self.work;
+        let mut work = self.work.borrow_mut();
+        let [g, s1, s2, conv, w] = &mut *work;
         self.c_nor.mult(q, g)?;
         self.c_tan.mult(q, s1)?;
         self.c_tan2.mult(q, s2)?;
@@ -496,8 +497,9 @@ impl<'p> ContactModel<'p> {
     /// The contact force f_N + f_T = C_NOR^T (w p) - C_TAN^T (w t1) - C_TAN2^T (w t2).
     ///
     /// # Collective
-    pub fn force(&self, state: &ContactState, out: &Vector) -> Result<(), LaError> {
-        let [wp, wt1, wt2, ..] = &self.work;
+    pub fn force(&self, state: &ContactState, out: &mut Vector) -> Result<(), LaError> {
+        let mut work = self.work.borrow_mut();
+        let [wp, wt1, wt2, ..] = &mut *work;
         {
             let (mut a, mut b, mut c) = (wp.local_mut()?, wt1.local_mut()?, wt2.local_mut()?);
             for (k, &id) in self.local.iter().enumerate() {
@@ -509,8 +511,8 @@ impl<'p> ContactModel<'p> {
             }
         }
         self.c_nor.mult_transpose(wp, out)?;
-        self.c_tan.mult_transpose_add(wt1, out, out)?;
-        self.c_tan2.mult_transpose_add(wt2, out, out)
+        self.c_tan.mult_transpose_add(wt1, out)?;
+        self.c_tan2.mult_transpose_add(wt2, out)
     }
 
     fn observation(&self, c: Channel) -> &ObservationMatrix<'p> {
@@ -529,14 +531,14 @@ impl<'p> ContactModel<'p> {
     pub fn observe_shapes(&self, shapes: &[Vector]) -> Result<[Vec<f64>; 4], LaError> {
         let n = self.local.len();
         let mut out: [Vec<f64>; 4] = Default::default();
-        let y = self.c_nor.new_point_vector()?;
+        let mut y = self.c_nor.new_point_vector()?;
         for (c, matrix) in [&self.c_nor, &self.c_tan, &self.c_tan2, &self.c_conv]
             .into_iter()
             .enumerate()
         {
             out[c].reserve(n * shapes.len());
             for x in shapes {
-                matrix.mult(x, &y)?;
+                matrix.mult(x, &mut y)?;
                 out[c].extend_from_slice(&y.local()?);
             }
         }

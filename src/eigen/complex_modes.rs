@@ -249,15 +249,15 @@ impl<'a, 'p> Operators<'a, 'p> {
         // real = a M xr - b M xi + c C xr - d C xi + K xr, imaginary likewise.
         let (re, im) = s;
         let (a, b) = (re * re - im * im, 2.0 * re * im);
-        let tmp = xr.duplicate()?;
-        let (rr, ri) = (xr.duplicate()?, xr.duplicate()?);
-        self.k.mult(xr, &rr)?;
-        self.k.mult(xi, &ri)?;
+        let mut tmp = xr.duplicate()?;
+        let (mut rr, mut ri) = (xr.duplicate()?, xr.duplicate()?);
+        self.k.mult(xr, &mut rr)?;
+        self.k.mult(xi, &mut ri)?;
         for (op, cr, ci) in [(self.m, a, b), (self.c, re, im)] {
-            op.mult(xr, &tmp)?;
+            op.mult(xr, &mut tmp)?;
             rr.axpy(cr, &tmp)?;
             ri.axpy(ci, &tmp)?;
-            op.mult(xi, &tmp)?;
+            op.mult(xi, &mut tmp)?;
             rr.axpy(-ci, &tmp)?;
             ri.axpy(cr, &tmp)?;
         }
@@ -405,10 +405,10 @@ pub fn project_operators(
         let [k, c, mm] = out;
         return Ok((k, c, mm));
     }
-    let y = shapes[0].duplicate()?;
+    let mut y = shapes[0].duplicate()?;
     for (o, op) in out.iter_mut().zip([ops.k, ops.c, ops.m]) {
         for j in 0..m {
-            op.mult(&shapes[j], &y)?;
+            op.mult(&shapes[j], &mut y)?;
             for i in 0..m {
                 o[j * m + i] = shapes[i].dot(&y)?;
             }
@@ -464,8 +464,8 @@ pub fn expand<'p>(
     shapes: &[Vector<'p>],
     y: &[(f64, f64)],
 ) -> Result<(Vector<'p>, Vector<'p>), LaError> {
-    let xr = shapes[0].duplicate()?;
-    let xi = shapes[0].duplicate()?;
+    let mut xr = shapes[0].duplicate()?;
+    let mut xi = shapes[0].duplicate()?;
     xr.set_all(0.0)?;
     xi.set_all(0.0)?;
     for (phi, &(r, i)) in shapes.iter().zip(y) {

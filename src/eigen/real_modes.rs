@@ -111,7 +111,7 @@ pub fn real_modes<'p>(
         if wanted > 0 { Some(&mut report) } else { None };
     let sol = GeneralizedEigen::solve(petsc, stiffness, mass, true, &opts, monitor);
     bar.finish();
-    let sol = sol?;
+    let mut sol = sol?;
     // Residuals by our own products (two per mode) rather than EPSComputeError (which
     // repeats them): r = K x - lambda M x, backward error ||r|| / ((||K|| + |lambda| ||M||) ||x||)
     // with infinity norms, SLEPc's definition. The M-norm is checked and restored on the way.
@@ -119,16 +119,16 @@ pub fn real_modes<'p>(
     let norm_m = mass.norm_infinity()?;
     let mut residual_norms = Vec::with_capacity(sol.values.len());
     let mut backward_errors = Vec::with_capacity(sol.values.len());
-    let kx = stiffness.new_vector()?;
-    let mx = stiffness.new_vector()?;
-    for (lambda, x) in sol.values.iter().zip(&sol.vectors) {
-        mass.mult(x, &mx)?;
+    let mut kx = stiffness.new_vector()?;
+    let mut mx = stiffness.new_vector()?;
+    for (lambda, x) in sol.values.iter().zip(&mut sol.vectors) {
+        mass.mult(x, &mut mx)?;
         let m_norm = mx.dot(x)?.sqrt();
         if m_norm > 0.0 && (m_norm - 1.0).abs() > 1e-12 {
             x.scale(1.0 / m_norm)?;
             mx.scale(1.0 / m_norm)?;
         }
-        stiffness.mult(x, &kx)?;
+        stiffness.mult(x, &mut kx)?;
         kx.axpy(-lambda, &mx)?;
         let r = kx.norm2()?;
         residual_norms.push(r);

@@ -206,7 +206,7 @@ impl<'p> SparseMatrix<'p> {
     pub fn new_vector(&self) -> Result<Vector<'p>> {
         let mut raw = std::ptr::null_mut();
         call!(MatCreateVecs(self.raw, &mut raw, std::ptr::null_mut()))?;
-        let v = Vector::from_raw(raw);
+        let mut v = Vector::from_raw(raw);
         v.set_all(0.0)?;
         Ok(v)
     }
@@ -214,21 +214,21 @@ impl<'p> SparseMatrix<'p> {
     /// `y = A x`
     ///
     /// # Collective
-    pub fn mult(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn mult(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         call!(MatMult(self.raw, x.raw, y.raw))
     }
 
     /// `y = A^T x`
     ///
     /// # Collective
-    pub fn mult_transpose(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn mult_transpose(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         call!(MatMultTranspose(self.raw, x.raw, y.raw))
     }
 
     /// `y = y + A x`
     ///
     /// # Collective
-    pub fn mult_add(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn mult_add(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         call!(MatMultAdd(self.raw, x.raw, y.raw, y.raw))
     }
 
@@ -446,17 +446,17 @@ impl crate::fem::assembly::MatrixSink for SparseMatrix<'_> {
 /// A linear operator applied without being assembled, or a matrix: `y = y + A x`.
 pub trait Operator<'p> {
     /// # Collective
-    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()>;
+    fn mult_add(&self, x: &Vector<'p>, y: &mut Vector<'p>) -> Result<()>;
 }
 
 impl<'p> Operator<'p> for SparseMatrix<'p> {
-    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()> {
+    fn mult_add(&self, x: &Vector<'p>, y: &mut Vector<'p>) -> Result<()> {
         SparseMatrix::mult_add(self, x, y)
     }
 }
 
 impl<'p, T: Operator<'p> + ?Sized> Operator<'p> for &T {
-    fn mult_add(&self, x: &Vector<'p>, y: &Vector<'p>) -> Result<()> {
+    fn mult_add(&self, x: &Vector<'p>, y: &mut Vector<'p>) -> Result<()> {
         (**self).mult_add(x, y)
     }
 }

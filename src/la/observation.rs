@@ -110,7 +110,7 @@ impl<'p> ObservationMatrix<'p> {
     pub fn new_point_vector(&self) -> Result<Vector<'p>> {
         let mut raw = std::ptr::null_mut();
         call!(MatCreateVecs(self.raw, std::ptr::null_mut(), &mut raw))?;
-        let v = Vector::from_raw(raw);
+        let mut v = Vector::from_raw(raw);
         v.set_all(0.0)?;
         Ok(v)
     }
@@ -118,22 +118,22 @@ impl<'p> ObservationMatrix<'p> {
     /// `y = C x` (x: DOF vector, y: point vector)
     ///
     /// # Collective
-    pub fn mult(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn mult(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         call!(MatMult(self.raw, x.raw, y.raw))
     }
 
     /// `y = C^T x` (x: point vector, y: DOF vector)
     ///
     /// # Collective
-    pub fn mult_transpose(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn mult_transpose(&self, x: &Vector, y: &mut Vector) -> Result<()> {
         call!(MatMultTranspose(self.raw, x.raw, y.raw))
     }
 
-    /// `z = y + C^T x`
+    /// `y += C^T x`
     ///
     /// # Collective
-    pub fn mult_transpose_add(&self, x: &Vector, y: &Vector, z: &Vector) -> Result<()> {
-        call!(MatMultTransposeAdd(self.raw, x.raw, y.raw, z.raw))
+    pub fn mult_transpose_add(&self, x: &Vector, y: &mut Vector) -> Result<()> {
+        call!(MatMultTransposeAdd(self.raw, x.raw, y.raw, y.raw))
     }
 }
 

@@ -143,7 +143,7 @@ impl<'p> DirectSolver<'p> {
     /// Solves `A x = b` with the stored factors.
     ///
     /// # Collective
-    pub fn solve(&self, b: &Vector, x: &Vector) -> Result<()> {
+    pub fn solve(&self, b: &Vector, x: &mut Vector) -> Result<()> {
         call!(KSPSolve(self.raw, b.raw, x.raw))
     }
 

@@ -33,7 +33,7 @@ impl<'p> Vector<'p> {
             ffi::PETSC_DETERMINE as ffi::PetscInt,
             &mut raw
         ))?;
-        let v = Vector::from_raw(raw);
+        let mut v = Vector::from_raw(raw);
         v.set_all(0.0)?;
         Ok(v)
     }
@@ -42,7 +42,7 @@ impl<'p> Vector<'p> {
     ///
     /// # Collective
     pub fn from_local(petsc: &'p Petsc, values: &[f64]) -> Result<Self> {
-        let v = Vector::new(petsc, values.len())?;
+        let mut v = Vector::new(petsc, values.len())?;
         v.local_mut()?.copy_from_slice(values);
         Ok(v)
     }
@@ -53,7 +53,7 @@ impl<'p> Vector<'p> {
     pub fn duplicate(&self) -> Result<Vector<'p>> {
         let mut raw = std::ptr::null_mut();
         call!(VecDuplicate(self.raw, &mut raw))?;
-        let v = Vector::from_raw(raw);
+        let mut v = Vector::from_raw(raw);
         v.set_all(0.0)?;
         Ok(v)
     }
@@ -80,20 +80,20 @@ impl<'p> Vector<'p> {
         lo as usize..hi as usize
     }
 
-    pub fn set_all(&self, value: f64) -> Result<()> {
+    pub fn set_all(&mut self, value: f64) -> Result<()> {
         call!(VecSet(self.raw, value))
     }
 
     /// `self += alpha * x`
-    pub fn axpy(&self, alpha: f64, x: &Vector) -> Result<()> {
+    pub fn axpy(&mut self, alpha: f64, x: &Vector) -> Result<()> {
         call!(VecAXPY(self.raw, alpha, x.raw))
     }
 
-    pub fn scale(&self, alpha: f64) -> Result<()> {
+    pub fn scale(&mut self, alpha: f64) -> Result<()> {
         call!(VecScale(self.raw, alpha))
     }
 
-    pub fn copy_from(&self, x: &Vector) -> Result<()> {
+    pub fn copy_from(&mut self, x: &Vector) -> Result<()> {
         call!(VecCopy(x.raw, self.raw))
     }
 
@@ -122,7 +122,7 @@ impl<'p> Vector<'p> {
     }
 
     /// `self += sum_i alphas[i] xs[i]`
-    pub fn maxpy(&self, alphas: &[f64], xs: &[&Vector]) -> Result<()> {
+    pub fn maxpy(&mut self, alphas: &[f64], xs: &[&Vector]) -> Result<()> {
         debug_assert_eq!(alphas.len(), xs.len());
         let mut raws: Vec<ffi::Vec> = xs.iter().map(|x| x.raw).collect();
         if xs.is_empty() {
@@ -164,7 +164,7 @@ impl<'p> Vector<'p> {
     }
 
     /// Write access to this rank's entries; the array is restored when the guard drops.
-    pub fn local_mut(&self) -> Result<LocalWrite<'_, 'p>> {
+    pub fn local_mut(&mut self) -> Result<LocalWrite<'_, 'p>> {
         let mut ptr = std::ptr::null_mut();
         call!(VecGetArray(self.raw, &mut ptr))?;
         let mut n = 0;
@@ -177,7 +177,7 @@ impl<'p> Vector<'p> {
     }
 
     /// Adds values at global indices (any rank's); call [`Vector::assemble`] before use.
-    pub fn add_values(&self, indices: &[i32], values: &[f64]) -> Result<()> {
+    pub fn add_values(&mut self, indices: &[i32], values: &[f64]) -> Result<()> {
         debug_assert_eq!(indices.len(), values.len());
         call!(VecSetValues(
             self.raw,
@@ -191,13 +191,13 @@ impl<'p> Vector<'p> {
     /// Sends values added for other ranks' entries to their owners.
     ///
     /// # Collective
-    pub fn assemble(&self) -> Result<()> {
+    pub fn assemble(&mut self) -> Result<()> {
         call!(VecAssemblyBegin(self.raw))?;
         call!(VecAssemblyEnd(self.raw))
     }
 
     /// `self = x .* y`
-    pub fn pointwise_mult(&self, x: &Vector, y: &Vector) -> Result<()> {
+    pub fn pointwise_mult(&mut self, x: &Vector, y: &Vector) -> Result<()> {
         call!(VecPointwiseMult(self.raw, x.raw, y.raw))
     }
 

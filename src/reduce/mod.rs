@@ -197,7 +197,7 @@ impl Reduction {
         kept: &[f64],
         eta: &[f64],
     ) -> Result<Vector<'p>, LaError> {
-        let x = Vector::new(petsc, self.natural.len())?;
+        let mut x = Vector::new(petsc, self.natural.len())?;
         {
             let mut out = x.local_mut()?;
             out[..kept.len()].copy_from_slice(kept);
@@ -227,7 +227,7 @@ impl Reduction {
     /// Recovery: the full-model field T x of a reduced vector, written into `q`.
     ///
     /// # Collective
-    pub fn recover(&self, petsc: &Petsc, x: &Vector, q: &Vector) -> Result<(), LaError> {
+    pub fn recover(&self, petsc: &Petsc, x: &Vector, q: &mut Vector) -> Result<(), LaError> {
         let eta = self.modal_coordinates(petsc, x)?;
         let qb = lapack::gemm_nn(self.reduced_local.len(), self.modal, 1, &self.basis, &eta);
         let natural = relayout(petsc, x, self.natural.len())?;
@@ -269,7 +269,7 @@ impl Reduction {
     }
 
     /// A full-model vector holding basis column j on the b DOFs, zero on the kept ones.
-    fn basis_vector(&self, j: usize, out: &Vector) -> Result<(), LaError> {
+    fn basis_vector(&self, j: usize, out: &mut Vector) -> Result<(), LaError> {
         let n = self.reduced_local.len();
         let mut v = out.local_mut()?;
         v.iter_mut().for_each(|x| *x = 0.0);
@@ -323,8 +323,8 @@ pub fn reduce<'p>(
     let last_rank = petsc.rank() == petsc.size() - 1;
 
     // The raw basis at the b DOFs, each column scaled to unit M_bb norm below.
-    let work = m.new_vector()?;
-    let product = work.duplicate()?;
+    let mut work = m.new_vector()?;
+    let mut product = work.duplicate()?;
     let mut raw: Vec<&Vector> = shapes.iter().collect();
     if let Some(q0) = static_shape {
         raw.push(q0);
@@ -353,7 +353,7 @@ pub fn reduce<'p>(
         orthonormality: 0.0,
         seconds: 0.0,
     };
-    let mass_products = products(&partial, m, &work, &product)?;
+    let mass_products = products(&partial, m, &mut work, &mut product)?;
     let mut gram = lapack::gemm_tn(
         nb,
         offered,
@@ -407,7 +407,7 @@ pub fn reduce<'p>(
     partial.orthonormality = (0..modal * modal)
         .map(|k| (identity[k] - if k % (modal + 1) == 0 { 1.0 } else { 0.0 }).abs())
         .fold(0.0, f64::max);
-    let stiffness_products = products(&partial, k0, &work, &product)?;
+    let stiffness_products = products(&partial, k0, &mut work, &mut product)?;
 
     let local_reduced = partial.kept_local.len() + if last_rank { modal } else { 0 };
     partial.natural = first_kept..first_kept + local_reduced;
@@ -469,7 +469,7 @@ fn balanced_rows(
 ///
 /// # Collective
 fn relayout<'p>(petsc: &'p Petsc, x: &Vector<'p>, local: usize) -> Result<Vector<'p>, LaError> {
-    let y = Vector::new(petsc, local)?;
+    let mut y = Vector::new(petsc, local)?;
     y.set_all(0.0)?;
     let indices: Vec<i32> = x.ownership().map(|i| i as i32).collect();
     y.add_values(&indices, &x.local()?)?;
@@ -481,8 +481,8 @@ fn relayout<'p>(petsc: &'p Petsc, x: &Vector<'p>, local: usize) -> Result<Vector
 fn products(
     r: &Reduction,
     a: &SparseMatrix,
-    work: &Vector,
-    out: &Vector,
+    work: &mut Vector,
+    out: &mut Vector,
 ) -> Result<Vec<f64>, LaError> {
     let mut w = Vec::with_capacity(r.full_local * r.modal);
     for j in 0..r.modal {

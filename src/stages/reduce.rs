@@ -87,8 +87,8 @@ pub fn reduce<'p>(
     let reduced_contact = contact.restricted(petsc, &r.map, r.columns.clone())?;
     let f_ext = r.project_force(petsc, &preload.load)?;
     let q_static = r.restrict(petsc, &state.displacement)?;
-    let recovered = state.displacement.duplicate()?;
-    r.recover(petsc, &q_static, &recovered)?;
+    let mut recovered = state.displacement.duplicate()?;
+    r.recover(petsc, &q_static, &mut recovered)?;
     recovered.axpy(-1.0, &state.displacement)?;
     let static_error = recovered.norm2()? / state.displacement.norm2()?.max(f64::MIN_POSITIVE);
     let static_state = reduced_contact.evaluate(&q_static, None, state.contact.friction_scale)?;

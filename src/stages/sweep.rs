@@ -128,7 +128,7 @@ fn sweep_points<'p>(
     let world = petsc.world();
     let nominal_laws = preload.contact.interfaces.clone();
     let nominal_speed = preload.contact.disc_speed;
-    let f = preload.load.duplicate()?;
+    let mut f = preload.load.duplicate()?;
     let mut q = preload.state.displacement.try_clone()?;
     let mut points = Vec::with_capacity(out.values.len());
     let name = sweep.parameter.name();

@@ -192,7 +192,7 @@ pub fn kick<'p>(
     // A mode's sign is the eigensolver's choice (it may differ with the number of ranks):
     // each kick shape is signed so that its product with a fixed field of the node positions
     // is positive, so the same scene starts the same way on any number of ranks.
-    let sign_field = first.duplicate()?;
+    let mut sign_field = first.duplicate()?;
     if let Some(mesh) = mesh {
         let start = sign_field.ownership().start;
         let mut local = sign_field.local_mut()?;
@@ -225,12 +225,12 @@ pub fn kick<'p>(
                         mode: settings.mode,
                         computed: modes.shapes.len(),
                     })?;
-            let kick = shape.try_clone()?;
+            let mut kick = shape.try_clone()?;
             kick.scale(signed(shape)?)?;
             Ok(kick)
         }
         Start::Random => {
-            let field = first.duplicate()?;
+            let mut field = first.duplicate()?;
             field.set_all(0.0)?;
             let coefficients =
                 crate::time::transient::random_coefficients(settings.seed, modes.shapes.len());
@@ -252,7 +252,7 @@ pub fn kick<'p>(
                     impulse.value[0], impulse.value[1], impulse.value[2], c[0], c[1], c[2]
                 );
             }
-            let force = first.duplicate()?;
+            let mut force = first.duplicate()?;
             force.set_all(0.0)?;
             if dofs.owner_of_node(node) == dofs.rank {
                 let (rows, values): (Vec<i32>, Vec<f64>) = dofs.node_dofs[node]
@@ -355,8 +355,8 @@ pub fn modal_damping<'p>(
             Some(r) => r.restrict(petsc, shape)?,
             None => shape.try_clone()?,
         };
-        let mass_shape = x.duplicate()?;
-        m.mult(&x, &mass_shape)?;
+        let mut mass_shape = x.duplicate()?;
+        m.mult(&x, &mut mass_shape)?;
         shapes.push(mass_shape);
         coefficients.push(c);
     }

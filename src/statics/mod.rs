@@ -162,7 +162,7 @@ pub fn pressure_load<'p>(
     loads: &[PressureLoad],
     pressure: f64,
 ) -> Result<Vector<'p>, String> {
-    let f = Vector::new(petsc, dofs.local_dofs()).map_err(|e| e.to_string())?;
+    let mut f = Vector::new(petsc, dofs.local_dofs()).map_err(|e| e.to_string())?;
     if petsc.rank() == 0 {
         for load in loads {
             let faces: Vec<Face> = mesh
@@ -219,15 +219,15 @@ pub fn solve<'p>(
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
         && contact.disc_speed != 0.0;
     let mut jac = contact.joined_matrix(petsc, k0)?;
-    let q = k0.new_vector()?;
+    let mut q = k0.new_vector()?;
     if let Some(start) = start_from {
         q.copy_from(start)?;
     }
-    let trial = q.duplicate()?;
-    let dq = q.duplicate()?;
-    let residual = q.duplicate()?;
-    let f = q.duplicate()?;
-    let fc = q.duplicate()?;
+    let mut trial = q.duplicate()?;
+    let mut dq = q.duplicate()?;
+    let mut residual = q.duplicate()?;
+    let mut f = q.duplicate()?;
+    let mut fc = q.duplicate()?;
     let load_norm = f_ext.norm2()?;
     let mut log = Vec::new();
     let (mut factorizations, mut factor_entries, mut seconds_factorizing) = (0usize, 0.0, 0.0);
@@ -235,13 +235,13 @@ pub fn solve<'p>(
     let mut cut_steps = 0usize;
 
     // R = K0 q - f_c(q) - f; returns (|R|, reference force, state).
-    let eval = |q: &Vector<'p>,
-                psi: f64,
-                f: &Vector<'p>,
-                r: &Vector<'p>|
+    let mut eval = |q: &Vector<'p>,
+                    psi: f64,
+                    f: &Vector<'p>,
+                    r: &mut Vector<'p>|
      -> Result<(f64, f64, ContactState), LaError> {
         let state = contact.evaluate(q, None, psi)?;
-        contact.force(&state, &fc)?;
+        contact.force(&state, &mut fc)?;
         k0.mult(q, r)?;
         r.axpy(-1.0, &fc)?;
         r.axpy(-1.0, f)?;
@@ -257,7 +257,7 @@ pub fn solve<'p>(
         None => settings.schedule(friction).into(),
     };
     let mut converged_at = (0.0, 0.0);
-    let saved = q.duplicate()?;
+    let mut saved = q.duplicate()?;
     let mut cuts = 0;
     let mut step = 0;
     let mut last_state = None;
@@ -265,7 +265,7 @@ pub fn solve<'p>(
         step += 1;
         f.copy_from(f_ext)?;
         f.scale(phi)?;
-        let (mut r, mut reference, mut state) = eval(&q, psi, &f, &residual)?;
+        let (mut r, mut reference, mut state) = eval(&q, psi, &f, &mut residual)?;
         let mut history = Vec::new();
         let mut iteration = 0;
         let outcome = loop {
@@ -319,7 +319,7 @@ pub fn solve<'p>(
             solver
                 .as_ref()
                 .expect("factored above")
-                .solve(&residual, &dq)?;
+                .solve(&residual, &mut dq)?;
             solves += 1;
             // Backtracking: the first step length with sufficient decrease of |R|, else the
             // best one tried if it lowers |R| at all, else the step has failed.
@@ -330,7 +330,7 @@ pub fn solve<'p>(
             let chosen = loop {
                 trial.copy_from(&q)?;
                 trial.axpy(alpha, &dq)?;
-                let evaluated = eval(&trial, psi, &f, &residual)?;
+                let evaluated = eval(&trial, psi, &f, &mut residual)?;
                 let rt = evaluated.0;
                 if rt.is_finite() && rt <= (1.0 - 1e-4 * alpha) * r {
                     break Some((alpha, Some(evaluated)));
@@ -346,7 +346,7 @@ pub fn solve<'p>(
             let Some((alpha, evaluated)) = chosen else {
                 // Leave the residual of the current iterate for the error report (and for a
                 // retry with a fresh factor when this one was old).
-                eval(&q, psi, &f, &residual)?;
+                eval(&q, psi, &f, &mut residual)?;
                 if !fresh {
                     refresh = true;
                     continue;
@@ -360,7 +360,7 @@ pub fn solve<'p>(
             let previous = r;
             (r, reference, state) = match evaluated {
                 Some(e) => e,
-                None => eval(&q, psi, &f, &residual)?,
+                None => eval(&q, psi, &f, &mut residual)?,
             };
             refresh = alpha < 1.0 || r > settings.reuse_contraction * previous;
             iteration += 1;

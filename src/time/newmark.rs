@@ -106,7 +106,7 @@ impl<'p> ModalDamping<'p> {
     /// `f -= C_m v`
     ///
     /// # Collective
-    pub fn subtract_force(&self, v: &Vector<'p>, f: &Vector<'p>) -> Result<(), LaError> {
+    pub fn subtract_force(&self, v: &Vector<'p>, f: &mut Vector<'p>) -> Result<(), LaError> {
         let shapes: Vec<&Vector> = self.mass_shapes.iter().collect();
         let projections = v.mdot(&shapes)?;
         let alphas: Vec<f64> = projections
@@ -147,7 +147,7 @@ pub enum TimeError {
 
 /// The right-hand side f(t, q, v) (external plus nonlinear forces), written into `out`.
 pub type Forces<'f, 'p> =
-    dyn FnMut(f64, &Vector<'p>, &Vector<'p>, &Vector<'p>) -> Result<(), LaError> + 'f;
+    dyn FnMut(f64, &Vector<'p>, &Vector<'p>, &mut Vector<'p>) -> Result<(), LaError> + 'f;
 
 /// The state of the integrator: time, displacement, velocity, acceleration.
 pub struct State<'p> {
@@ -214,7 +214,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
     }
 
     /// Sets a1 and v1 from q1 (the Newmark relations).
-    fn kinematics(&self, s: &State<'p>) -> Result<(), LaError> {
+    fn kinematics(&mut self, s: &State<'p>) -> Result<(), LaError> {
         let NewmarkSettings {
             beta,
             gamma,
@@ -234,22 +234,22 @@ impl<'a, 'p> Newmark<'a, 'p> {
     }
 
     /// z = M a1 + C v1 + K q1 from scratch.
-    fn linear_force(&self) -> Result<(), LaError> {
+    fn linear_force(&mut self) -> Result<(), LaError> {
         match self.c {
             Damping::Rayleigh { alpha, beta } => {
                 // M (a + alpha v) + K (q + beta v)
                 self.tmp.copy_from(&self.a1)?;
                 self.tmp.axpy(alpha, &self.v1)?;
-                self.m.mult(&self.tmp, &self.z)?;
+                self.m.mult(&self.tmp, &mut self.z)?;
                 self.tmp.copy_from(&self.q1)?;
                 self.tmp.axpy(beta, &self.v1)?;
-                self.k.mult_add(&self.tmp, &self.z)
+                self.k.mult_add(&self.tmp, &mut self.z)
             }
             Damping::None | Damping::Matrix(_) => {
-                self.m.mult(&self.a1, &self.z)?;
-                self.k.mult_add(&self.q1, &self.z)?;
+                self.m.mult(&self.a1, &mut self.z)?;
+                self.k.mult_add(&self.q1, &mut self.z)?;
                 if let Damping::Matrix(c) = self.c {
-                    c.mult_add(&self.v1, &self.z)?;
+                    c.mult_add(&self.v1, &mut self.z)?;
                 }
                 Ok(())
             }
@@ -258,7 +258,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
 
     /// z at the constant-acceleration predictor from z_n of the state:
     /// z_n + C h a_n + K (h v_n + h^2/2 a_n).
-    fn predicted_linear_force(&self, s: &State<'p>, z_n: &Vector<'p>) -> Result<(), LaError> {
+    fn predicted_linear_force(&mut self, s: &State<'p>, z_n: &Vector<'p>) -> Result<(), LaError> {
         let h = self.settings.step;
         self.z.copy_from(z_n)?;
         let (k_on_a, mass_on_a) = match self.c {
@@ -268,16 +268,16 @@ impl<'a, 'p> Newmark<'a, 'p> {
         self.tmp.copy_from(&s.v)?;
         self.tmp.scale(h)?;
         self.tmp.axpy(k_on_a, &s.a)?;
-        self.k.mult_add(&self.tmp, &self.z)?;
+        self.k.mult_add(&self.tmp, &mut self.z)?;
         if mass_on_a != 0.0 {
             self.tmp.copy_from(&s.a)?;
             self.tmp.scale(mass_on_a)?;
-            self.m.mult_add(&self.tmp, &self.z)?;
+            self.m.mult_add(&self.tmp, &mut self.z)?;
         }
         if let Damping::Matrix(c) = self.c {
             self.tmp.copy_from(&s.a)?;
             self.tmp.scale(h)?;
-            c.mult_add(&self.tmp, &self.z)?;
+            c.mult_add(&self.tmp, &mut self.z)?;
         }
         Ok(())
     }
@@ -329,7 +329,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
         loop {
             // R = z - f
             let clock = std::time::Instant::now();
-            forces(t1, &self.q1, &self.v1, &self.f)?;
+            forces(t1, &self.q1, &self.v1, &mut self.f)?;
             force_seconds += clock.elapsed().as_secs_f64();
             self.r.copy_from(&self.z)?;
             self.r.axpy(-1.0, &self.f)?;
@@ -374,7 +374,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             };
             let jacobian = fresh.as_ref().unwrap_or(self.jacobian);
             let t = std::time::Instant::now();
-            jacobian.factor.solve(&self.r, &self.dq)?;
+            jacobian.factor.solve(&self.r, &mut self.dq)?;
             solve_seconds += t.elapsed().as_secs_f64();
             self.q1.axpy(-1.0, &self.dq)?;
             self.a1.axpy(-1.0 / (beta * h * h), &self.dq)?;
@@ -383,7 +383,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.z.axpy(-1.0, &self.r)?;
             if let Some(extra) = &jacobian.extra {
                 let clock = std::time::Instant::now();
-                extra.mult_add(&self.dq, &self.z)?;
+                extra.mult_add(&self.dq, &mut self.z)?;
                 product_seconds += clock.elapsed().as_secs_f64();
             }
             iterations += 1;
@@ -412,7 +412,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state.q.copy_from(&self.q1)?;
         state.v.copy_from(&self.v1)?;
         state.a.copy_from(&self.a1)?;
-        match &state.linear {
+        match &mut state.linear {
             Some(z) => z.copy_from(&self.z)?,
             None => state.linear = Some(self.z.try_clone()?),
         }
@@ -470,25 +470,25 @@ pub fn initial_acceleration<'p>(
     forces: &mut Forces<'_, 'p>,
     mass_solver: &DirectSolver<'p>,
 ) -> Result<(), LaError> {
-    let f = m.new_vector()?;
-    let tmp = f.duplicate()?;
-    forces(state.time, &state.q, &state.v, &f)?;
-    k.mult(&state.q, &tmp)?;
+    let mut f = m.new_vector()?;
+    let mut tmp = f.duplicate()?;
+    forces(state.time, &state.q, &state.v, &mut f)?;
+    k.mult(&state.q, &mut tmp)?;
     f.axpy(-1.0, &tmp)?;
     match c {
         Damping::None => {}
         Damping::Rayleigh { alpha, beta } => {
-            m.mult(&state.v, &tmp)?;
+            m.mult(&state.v, &mut tmp)?;
             f.axpy(-alpha, &tmp)?;
-            k.mult(&state.v, &tmp)?;
+            k.mult(&state.v, &mut tmp)?;
             f.axpy(-beta, &tmp)?;
         }
         Damping::Matrix(c) => {
-            c.mult(&state.v, &tmp)?;
+            c.mult(&state.v, &mut tmp)?;
             f.axpy(-1.0, &tmp)?;
         }
     }
-    mass_solver.solve(&f, &state.a)
+    mass_solver.solve(&f, &mut state.a)
 }
 
 /// What an adaptive run did besides stepping, and where its step control stands (so a

@@ -286,7 +286,7 @@ fn tangent_operator_equals_assembled<'p>(
     use squeal::contact::kernel::Part;
     use squeal::la::Operator;
     let e = |e: squeal::la::LaError| e.to_string();
-    let x = like.duplicate().map_err(e)?;
+    let mut x = like.duplicate().map_err(e)?;
     {
         let range = x.ownership();
         let mut local = x.local_mut().map_err(e)?;
@@ -308,10 +308,10 @@ fn tangent_operator_equals_assembled<'p>(
             &[(stiffness, 1.0), (&[Part::Damping], damping_scale)],
         )
         .map_err(e)?;
-    let (y, z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
-    assembled.mult(&x, &y).map_err(e)?;
+    let (mut y, mut z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
+    assembled.mult(&x, &mut y).map_err(e)?;
     z.set_all(0.0).map_err(e)?;
-    operator.mult_add(&x, &z).map_err(e)?;
+    operator.mult_add(&x, &mut z).map_err(e)?;
     let scale = y.norm2().map_err(e)?;
     z.axpy(-1.0, &y).map_err(e)?;
     let diff = z.norm2().map_err(e)? / scale;

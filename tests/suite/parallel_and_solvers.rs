@@ -319,20 +319,24 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
     .map_err(|e| e.to_string())?;
     // Compare K x for a deterministic x; layouts may differ, so compare gathered products.
     let n = system.stiffness.global_rows();
-    let x1 = system.stiffness.new_vector().map_err(|e| e.to_string())?;
-    let x2 = back.matrix.new_vector().map_err(|e| e.to_string())?;
-    for (x, range) in [(&x1, x1.ownership()), (&x2, x2.ownership())] {
+    let mut x1 = system.stiffness.new_vector().map_err(|e| e.to_string())?;
+    let mut x2 = back.matrix.new_vector().map_err(|e| e.to_string())?;
+    let (r1, r2) = (x1.ownership(), x2.ownership());
+    for (x, range) in [(&mut x1, r1), (&mut x2, r2)] {
         let mut l = x.local_mut().map_err(|e| e.to_string())?;
         for (i, v) in range.clone().zip(l.iter_mut()) {
             *v = ((i * 7919) % 101) as f64 / 101.0 - 0.5;
         }
     }
-    let (y1, y2) = (
+    let (mut y1, mut y2) = (
         x1.duplicate().map_err(|e| e.to_string())?,
         x2.duplicate().map_err(|e| e.to_string())?,
     );
-    system.stiffness.mult(&x1, &y1).map_err(|e| e.to_string())?;
-    back.matrix.mult(&x2, &y2).map_err(|e| e.to_string())?;
+    system
+        .stiffness
+        .mult(&x1, &mut y1)
+        .map_err(|e| e.to_string())?;
+    back.matrix.mult(&x2, &mut y2).map_err(|e| e.to_string())?;
     let (a, b) = (
         y1.gather_all().map_err(|e| e.to_string())?,
         y2.gather_all().map_err(|e| e.to_string())?,

@@ -46,7 +46,7 @@ fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
                 d
             }
         };
-        let f = system.stiffness.new_vector().map_err(|e| e.to_string())?;
+        let mut f = system.stiffness.new_vector().map_err(|e| e.to_string())?;
         {
             let mut local = f.local_mut().map_err(|e| e.to_string())?;
             let first = system.dofs.owned_dofs().start;
@@ -59,10 +59,10 @@ fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
                 }
             }
         }
-        let u = f.duplicate().map_err(|e| e.to_string())?;
+        let mut u = f.duplicate().map_err(|e| e.to_string())?;
         let solver = DirectSolver::factorize(petsc, &system.stiffness, kind, "static_")
             .map_err(|e| e.to_string())?;
-        solver.solve(&f, &u).map_err(|e| e.to_string())?;
+        solver.solve(&f, &mut u).map_err(|e| e.to_string())?;
         // Mean vertical deflection of the end face.
         let all = u.gather_all().map_err(|e| e.to_string())?;
         let face = mesh.node_set("u1")?;

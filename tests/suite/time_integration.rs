@@ -349,7 +349,7 @@ fn integrate<'p>(
 }
 
 fn no_force<'f, 'p>() -> Box<Forces<'f, 'p>> {
-    Box::new(|_, _, _, f: &Vector| f.set_all(0.0))
+    Box::new(|_, _, _, f: &mut Vector| f.set_all(0.0))
 }
 
 /// First component of a distributed vector (row 0 lives on rank 0), broadcast to all ranks.
@@ -486,14 +486,14 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
         tolerance: 1e-12,
         ..Default::default()
     };
-    let (kq, mv) = (
+    let (mut kq, mut mv) = (
         k.new_vector().map_err(|e| e.to_string())?,
         k.new_vector().map_err(|e| e.to_string())?,
     );
-    let energy = |s: &State| -> Result<f64, String> {
+    let mut energy = |s: &State| -> Result<f64, String> {
         let e = |e: squeal::la::LaError| e.to_string();
-        k.mult(&s.q, &kq).map_err(e)?;
-        m.mult(&s.v, &mv).map_err(e)?;
+        k.mult(&s.q, &mut kq).map_err(e)?;
+        m.mult(&s.v, &mut mv).map_err(e)?;
         Ok(0.5 * (kq.dot(&s.q).map_err(e)? + mv.dot(&s.v).map_err(e)?))
     };
     let mut e0 = None;
@@ -532,7 +532,7 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
 /// the band): the measured ratio of mode 1 matches zeta = 0.02 to 1e-4 (measured 3.7e-6; average acceleration's
 /// period error at omega h = 0.02 is ~3e-5), and mode 5 keeps its energy (the modes stay uncoupled:
 /// Phi is M-orthonormal).
-fn modal_damping_decay(petsc: &Petsc) -> Result<(), String> {
+fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
     let e = |e: squeal::la::LaError| e.to_string();
     let SpringChain {
         masses,
@@ -575,7 +575,7 @@ fn modal_damping_decay(petsc: &Petsc) -> Result<(), String> {
         .collect::<Result<Vec<_>, _>>()?;
     let coefficients = damped.iter().map(|&j| 2.0 * zeta * omega[j]).collect();
     let modal = ModalDamping::new(mass_shapes, coefficients);
-    let mut forces = |_t: f64, _q: &Vector, v: &Vector, f: &Vector| {
+    let mut forces = |_t: f64, _q: &Vector<'p>, v: &Vector<'p>, f: &mut Vector<'p>| {
         f.set_all(0.0)?;
         modal.subtract_force(v, f)
     };
@@ -682,7 +682,12 @@ impl Oscillation {
 }
 
 /// The oscillator's force: -1 (external, towards the wall) + exp(-g) (contact), q = g.
-fn contact_force(_t: f64, q: &Vector, _v: &Vector, f: &Vector) -> Result<(), squeal::la::LaError> {
+fn contact_force(
+    _t: f64,
+    q: &Vector,
+    _v: &Vector,
+    f: &mut Vector,
+) -> Result<(), squeal::la::LaError> {
     let g = q.local()?.to_vec();
     let mut out = f.local_mut()?;
     for (o, g) in out.iter_mut().zip(g) {

@@ -59,10 +59,10 @@ pub fn write_header(
 /// /sweep, /reduced, with their CSV files and plots (and model.inp when asked).
 ///
 /// # Collective
-pub fn write_analyses(
-    petsc: &crate::la::Petsc,
+pub fn write_analyses<'p>(
+    petsc: &'p crate::la::Petsc,
     file: &ResultsFile,
-    a: &Analyses,
+    a: &Analyses<'p>,
     (scene_text, petsc_options): (&str, &[String]),
     write_inp_file: bool,
     output: &Path,

@@ -15,10 +15,10 @@ use crate::statics::NewtonRecord;
 /// and per-interface sums, and the contact maps of the sliding interfaces.
 ///
 /// # Collective
-pub fn write_static(
-    petsc: &Petsc,
+pub fn write_static<'p>(
+    petsc: &'p Petsc,
     file: &ResultsFile,
-    preload: &Preloaded,
+    preload: &Preloaded<'p>,
     dofs: &DofMap,
     model: &Model,
     output: &Path,

@@ -122,7 +122,7 @@ impl<'p> Checkpoint<'p> {
         expect("nominal_step", settings.step, "key 'transient.step'")?;
         let range = like.q.ownership();
         let vector = |name: &str| -> Result<Vector<'p>, TimeError> {
-            let x = like.q.duplicate()?;
+            let mut x = like.q.duplicate()?;
             let values = f.read_vector(name, range.clone()).map_err(io_error)?;
             x.local_mut()?.copy_from_slice(&values);
             Ok(x)

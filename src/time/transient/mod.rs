@@ -105,6 +105,22 @@ impl Transient {
             .collect()
     }
 
+    /// The Jacobian counts and times of a finished run (`seconds_start`: the mass
+    /// factorization of the start).
+    fn count_factorizations(
+        &mut self,
+        b: &JacobianBuilder,
+        control: &StepControl,
+        seconds_start: f64,
+    ) {
+        self.factor_entries = b.factor_entries;
+        self.seconds_factorizing = seconds_start + b.seconds_factorizing;
+        self.seconds_jacobians = b.seconds_in_loop;
+        self.cuts = control.cuts;
+        self.refreshes = control.refreshes;
+        self.factorizations = control.factorizations.max(b.built);
+    }
+
     fn empty(steps: usize, interfaces: usize, sensor_names: Vec<String>) -> Self {
         let series = || vec![Vec::with_capacity(steps + 1); interfaces];
         Transient {
@@ -180,9 +196,9 @@ pub fn run<'p>(
     // The contact state of the last force evaluation: the step's record reuses it when the
     // step ended there.
     let last_contact = RefCell::new(None::<ContactState>);
-    let fc = input.f_ext.duplicate()?;
-    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| {
-        contact_forces(&input, &fc, q, v, f, &last_contact)
+    let mut fc = input.f_ext.duplicate()?;
+    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &mut Vector<'p>| {
+        contact_forces(&input, &mut fc, q, v, f, &last_contact)
     };
 
     // A fresh stream, or the checkpoint's state, step control and Jacobian state with the
@@ -259,19 +275,10 @@ pub fn run<'p>(
                     checkpoint_failure = Some(e.to_string());
                 }
             }
-            let out = &recorder.out;
-            if out.time.len().is_multiple_of(50) || at_end {
-                let recent = &out.iterations[out.iterations.len().saturating_sub(500)..];
-                let mean = recent.iter().sum::<usize>() as f64 / recent.len().max(1) as f64;
+            if recorder.out.time.len().is_multiple_of(50) || at_end {
                 let done = ((s.time / settings.step).round() as usize).min(settings.steps);
                 let rate = (done - first_step) as f64 / t.elapsed().as_secs_f64().max(1e-9);
-                bar.update(
-                    done,
-                    &format!(
-                        "t = {:.3e} s, {rate:.1} steps/s, {mean:.2} iterations/step",
-                        s.time
-                    ),
-                );
+                bar.update(done, &progress_line(&recorder.out, s.time, rate));
             }
             Ok(())
         };
@@ -305,8 +312,8 @@ pub fn run<'p>(
     // Whatever happened, the signals recorded so far go to the file, and a failed run leaves
     // a checkpoint at its last converged step (to restart with other settings).
     recorder.flush()?;
-    let b = builder.into_inner();
     if result.is_err() && settings.checkpoint_every > 0 {
+        let b = builder.borrow();
         let at = b.built_at.as_ref();
         Checkpoint::write(petsc, files, settings, &state, &control, at, &recorder.out)?;
     }
@@ -315,13 +322,15 @@ pub fn run<'p>(
     }
     let mut out = recorder.out;
     out.seconds_stepping = t.elapsed().as_secs_f64();
-    out.factor_entries = b.factor_entries;
-    out.seconds_factorizing = seconds_start + b.seconds_factorizing;
-    out.seconds_jacobians = b.seconds_in_loop;
-    out.cuts = control.cuts;
-    out.refreshes = control.refreshes;
-    out.factorizations = control.factorizations.max(b.built);
+    out.count_factorizations(&builder.into_inner(), &control, seconds_start);
     Ok((out, result.err()))
+}
+
+/// The progress bar's line: time, steps per second, mean iterations over the last 500 steps.
+fn progress_line(out: &Transient, time: f64, rate: f64) -> String {
+    let recent = &out.iterations[out.iterations.len().saturating_sub(500)..];
+    let mean = recent.iter().sum::<usize>() as f64 / recent.len().max(1) as f64;
+    format!("t = {time:.3e} s, {rate:.1} steps/s, {mean:.2} iterations/step")
 }
 
 /// The start: the static state + amplitude x the kick's shape (scaled to its largest entry),
@@ -336,8 +345,8 @@ fn start_state<'p>(
     k0: &SparseMatrix<'p>,
 ) -> Result<State<'p>, TimeError> {
     let mass = DirectSolver::factorize(petsc, input.m, Factorization::Lu, "time_mass_")?;
-    let q = input.q_static.try_clone()?;
-    let v = q.duplicate()?;
+    let mut q = input.q_static.try_clone()?;
+    let mut v = q.duplicate()?;
     v.set_all(0.0)?;
     match input.kick {
         Kick::Displacement(shape) => {
@@ -346,7 +355,7 @@ fn start_state<'p>(
                 q.axpy(settings.amplitude / largest, shape)?;
             }
         }
-        Kick::Impulse(impulse) => mass.solve(impulse, &v)?,
+        Kick::Impulse(impulse) => mass.solve(impulse, &mut v)?,
     }
     let a = q.duplicate()?;
     let mut state = State {
@@ -357,10 +366,10 @@ fn start_state<'p>(
         a,
         linear: None,
     };
-    let fc = input.f_ext.duplicate()?;
+    let mut fc = input.f_ext.duplicate()?;
     let last = RefCell::new(None);
-    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &Vector<'p>| {
-        contact_forces(input, &fc, q, v, f, &last)
+    let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &mut Vector<'p>| {
+        contact_forces(input, &mut fc, q, v, f, &last)
     };
     initial_acceleration(input.m, input.c, k0, &mut state, &mut forces, &mass)?;
     Ok(state)
@@ -371,17 +380,17 @@ fn start_state<'p>(
 /// # Collective
 fn contact_forces<'p>(
     input: &TransientInputs<'_, 'p>,
-    fc: &Vector<'p>,
+    fc: &mut Vector<'p>,
     q: &Vector<'p>,
     v: &Vector<'p>,
-    f: &Vector<'p>,
+    f: &mut Vector<'p>,
     last: &RefCell<Option<ContactState>>,
 ) -> Result<(), LaError> {
     let state = input.contact.evaluate(q, Some(v), 1.0)?;
     input.contact.force(&state, fc)?;
     *last.borrow_mut() = Some(state);
     f.copy_from(input.f_ext)?;
-    f.axpy(1.0, fc)?;
+    f.axpy(1.0, &*fc)?;
     match input.modal_damping {
         Some(modal) => modal.subtract_force(v, f),
         None => Ok(()),

@@ -198,7 +198,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             out.friction_force[i].push(sum.friction_force);
             out.torque[i].push(sum.torque);
         }
-        if let (Some(sensors), Some(y)) = (self.sensors, &self.sensor_buffer) {
+        if let (Some(sensors), Some(y)) = (self.sensors, &mut self.sensor_buffer) {
             // Each rank's rows into their place, then one sum over the ranks for all three.
             let n = y.global_len();
             let mut values = vec![0.0; 3 * n];
