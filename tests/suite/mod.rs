@@ -7,6 +7,7 @@ pub mod convergence;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
 pub mod reduction;
+pub mod stages;
 pub mod static_solve;
 pub mod time_integration;
 
@@ -25,5 +26,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(complex_modes::tests());
     v.extend(time_integration::tests());
     v.extend(reduction::tests());
+    v.extend(stages::tests());
     v
 }
