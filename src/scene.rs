@@ -163,6 +163,12 @@ impl Scene {
     }
 
     fn validate(&self) -> Result<(), String> {
+        self.validate_model()?;
+        self.validate_analyses()
+    }
+
+    /// The `[model]` table: dimensions, cells, materials, files, matrix terms.
+    fn validate_model(&self) -> Result<(), String> {
         let positive = |key: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
@@ -276,6 +282,11 @@ impl Scene {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The analysis tables and what each needs from the others.
+    fn validate_analyses(&self) -> Result<(), String> {
         if let Some(r) = &self.real_modes {
             if r.count == 0 && r.f_max_hz.is_none() {
                 return Err(

@@ -139,6 +139,10 @@ pub struct MshModel {
 
 /// Reads a Gmsh 4.1 ASCII file. `materials` gives the material of each physical volume by
 /// name; every volume group needs one.
+///
+/// Long by design (about 310 lines): the sections of the format in file order ($MeshFormat,
+/// $PhysicalNames, $Entities, $Nodes, $Elements), each a short block over the shared tables
+/// of entity tags and physical groups, then their resolution into blocks and surfaces.
 pub fn read(path: &Path, materials: &BTreeMap<String, Material>) -> Result<MshModel, MshError> {
     let text = std::fs::read(path).map_err(|e| MshError::Io {
         file: path.to_path_buf(),

@@ -200,6 +200,10 @@ pub fn pressure_load<'p>(
 
 /// Solves for the preloaded state. `k0` must be AIJ (LU). `progress` receives each record.
 ///
+/// About 180 lines, on purpose: load stepping with cutting around a modified Newton loop with
+/// factor refresh; the iterate, the factor and the residual pass between the two loops, which
+/// read best in one view (the factorization and the line search are their own functions).
+///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // the operators, the load, the settings, a start, a log
 pub fn solve<'p>(
@@ -296,20 +300,8 @@ pub fn solve<'p>(
             if fresh {
                 // Free the old factor before the new one is built (peak memory).
                 drop(solver.take());
-                jac.copy_values_from(k0)?;
-                contact.add_tangent(
-                    &state,
-                    &[
-                        Part::Normal,
-                        Part::Stick,
-                        Part::Friction,
-                        Part::StickCoupling,
-                    ],
-                    &mut jac,
-                )?;
-                jac.assemble()?;
                 let t = Instant::now();
-                let factored = DirectSolver::factorize(petsc, &jac, Factorization::Lu, "static_")?;
+                let factored = factorize_tangent(petsc, &mut jac, k0, contact, &state)?;
                 seconds_factorizing += t.elapsed().as_secs_f64();
                 factorizations += 1;
                 factor_entries = factored.report().factor_entries;
@@ -321,28 +313,7 @@ pub fn solve<'p>(
                 .expect("factored above")
                 .solve(&residual, &mut dq)?;
             solves += 1;
-            // Backtracking: the first step length with sufficient decrease of |R|, else the
-            // best one tried if it lowers |R| at all, else the step has failed.
-            let mut alpha = 1.0;
-            let mut best: Option<(f64, f64)> = None;
-            // The accepted trial's evaluation is kept (it is the next iterate's residual and
-            // contact state); only the best-of fallback needs a fresh evaluation.
-            let chosen = loop {
-                trial.copy_from(&q)?;
-                trial.axpy(alpha, &dq)?;
-                let evaluated = eval(&trial, psi, &f, &mut residual)?;
-                let rt = evaluated.0;
-                if rt.is_finite() && rt <= (1.0 - 1e-4 * alpha) * r {
-                    break Some((alpha, Some(evaluated)));
-                }
-                if rt.is_finite() && best.is_none_or(|b| rt < b.1) {
-                    best = Some((alpha, rt));
-                }
-                if alpha < 1.0 / 1024.0 {
-                    break best.filter(|b| b.1 < r).map(|b| (b.0, None));
-                }
-                alpha *= 0.5;
-            };
+            let chosen = backtrack(&q, &dq, r, &mut trial, |t| eval(t, psi, &f, &mut residual))?;
             let Some((alpha, evaluated)) = chosen else {
                 // Leave the residual of the current iterate for the error report (and for a
                 // retry with a fresh factor when this one was old).
@@ -418,6 +389,62 @@ pub fn solve<'p>(
         seconds: start.elapsed().as_secs_f64(),
         load_norm,
     })
+}
+
+/// J = K0 + the contact tangent at `state` (normal, stick, friction, stick coupling) into
+/// `jac` (K0's pattern joined with the contacts), LU-factorized.
+///
+/// # Collective
+fn factorize_tangent<'p>(
+    petsc: &'p Petsc,
+    jac: &mut SparseMatrix<'p>,
+    k0: &SparseMatrix<'p>,
+    contact: &ContactModel<'p>,
+    state: &ContactState,
+) -> Result<DirectSolver<'p>, LaError> {
+    jac.copy_values_from(k0)?;
+    let parts = [
+        Part::Normal,
+        Part::Stick,
+        Part::Friction,
+        Part::StickCoupling,
+    ];
+    contact.add_tangent(state, &parts, jac)?;
+    jac.assemble()?;
+    DirectSolver::factorize(petsc, jac, Factorization::Lu, "static_")
+}
+
+/// Backtracking along `dq` from `q` (residual norm `r`): the first step length with
+/// sufficient decrease of |R| with its evaluation, else the best one tried if it lowers |R| at
+/// all (to be re-evaluated: None), else None: the step has failed. The accepted trial's
+/// evaluation is kept (it is the next iterate's residual and contact state).
+///
+/// # Collective
+fn backtrack<'p>(
+    q: &Vector<'p>,
+    dq: &Vector<'p>,
+    r: f64,
+    trial: &mut Vector<'p>,
+    mut eval: impl FnMut(&Vector<'p>) -> Result<(f64, f64, ContactState), LaError>,
+) -> Result<Option<(f64, Option<(f64, f64, ContactState)>)>, LaError> {
+    let mut alpha = 1.0;
+    let mut best: Option<(f64, f64)> = None;
+    loop {
+        trial.copy_from(q)?;
+        trial.axpy(alpha, dq)?;
+        let evaluated = eval(trial)?;
+        let rt = evaluated.0;
+        if rt.is_finite() && rt <= (1.0 - 1e-4 * alpha) * r {
+            return Ok(Some((alpha, Some(evaluated))));
+        }
+        if rt.is_finite() && best.is_none_or(|b| rt < b.1) {
+            best = Some((alpha, rt));
+        }
+        if alpha < 1.0 / 1024.0 {
+            return Ok(best.filter(|b| b.1 < r).map(|b| (b.0, None)));
+        }
+        alpha *= 0.5;
+    }
 }
 
 /// The interface whose master DOFs carry the largest residual (for the error message).
