@@ -391,6 +391,9 @@ pub fn solve<'p>(
     })
 }
 
+/// A residual evaluation: |R|, the reference force, the contact state.
+type Evaluation = (f64, f64, ContactState);
+
 /// J = K0 + the contact tangent at `state` (normal, stick, friction, stick coupling) into
 /// `jac` (K0's pattern joined with the contacts), LU-factorized.
 ///
@@ -425,8 +428,8 @@ fn backtrack<'p>(
     dq: &Vector<'p>,
     r: f64,
     trial: &mut Vector<'p>,
-    mut eval: impl FnMut(&Vector<'p>) -> Result<(f64, f64, ContactState), LaError>,
-) -> Result<Option<(f64, Option<(f64, f64, ContactState)>)>, LaError> {
+    mut eval: impl FnMut(&Vector<'p>) -> Result<Evaluation, LaError>,
+) -> Result<Option<(f64, Option<Evaluation>)>, LaError> {
     let mut alpha = 1.0;
     let mut best: Option<(f64, f64)> = None;
     loop {
