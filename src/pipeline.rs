@@ -98,9 +98,20 @@ pub fn run_with(
         })?),
         None => None,
     };
+    let limit_cycle = match (&trajectory, &scene.transient, &scene.post) {
+        (Some(t), Some(settings), Some(post)) => post.limit_cycle.map(|lc| {
+            timings.time("limit cycle", || {
+                stages::post::limit_cycle(t, settings, &lc, &a.complex, &a.interface_names())
+            })
+        }),
+        _ => None,
+    };
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         output::transient::write_transient(petsc, &file, &t.signals, settings, output)?;
+        if let Some(lc) = &limit_cycle {
+            output::post::write_limit_cycle(petsc, &file, lc, &t.signals, output)?;
+        }
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         output::write_xdmf_and_preview(output, model, a.modes.as_ref(), &a.complex)?;
@@ -119,12 +130,7 @@ pub fn run_with(
     };
 
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
-    Ok(RunSummary::of(
-        petsc,
-        a,
-        signals.as_ref(),
-        timings,
-        peak,
-        output,
-    )?)
+    let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
+    summary.limit_cycle = limit_cycle;
+    Ok(summary)
 }

@@ -43,8 +43,20 @@ pub struct Scene {
     /// [real_modes]): the contact zone kept, the rest on the real modes + static shape.
     #[serde(default)]
     pub reduction: Option<crate::reduce::ReductionSettings>,
+    /// Analyses of the transient's trajectory (DESIGN.md §2b), each asked for by its key.
+    #[serde(default)]
+    pub post: Option<PostSettings>,
     #[serde(default)]
     pub output: Output,
+}
+
+/// The `[post]` table: one key per analysis of the trajectory.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PostSettings {
+    /// Growth, saturation, frequency, period and amplitude per cycle of the braking torque.
+    #[serde(default)]
+    pub limit_cycle: Option<crate::post::limit_cycle::LimitCycleSettings>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -356,6 +368,14 @@ impl Scene {
             sw.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
                 return Err("key 'sweep': a sweep re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]".into());
+            }
+        }
+        if let Some(post) = &self.post {
+            if self.transient.is_none() {
+                return Err("key 'post': the analyses of a trajectory need a [transient]".into());
+            }
+            if let Some(lc) = &post.limit_cycle {
+                lc.validate()?;
             }
         }
         for e in &self.output.export_matrices {

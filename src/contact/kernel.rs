@@ -49,6 +49,15 @@ pub struct PointResponse {
     stick: f64,
 }
 
+impl PointResponse {
+    /// A point of a sliding interface whose speed lies inside the friction law's
+    /// regularization band (|w| < slip_speed): there the traction's slope in the speed is
+    /// mu p / slip_speed, the stiffest term of the time integration.
+    pub fn in_friction_band(&self) -> bool {
+        self.status == Status::Stick && self.stick == 0.0
+    }
+}
+
 /// The law pair of an interface applied at one point; `friction_scale` ramps the friction of
 /// sliding interfaces in.
 pub fn respond(

@@ -2,4 +2,5 @@
 //! dynamic stability along the cycle and pseudo trajectories belong here too. Writers of their
 //! results live in `io::output`.
 
+pub mod limit_cycle;
 pub mod spectrum;

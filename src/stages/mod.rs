@@ -13,6 +13,7 @@ pub mod complex;
 pub mod model;
 pub mod modes;
 pub mod operators;
+pub mod post;
 pub mod reduce;
 pub mod statics;
 pub mod summary;
@@ -100,6 +101,19 @@ pub struct Analyses<'p> {
     pub complex: Vec<crate::eigen::complex_modes::ComplexModes<'p>>,
     pub sweep: Option<sweep::SweepOutput>,
     pub reduced: Option<reduce::Reduced<'p>>,
+}
+
+impl Analyses<'_> {
+    /// The contact interfaces' names, in the contact model's order (empty without statics).
+    pub fn interface_names(&self) -> Vec<String> {
+        self.preload.as_ref().map_or(Vec::new(), |p| {
+            p.contact
+                .interfaces
+                .iter()
+                .map(|i| i.name.clone())
+                .collect()
+        })
+    }
 }
 
 /// Wall-clock seconds per stage, in order.

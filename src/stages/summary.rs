@@ -42,6 +42,8 @@ pub struct RunSummary {
     pub sweep: Option<SweepSummary>,
     pub transient: Option<TransientSummary>,
     pub reduction: Option<ReductionSummary>,
+    /// The limit cycle of the transient, when `[post.limit_cycle]` asked for it.
+    pub limit_cycle: Option<super::post::LimitCycleReport>,
 }
 
 /// The superelement reduction, for the summary.
@@ -97,6 +99,9 @@ pub struct TransientSummary {
     pub seconds_factorizing: f64,
     pub cuts: usize,
     pub refreshes: usize,
+    pub krylov_retries: usize,
+    pub full_newton_retries: usize,
+    pub krylov_iterations: usize,
     pub factorizations: usize,
     /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
     pub seconds_per_iteration: f64,
@@ -167,6 +172,7 @@ impl RunSummary {
             sweep: None,
             transient: None,
             reduction: None,
+            limit_cycle: None,
         }
     }
 }
@@ -293,6 +299,9 @@ impl TransientSummary {
             seconds_factorizing: t.seconds_factorizing,
             cuts: t.cuts,
             refreshes: t.refreshes,
+            krylov_retries: t.krylov_retries,
+            full_newton_retries: t.full_newton_retries,
+            krylov_iterations: t.krylov_iterations,
             factorizations: t.factorizations,
             seconds_per_iteration: stepping / iterations_run,
             seconds_per_solve: t.seconds_solving / iterations_run,
@@ -336,6 +345,7 @@ impl fmt::Display for RunSummary {
         self.fmt_statics(f)?;
         self.fmt_modes(f)?;
         self.fmt_reduction_transient_sweep(f)?;
+        self.fmt_limit_cycle(f)?;
         self.fmt_timings(f)
     }
 }
@@ -487,7 +497,7 @@ impl RunSummary {
         }
         if let Some(t) = &s.transient {
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -495,6 +505,9 @@ impl RunSummary {
                 1e3 * t.seconds_per_step,
                 t.cuts,
                 t.refreshes,
+                t.krylov_retries,
+                t.krylov_iterations,
+                t.full_newton_retries,
                 t.factorizations,
                 t.factor_entries,
                 t.seconds_factorizing,
@@ -526,6 +539,44 @@ impl RunSummary {
                     sw.cold_restarts
                 )?;
             }
+        }
+        Ok(())
+    }
+
+    /// The limit cycle against the complex modes.
+    fn fmt_limit_cycle(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Some(r) = &self.limit_cycle else {
+            return Ok(());
+        };
+        let c = &r.cycle;
+        writeln!(f, "limit cycle of the braking torque: {}", c.verdict)?;
+        let growth = c
+            .growth_rate
+            .map_or("not measured".into(), |g| format!("{g:.0} 1/s"));
+        let predicted = r.predicted.as_ref().map_or(String::new(), |p| {
+            format!(
+                " (complex mode {} of the {} route: Re(s) {:.0} 1/s at {:.1} Hz)",
+                p.1, p.0, p.2, p.3
+            )
+        });
+        writeln!(f, "    growth rate {growth}{predicted}")?;
+        writeln!(
+            f,
+            "    dominant frequency {:.1} Hz, period {}, saturation at {}, amplitude {:.3e} N m (half peak-to-peak), {} cycles after saturation",
+            c.dominant_frequency,
+            c.period.map_or("-".into(), |p| format!("{:.4e} s", p)),
+            c.saturation_time.map_or("-".into(), |t| format!("{:.4e} s", t)),
+            c.saturated_amplitude,
+            c.amplitudes.len()
+        )?;
+        for (name, fr) in &r.contact_fractions {
+            writeln!(
+                f,
+                "    {name:34} open {:5.1} %, sticking {:5.1} %, slipping {:5.1} % of the points over the last cycles",
+                100.0 * fr[0],
+                100.0 * fr[1],
+                100.0 * fr[2]
+            )?;
         }
         Ok(())
     }

@@ -65,6 +65,8 @@ pub struct StepReport {
     /// The last force evaluation was at the accepted state (the caller may reuse what it
     /// computed there); false when the step ended on the correction criterion.
     pub forces_current: bool,
+    /// GMRES iterations of Newton-Krylov corrections.
+    pub krylov_iterations: usize,
 }
 
 /// The damping operator C.
@@ -123,6 +125,9 @@ impl<'p> ModalDamping<'p> {
 pub struct Jacobian<'x, 'p> {
     pub factor: DirectSolver<'p>,
     pub extra: Option<Box<dyn Operator<'p> + 'x>>,
+    /// J itself (what was factorized), for Krylov iterations on the consistent tangent of
+    /// another state: J(state) = J + X(state) - extra.
+    pub matrix: Option<SparseMatrix<'p>>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -165,6 +170,9 @@ pub struct State<'p> {
 /// in the checkpoint, recomputes it at the same steps).
 pub const LINEAR_FORCE_REFRESH: usize = 1000;
 
+/// GMRES iterations at most per Newton-Krylov correction.
+pub const KRYLOV_MAX: usize = 60;
+
 /// A Newmark integrator over fixed operators M, C, K and a factor of J.
 pub struct Newmark<'a, 'p> {
     pub settings: NewmarkSettings,
@@ -181,6 +189,10 @@ pub struct Newmark<'a, 'p> {
     f: Vector<'p>,
     tmp: Vector<'p>,
     dq: Vector<'p>,
+    /// The linear force's change for a full correction, -(J - X) dq (line search).
+    dz: Vector<'p>,
+    /// GMRES basis (Newton-Krylov corrections), grown on first use.
+    basis: Vec<Vector<'p>>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -209,6 +221,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             f: q1.duplicate()?,
             tmp: q1.duplicate()?,
             dq: q1.duplicate()?,
+            dz: q1.duplicate()?,
+            basis: Vec::new(),
             q1,
         })
     }
@@ -290,25 +304,24 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state: &mut State<'p>,
         forces: &mut Forces<'_, 'p>,
     ) -> Result<StepReport, TimeError> {
-        self.step_with(state, forces, None)
+        self.step_with(state, forces, Correction::Fixed, false)
     }
 
     /// [`Newmark::step`], or with `retangent` a full Newton: J rebuilt and factorized at every
-    /// iterate (for checking the fixed-Jacobian iterations, and for problems they cannot do).
+    /// iterate (the consistent tangent, for the steps the fixed Jacobian cannot do), and with
+    /// `line_search` each correction backtracked on |R| (Armijo): where a contact point crosses
+    /// the friction law's regularization band or opens, a full Newton step can overshoot and
+    /// cycle, and no step size removes that; a shorter step along the same direction does.
     ///
     /// # Collective
     pub fn step_with(
         &mut self,
         state: &mut State<'p>,
         forces: &mut Forces<'_, 'p>,
-        mut retangent: Option<&mut Factorize<'_, 'p>>,
+        mut correction: Correction<'_, '_, 'p>,
+        line_search: bool,
     ) -> Result<StepReport, TimeError> {
-        let NewmarkSettings {
-            beta,
-            gamma,
-            step: h,
-            ..
-        } = self.settings;
+        let h = self.settings.step;
         let t1 = state.time + h;
         // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
         self.q1.copy_from(&state.q)?;
@@ -322,88 +335,271 @@ impl<'a, 'p> Newmark<'a, 'p> {
             }
             _ => self.linear_force()?,
         }
-        let mut product_seconds = clock.elapsed().as_secs_f64();
-        let mut iterations = 0;
-        let mut solve_seconds = 0.0;
-        let mut force_seconds = 0.0;
+        let mut report = StepReport {
+            iterations: 0,
+            residual: 0.0,
+            reference: 0.0,
+            solve_seconds: 0.0,
+            force_seconds: 0.0,
+            product_seconds: clock.elapsed().as_secs_f64(),
+            forces_current: true,
+            krylov_iterations: 0,
+        };
+        // R = z - f at the predictor; later iterates come evaluated from the correction.
+        let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
+        let mut history = Vec::new();
         loop {
-            // R = z - f
-            let clock = std::time::Instant::now();
-            forces(t1, &self.q1, &self.v1, &mut self.f)?;
-            force_seconds += clock.elapsed().as_secs_f64();
-            self.r.copy_from(&self.z)?;
-            self.r.axpy(-1.0, &self.f)?;
-            let r = self.r.norm2()?;
-            let reference = self.f.norm2()?.max(self.z.norm2()?);
             let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
-            let report = StepReport {
-                iterations,
-                residual: r,
-                reference,
-                solve_seconds,
-                force_seconds,
-                product_seconds,
-                forces_current: true,
-            };
+            report.residual = r;
+            report.reference = reference;
             if r <= target {
                 self.accept(state, t1)?;
                 return Ok(report);
             }
-            if iterations >= self.settings.max_iterations || !r.is_finite() {
+            history.push(r);
+            // Stalled: less than a halving over the last four iterations after eight; at that
+            // rate the tolerance is out of reach within the limit, and the caller has better
+            // corrections to try.
+            let k = history.len();
+            let stalled = k > 8 && r > 0.5 * history[k - 5];
+            if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
                 return Err(TimeError::NotConverged {
                     step: state.step + 1,
                     time: t1,
-                    iterations,
+                    iterations: report.iterations,
                     residual: r,
                     target,
                 });
             }
-            let fresh = match retangent.as_mut() {
-                Some(build) => {
-                    let iterate = State {
-                        time: t1,
-                        step: state.step + 1,
-                        q: self.q1.try_clone()?,
-                        v: self.v1.try_clone()?,
-                        a: self.a1.try_clone()?,
-                        linear: None,
-                    };
-                    Some(build(&self.settings, Some(&iterate))?)
-                }
-                None => None,
+            let iterate = |s: &Self| -> Result<State<'p>, LaError> {
+                Ok(State {
+                    time: t1,
+                    step: state.step + 1,
+                    q: s.q1.try_clone()?,
+                    v: s.v1.try_clone()?,
+                    a: s.a1.try_clone()?,
+                    linear: None,
+                })
             };
-            let jacobian = fresh.as_ref().unwrap_or(self.jacobian);
             let t = std::time::Instant::now();
-            jacobian.factor.solve(&self.r, &mut self.dq)?;
-            solve_seconds += t.elapsed().as_secs_f64();
-            self.q1.axpy(-1.0, &self.dq)?;
-            self.a1.axpy(-1.0 / (beta * h * h), &self.dq)?;
-            self.v1.axpy(-gamma / (beta * h), &self.dq)?;
-            // z <- z - L dq = z - R + X dq
-            self.z.axpy(-1.0, &self.r)?;
-            if let Some(extra) = &jacobian.extra {
-                let clock = std::time::Instant::now();
-                extra.mult_add(&self.dq, &mut self.z)?;
-                product_seconds += clock.elapsed().as_secs_f64();
+            match &mut correction {
+                Correction::Fixed => {
+                    self.jacobian.factor.solve(&self.r, &mut self.dq)?;
+                    self.linear_change(self.jacobian, &mut report)?;
+                }
+                Correction::Full(build) => {
+                    let fresh = build(&self.settings, Some(&iterate(self)?))?;
+                    fresh.factor.solve(&self.r, &mut self.dq)?;
+                    self.linear_change(&fresh, &mut report)?;
+                }
+                Correction::Krylov(linearize) => {
+                    let tangent = linearize(&self.settings, &iterate(self)?)?;
+                    report.krylov_iterations += self.krylov_solve(tangent.as_ref())?;
+                    self.linear_change_from_matrix()?;
+                }
             }
-            iterations += 1;
+            report.solve_seconds += t.elapsed().as_secs_f64();
+            report.iterations += 1;
+            let alpha = if line_search {
+                let (alpha, evaluated) = self.backtrack(t1, r, forces, &mut report)?;
+                (r, reference) = evaluated;
+                alpha
+            } else {
+                self.correct(1.0)?;
+                1.0
+            };
             // Converged in q1 (the residual's round-off floor reached): accept.
             // (q1 itself is known to its own round-off at best: 10 eps |q1|.)
-            let correction = self.dq.norm2()?;
+            let correction = alpha * self.dq.norm2()?;
             self.tmp.copy_from(&self.q1)?;
             self.tmp.axpy(-1.0, &state.q)?;
             let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
             if correction <= self.settings.tolerance * self.tmp.norm2()? + floor {
                 self.accept(state, t1)?;
-                return Ok(StepReport {
-                    iterations,
-                    solve_seconds,
-                    force_seconds,
-                    product_seconds,
-                    forces_current: false,
-                    ..report
-                });
+                report.forces_current = line_search;
+                return Ok(report);
             }
+            if !line_search {
+                (r, reference) = self.residual(t1, forces, &mut report)?;
+            }
+        }
+    }
+
+    /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to
+    /// the factor's accuracy): -R + X dq.
+    fn linear_change(
+        &mut self,
+        jacobian: &Jacobian<'_, 'p>,
+        report: &mut StepReport,
+    ) -> Result<(), LaError> {
+        self.dz.copy_from(&self.r)?;
+        self.dz.scale(-1.0)?;
+        if let Some(extra) = &jacobian.extra {
+            let clock = std::time::Instant::now();
+            extra.mult_add(&self.dq, &mut self.dz)?;
+            report.product_seconds += clock.elapsed().as_secs_f64();
+        }
+        Ok(())
+    }
+
+    /// dz = -(J - X) dq by products (a Krylov correction does not satisfy J dq = R).
+    fn linear_change_from_matrix(&mut self) -> Result<(), LaError> {
+        let matrix =
+            self.jacobian.matrix.as_ref().ok_or_else(|| {
+                LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into())
+            })?;
+        matrix.mult(&self.dq, &mut self.dz)?;
+        if let Some(extra) = &self.jacobian.extra {
+            self.tmp.set_all(0.0)?;
+            extra.mult_add(&self.dq, &mut self.tmp)?;
+            self.dz.axpy(-1.0, &self.tmp)?;
+        }
+        self.dz.scale(-1.0)
+    }
+
+    /// GMRES on J(state) dq = R, right-preconditioned by the step's factor, from dq = 0, to a
+    /// relative residual of 1e-4 (an inexact Newton step: the outer iteration converges
+    /// linearly at that rate) or KRYLOV_MAX iterations (the best solution then: GMRES
+    /// minimizes the residual, and the line search judges the step). Returns the iterations.
+    ///
+    /// # Collective
+    fn krylov_solve(&mut self, tangent: &dyn Operator<'p>) -> Result<usize, LaError> {
+        let m = KRYLOV_MAX;
+        while self.basis.len() < m + 1 {
+            self.basis.push(self.q1.duplicate()?);
+        }
+        let beta0 = self.r.norm2()?;
+        self.dq.set_all(0.0)?;
+        if beta0 == 0.0 {
+            return Ok(0);
+        }
+        self.basis[0].copy_from(&self.r)?;
+        self.basis[0].scale(1.0 / beta0)?;
+        // Hessenberg columns, Givens rotations, and the rotated right-hand side.
+        let mut h = vec![vec![0.0; m + 1]; m];
+        let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
+        let mut g = vec![0.0; m + 1];
+        g[0] = beta0;
+        let mut k = 0;
+        while k < m {
+            // w = J(state) P^-1 v_k, into basis[k + 1].
+            self.jacobian.factor.solve(&self.basis[k], &mut self.dz)?;
+            let (head, tail) = self.basis.split_at_mut(k + 1);
+            let w = &mut tail[0];
+            apply_consistent(self.jacobian, &mut self.tmp, tangent, &self.dz, w)?;
+            let _ = head;
+            let (head, tail) = self.basis.split_at_mut(k + 1);
+            let w = &mut tail[0];
+            for i in 0..=k {
+                h[k][i] = w.dot(&head[i])?;
+                w.axpy(-h[k][i], &head[i])?;
+            }
+            h[k][k + 1] = w.norm2()?;
+            if h[k][k + 1] > 0.0 {
+                w.scale(1.0 / h[k][k + 1])?;
+            }
+            for i in 0..k {
+                let t = cs[i] * h[k][i] + sn[i] * h[k][i + 1];
+                h[k][i + 1] = -sn[i] * h[k][i] + cs[i] * h[k][i + 1];
+                h[k][i] = t;
+            }
+            let d = h[k][k].hypot(h[k][k + 1]);
+            (cs[k], sn[k]) = if d > 0.0 {
+                (h[k][k] / d, h[k][k + 1] / d)
+            } else {
+                (1.0, 0.0)
+            };
+            h[k][k] = d;
+            h[k][k + 1] = 0.0;
+            g[k + 1] = -sn[k] * g[k];
+            g[k] *= cs[k];
+            k += 1;
+            if g[k].abs() <= 1e-4 * beta0 || !g[k].is_finite() {
+                break;
+            }
+        }
+        // y from the triangular system, then dq = P^-1 (V y).
+        let mut y = vec![0.0; k];
+        for i in (0..k).rev() {
+            let mut t = g[i];
+            for j in i + 1..k {
+                t -= h[j][i] * y[j];
+            }
+            y[i] = t / h[i][i];
+        }
+        self.tmp.set_all(0.0)?;
+        for (i, yi) in y.iter().enumerate() {
+            self.tmp.axpy(*yi, &self.basis[i])?;
+        }
+        self.jacobian.factor.solve(&self.tmp, &mut self.dq)?;
+        Ok(k)
+    }
+
+    /// R = z - f at the current iterate (into `r`); returns |R| and the reference force
+    /// max(|f|, |z|).
+    ///
+    /// # Collective
+    fn residual(
+        &mut self,
+        t1: f64,
+        forces: &mut Forces<'_, 'p>,
+        report: &mut StepReport,
+    ) -> Result<(f64, f64), LaError> {
+        let clock = std::time::Instant::now();
+        forces(t1, &self.q1, &self.v1, &mut self.f)?;
+        report.force_seconds += clock.elapsed().as_secs_f64();
+        self.r.copy_from(&self.z)?;
+        self.r.axpy(-1.0, &self.f)?;
+        let reference = self.f.norm2()?.max(self.z.norm2()?);
+        Ok((self.r.norm2()?, reference))
+    }
+
+    /// Moves the iterate by `-alpha dq` (q1, a1, v1 by the Newmark relations, z linearly).
+    fn correct(&mut self, alpha: f64) -> Result<(), LaError> {
+        let NewmarkSettings {
+            beta,
+            gamma,
+            step: h,
+            ..
+        } = self.settings;
+        self.q1.axpy(-alpha, &self.dq)?;
+        self.a1.axpy(-alpha / (beta * h * h), &self.dq)?;
+        self.v1.axpy(-alpha * gamma / (beta * h), &self.dq)?;
+        self.z.axpy(alpha, &self.dz)
+    }
+
+    /// Backtracking on |R| along the correction: the first alpha in 1, 1/2, ... 1/1024 with
+    /// |R(alpha)| <= (1 - 1e-4 alpha) |R(0)|, else the best alpha tried if it lowers |R| at all,
+    /// else the full step (the caller's iteration limit then decides). The iterate is left at
+    /// the chosen alpha with its residual evaluated.
+    ///
+    /// # Collective
+    fn backtrack(
+        &mut self,
+        t1: f64,
+        r0: f64,
+        forces: &mut Forces<'_, 'p>,
+        report: &mut StepReport,
+    ) -> Result<(f64, (f64, f64)), LaError> {
+        let (mut alpha, mut at) = (1.0, 0.0);
+        let mut best: Option<(f64, f64)> = None;
+        loop {
+            self.correct(alpha - at)?;
+            at = alpha;
+            let evaluated = self.residual(t1, forces, report)?;
+            let r = evaluated.0;
+            if r.is_finite() && r <= (1.0 - 1e-4 * alpha) * r0 {
+                return Ok((alpha, evaluated));
+            }
+            if r.is_finite() && best.is_none_or(|b| r < b.1) {
+                best = Some((alpha, r));
+            }
+            if alpha < 1.0 / 1024.0 {
+                let chosen = best.filter(|b| b.1 < r0).map_or(1.0, |b| b.0);
+                self.correct(chosen - at)?;
+                return Ok((chosen, self.residual(t1, forces, report)?));
+            }
+            alpha *= 0.5;
         }
     }
 
@@ -420,6 +616,30 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state.step += 1;
         Ok(())
     }
+}
+
+/// y = J(state) x = J x + X(state) x - extra x (`tmp`: scratch).
+///
+/// # Collective
+fn apply_consistent<'p>(
+    jacobian: &Jacobian<'_, 'p>,
+    tmp: &mut Vector<'p>,
+    tangent: &dyn Operator<'p>,
+    x: &Vector<'p>,
+    y: &mut Vector<'p>,
+) -> Result<(), LaError> {
+    let matrix = jacobian
+        .matrix
+        .as_ref()
+        .ok_or_else(|| LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into()))?;
+    matrix.mult(x, y)?;
+    tangent.mult_add(x, y)?;
+    if let Some(extra) = &jacobian.extra {
+        tmp.set_all(0.0)?;
+        extra.mult_add(x, tmp)?;
+        y.axpy(-1.0, tmp)?;
+    }
+    Ok(())
 }
 
 /// J = M / (beta h^2) + gamma / (beta h) C + K + mock, assembled into a copy of `k`'s pattern
@@ -509,6 +729,12 @@ pub struct StepControl {
     /// retries from (a failure there cuts the step).
     pub refreshed: bool,
     pub fresh: bool,
+    /// Steps retried on the consistent tangent after the refreshed Jacobian stalled: by
+    /// Newton-Krylov (the factor as preconditioner), then by a full Newton, each with line
+    /// search; and where the current step stands (0 fixed J, 1 Newton-Krylov, 2 full Newton).
+    pub krylov_retries: usize,
+    pub full_newton_retries: usize,
+    pub fallback: u8,
 }
 
 /// How an adaptive run reacts to failed steps.
@@ -528,10 +754,29 @@ pub struct Adaptivity {
 pub type Factorize<'f, 'p> =
     dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<Jacobian<'f, 'p>, LaError> + 'f;
 
+/// The nonlinear forces' tangent X at an iterate (K_c + K_stick + K_f + gamma/(beta h) C_f for
+/// contact: the consistent Jacobian beyond the linear operators), as an operator.
+pub type Linearize<'f, 'p> =
+    dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn Operator<'p> + 'f>, LaError> + 'f;
+
+/// How a step's corrections are computed.
+pub enum Correction<'r, 'f, 'p> {
+    /// With the factor of the step's fixed J (modified Newton).
+    Fixed,
+    /// Newton-Krylov: GMRES on the consistent tangent at every iterate, right-preconditioned
+    /// by the fixed factor (a few solves where J differs in a few contact points).
+    Krylov(&'r mut Linearize<'f, 'p>),
+    /// A full Newton: J rebuilt and factorized at every iterate.
+    Full(&'r mut Factorize<'f, 'p>),
+}
+
 /// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's
 /// fixed-Jacobian iterations fail, J is first rebuilt with the tangent of the current state
-/// (when `refresh` is set) and the step retried; if that fails too, the step is halved (J
-/// refactorized) and retried from the same state, at most `max_cuts` levels deep; after
+/// (when `refresh` is set) and the step retried; if that fails, the step is retried on the
+/// consistent tangent with line search: by Newton-Krylov (when `linearize` is given and J is
+/// kept), then by a full Newton; if that fails too,
+/// the step is halved (J refactorized) and retried from the same state, at most `max_cuts`
+/// levels deep; after
 /// `restore_after` good steps the step is doubled back towards the nominal one. Once refreshed,
 /// every later factorization uses the current state's tangent. Every change goes to `log`.
 /// Only when the smallest step fails too is the error returned. `control` starts at its
@@ -545,6 +790,7 @@ pub fn integrate_adaptive<'p>(
     c: Damping<'_, 'p>,
     k: &SparseMatrix<'p>,
     factorize: &mut Factorize<'_, 'p>,
+    mut linearize: Option<&mut Linearize<'_, 'p>>,
     state: &mut State<'p>,
     forces: &mut Forces<'_, 'p>,
     end_time: f64,
@@ -573,13 +819,23 @@ pub fn integrate_adaptive<'p>(
             if state.time >= end_time - 0.25 * step_settings.step {
                 break;
             }
-            let step = if full_newton {
-                integrator.step_with(state, forces, Some(&mut *factorize))
-            } else {
-                integrator.step(state, forces)
+            let step = match (full_newton, control.fallback, &mut linearize) {
+                (true, _, _) | (_, 2, _) => {
+                    integrator.step_with(state, forces, Correction::Full(&mut *factorize), true)
+                }
+                (_, 1, Some(l)) => {
+                    integrator.step_with(state, forces, Correction::Krylov(&mut **l), true)
+                }
+                _ => integrator.step(state, forces),
             };
             match step {
                 Ok(report) => {
+                    // Newton-Krylov stays on for the steps that follow (a point that crossed
+                    // the friction band crosses back within the cycle); the fixed J is tried
+                    // again after `restore_after` good steps.
+                    if control.fallback == 2 || control.good + 1 >= restore_after {
+                        control.fallback = 0;
+                    }
                     control.steps += 1;
                     control.fresh = false;
                     control.good += 1;
@@ -614,7 +870,30 @@ pub fn integrate_adaptive<'p>(
                 }
                 Err(TimeError::NotConverged {
                     residual, target, ..
+                }) if refresh && !full_newton && control.fallback < 2 => {
+                    // Newton-Krylov needs the assembled J and a linearization; without them
+                    // straight to the full Newton.
+                    let krylov = control.fallback == 0
+                        && linearize.is_some()
+                        && integrator.jacobian.matrix.is_some();
+                    control.fallback = if krylov { 1 } else { 2 };
+                    let how = if krylov {
+                        control.krylov_retries += 1;
+                        "Newton-Krylov (GMRES on the consistent tangent, the factor as preconditioner)"
+                    } else {
+                        control.full_newton_retries += 1;
+                        "a full Newton (the consistent tangent factorized at every iterate)"
+                    };
+                    log(&format!(
+                        "t = {:.6e} s: stalled with {} (residual {residual:.3e} vs {target:.3e}); retrying the step with {how} and line search",
+                        state.time,
+                        ["the refreshed Jacobian", "Newton-Krylov"][control.fallback as usize - 1]
+                    ));
+                }
+                Err(TimeError::NotConverged {
+                    residual, target, ..
                 }) if (control.level as usize) < max_cuts => {
+                    control.fallback = 0;
                     control.level += 1;
                     control.cuts += 1;
                     control.good = 0;

@@ -137,6 +137,7 @@ fn cut_and_restore(
         Ok(Jacobian {
             factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
             extra: Some(Box::new(mock)),
+            matrix: None,
         })
     };
     let mut oscillation = Oscillation::released_at(g0);
@@ -161,6 +162,7 @@ fn cut_and_restore(
         Damping::None,
         &k,
         &mut factorize,
+        None,
         &mut state,
         &mut forces,
         30.0,
@@ -323,6 +325,7 @@ fn integrate<'p>(
     let factor = Jacobian {
         factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?,
         extra: mock.map(|x| Box::new(x) as Box<dyn Operator<'p> + '_>),
+        matrix: None,
     };
     let mass = DirectSolver::factorize(petsc, m, Factorization::Lu, "mass_").map_err(e)?;
     let mut integrator = Newmark::new(settings, m, Damping::None, k, &factor).map_err(e)?;

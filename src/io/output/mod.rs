@@ -2,6 +2,7 @@
 //! Writers only write: what they show was computed by the stages or by `post`.
 
 pub mod modes;
+pub mod post;
 pub mod reduction;
 pub mod statics;
 pub mod sweep;

@@ -50,6 +50,9 @@ impl<'p> Checkpoint<'p> {
                 ("good", c.good as f64),
                 ("refreshed", f64::from(u8::from(c.refreshed))),
                 ("fresh", f64::from(u8::from(c.fresh))),
+                ("krylov_retries", c.krylov_retries as f64),
+                ("full_newton_retries", c.full_newton_retries as f64),
+                ("fallback", f64::from(c.fallback)),
                 ("signal_rows", out.time.len() as f64),
                 ("state_rows", out.states as f64),
                 ("jacobian_state", f64::from(u8::from(jacobian_at.is_some()))),
@@ -154,6 +157,9 @@ impl<'p> Checkpoint<'p> {
             good: number("good")? as usize,
             refreshed: number("refreshed")? != 0.0,
             fresh: number("fresh")? != 0.0,
+            krylov_retries: number("krylov_retries")? as usize,
+            full_newton_retries: number("full_newton_retries")? as usize,
+            fallback: number("fallback")? as u8,
         };
         let state_rows = number("state_rows")? as usize;
         Ok(Checkpoint {

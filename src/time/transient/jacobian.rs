@@ -7,9 +7,20 @@ use std::time::Instant;
 
 use crate::contact::kernel::Part;
 use crate::contact::linearize::Base;
+use crate::contact::linearize::TangentOperator;
 use crate::contact::{ContactModel, ContactState};
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
 use crate::time::newmark::{jacobian, Damping, Jacobian, NewmarkSettings, State};
+
+/// The contact tangent parts of the consistent Jacobian (with the friction damping through
+/// gamma / (beta h)): the joints' stick traction mu k_c(g) slip also moves with the gap
+/// (StickCoupling).
+const CONSISTENT: [Part; 4] = [
+    Part::Normal,
+    Part::Stick,
+    Part::Friction,
+    Part::StickCoupling,
+];
 
 /// Builds and factorizes Jacobians, and keeps what a checkpoint needs to rebuild the current
 /// one (the state it was built at).
@@ -72,6 +83,25 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         })
     }
 
+    /// The consistent contact tangent at an iterate, as an operator through the observation
+    /// rows (what Newton-Krylov adds to J in place of the factor's own tangent).
+    ///
+    /// # Collective
+    pub fn linearize(
+        &self,
+        ns: &NewmarkSettings,
+        at: &State<'p>,
+    ) -> Result<TangentOperator<'a, 'p>, LaError> {
+        let contact = self.contact;
+        let cs = contact.evaluate(&at.q, Some(&at.v), 1.0)?;
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        contact.tangent_operator(
+            self.petsc,
+            &cs,
+            &[(&CONSISTENT, 1.0), (&[Part::Damping], c1)],
+        )
+    }
+
     /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
     /// mock; a restart's saved state takes precedence once. The contact tangent beyond K0
     /// comes back as an operator applied through the observation rows (the iteration's
@@ -96,7 +126,14 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         let c1 = ns.gamma / (ns.beta * ns.step);
         let (j, extra) = if let Some((q, v)) = at {
             let cs = contact.evaluate(q, Some(v), 1.0)?;
-            let parts = [Part::Normal, Part::Stick, Part::Friction];
+            // The consistent tangent: the joints' stick traction mu k_c(g) slip also moves with
+            // the gap (StickCoupling).
+            let parts = [
+                Part::Normal,
+                Part::Stick,
+                Part::Friction,
+                Part::StickCoupling,
+            ];
             let mut tangent =
                 contact.linearize(self.petsc, Base::PatternOf(self.k0_input), &cs, &parts)?;
             let damping = contact.linearize(
@@ -140,6 +177,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         Ok(Jacobian {
             factor,
             extra: Some(Box::new(extra)),
+            matrix: Some(j),
         })
     }
 }

@@ -49,6 +49,9 @@ pub struct Transient {
     pub normal_force: Vec<Vec<f64>>,
     pub friction_force: Vec<Vec<f64>>,
     pub torque: Vec<Vec<f64>>,
+    /// Per interface: points open, sticking (inside the friction band, or a joint) and
+    /// slipping at every step.
+    pub status_points: Vec<[Vec<f64>; 3]>,
     pub iterations: Vec<usize>,
     /// The step size of each step (0 at the start).
     pub step_size: Vec<f64>,
@@ -61,6 +64,11 @@ pub struct Transient {
     /// Step cuts after failed steps, and Jacobian factorizations in all.
     pub cuts: usize,
     pub refreshes: usize,
+    /// Steps retried on the consistent tangent with line search: Newton-Krylov, full Newton.
+    pub krylov_retries: usize,
+    pub full_newton_retries: usize,
+    /// GMRES iterations of the Newton-Krylov retries.
+    pub krylov_iterations: usize,
     pub factorizations: usize,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
@@ -118,6 +126,8 @@ impl Transient {
         self.seconds_jacobians = b.seconds_in_loop;
         self.cuts = control.cuts;
         self.refreshes = control.refreshes;
+        self.krylov_retries = control.krylov_retries;
+        self.full_newton_retries = control.full_newton_retries;
         self.factorizations = control.factorizations.max(b.built);
     }
 
@@ -129,9 +139,13 @@ impl Transient {
             normal_force: series(),
             friction_force: series(),
             torque: series(),
+            status_points: vec![Default::default(); interfaces],
             iterations: Vec::with_capacity(steps + 1),
             cuts: 0,
             refreshes: 0,
+            krylov_retries: 0,
+            full_newton_retries: 0,
+            krylov_iterations: 0,
             factorizations: 0,
             factor_entries: 0.0,
             seconds_factorizing: 0.0,
@@ -196,9 +210,13 @@ pub fn run<'p>(
     // The contact state of the last force evaluation: the step's record reuses it when the
     // step ended there.
     let last_contact = RefCell::new(None::<ContactState>);
+    // Contact points whose status (open / stick: inside the friction law's regularization
+    // band / slip) changed between consecutive force evaluations since the last accepted
+    // step: the evidence a stalled step's log line gives.
+    let status_changes = std::cell::Cell::new(0usize);
     let mut fc = input.f_ext.duplicate()?;
     let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &mut Vector<'p>| {
-        contact_forces(&input, &mut fc, q, v, f, &last_contact)
+        contact_forces(&input, &mut fc, q, v, f, &last_contact, &status_changes)
     };
 
     // A fresh stream, or the checkpoint's state, step control and Jacobian state with the
@@ -237,6 +255,10 @@ pub fn run<'p>(
     )?);
     let mut factorize =
         |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);
+    let mut linearize = |ns: &NewmarkSettings, at: &State<'p>| {
+        let op = builder.borrow().linearize(ns, at)?;
+        Ok(Box::new(op) as Box<dyn crate::la::Operator<'p> + '_>)
+    };
 
     let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
     let first_step = ((state.time / settings.step).round() as usize).min(settings.steps);
@@ -247,12 +269,14 @@ pub fn run<'p>(
     let mut on_step =
         |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<(), TimeError> {
             let h = settings.step / f64::from(1u32 << c.level);
+            status_changes.set(0);
             let out = &mut recorder.out;
             out.seconds_solving += report.solve_seconds;
             out.seconds_in_forces += report.force_seconds;
             out.seconds_in_products += report.product_seconds;
             out.steps_run += 1;
             out.iterations_run += report.iterations;
+            out.krylov_iterations += report.krylov_iterations;
             let evaluated = last_contact.borrow();
             let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
             recorder.record(s, h, report.iterations, evaluated)?;
@@ -283,9 +307,18 @@ pub fn run<'p>(
             Ok(())
         };
     let rank0 = petsc.rank() == 0;
+    let world = petsc.world();
     let mut log = |line: &str| {
+        // Collective: every rank logs at the same points of the step control.
+        let changes = crate::parallel::sum(world, status_changes.get() as f64);
+        let in_band = last_contact.borrow().as_ref().map_or(0, |cs| {
+            cs.response.iter().filter(|r| r.in_friction_band()).count()
+        });
+        let in_band = crate::parallel::sum(world, in_band as f64);
         if rank0 {
-            println!("  transient: {line}");
+            println!(
+                "  transient: {line} [{changes:.0} contact status changes between iterates since the last step; {in_band:.0} sliding points inside the friction regularization band]"
+            );
         }
     };
     let forces: &mut Forces<'_, 'p> = &mut forces;
@@ -295,6 +328,7 @@ pub fn run<'p>(
         input.c,
         &k0,
         &mut factorize,
+        Some(&mut linearize),
         &mut state,
         forces,
         end_time,
@@ -368,8 +402,9 @@ fn start_state<'p>(
     };
     let mut fc = input.f_ext.duplicate()?;
     let last = RefCell::new(None);
+    let changes = std::cell::Cell::new(0);
     let mut forces = |_t: f64, q: &Vector<'p>, v: &Vector<'p>, f: &mut Vector<'p>| {
-        contact_forces(input, &mut fc, q, v, f, &last)
+        contact_forces(input, &mut fc, q, v, f, &last, &changes)
     };
     initial_acceleration(input.m, input.c, k0, &mut state, &mut forces, &mass)?;
     Ok(state)
@@ -385,9 +420,19 @@ fn contact_forces<'p>(
     v: &Vector<'p>,
     f: &mut Vector<'p>,
     last: &RefCell<Option<ContactState>>,
+    changes: &std::cell::Cell<usize>,
 ) -> Result<(), LaError> {
     let state = input.contact.evaluate(q, Some(v), 1.0)?;
     input.contact.force(&state, fc)?;
+    if let Some(previous) = last.borrow().as_ref() {
+        let changed = previous
+            .response
+            .iter()
+            .zip(&state.response)
+            .filter(|(a, b)| a.status != b.status)
+            .count();
+        changes.set(changes.get() + changed);
+    }
     *last.borrow_mut() = Some(state);
     f.copy_from(input.f_ext)?;
     f.axpy(1.0, &*fc)?;

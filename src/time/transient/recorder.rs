@@ -20,7 +20,14 @@ fn signal_paths(interfaces: &[String]) -> Vec<String> {
         .map(|s| s.to_string())
         .collect();
     for name in interfaces {
-        for s in ["normal_force", "friction_force", "torque"] {
+        for s in [
+            "normal_force",
+            "friction_force",
+            "torque",
+            "open_points",
+            "stick_points",
+            "slip_points",
+        ] {
             v.push(format!("interfaces/{name}/{s}"));
         }
     }
@@ -72,6 +79,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 "time" | "step_size" => "s",
                 "iterations" => "1",
                 "torque" | "braking_torque" => "N m",
+                "open_points" | "stick_points" | "slip_points" => "1",
                 _ => "N",
             };
             r.stream.create_series(&path, 1, units).map_err(io_error)?;
@@ -136,6 +144,9 @@ impl<'a, 'p> Recorder<'a, 'p> {
             out.normal_force[i] = read(&format!("interfaces/{name}/normal_force"))?;
             out.friction_force[i] = read(&format!("interfaces/{name}/friction_force"))?;
             out.torque[i] = read(&format!("interfaces/{name}/torque"))?;
+            for (k, status) in ["open", "stick", "slip"].iter().enumerate() {
+                out.status_points[i][k] = read(&format!("interfaces/{name}/{status}_points"))?;
+            }
         }
         for (i, chunk) in sensor_series.chunks(3).enumerate() {
             for (kind, path) in chunk.iter().enumerate() {
@@ -197,6 +208,9 @@ impl<'a, 'p> Recorder<'a, 'p> {
             out.normal_force[i].push(sum.normal_force);
             out.friction_force[i].push(sum.friction_force);
             out.torque[i].push(sum.torque);
+            for (k, count) in [sum.open, sum.stick, sum.slip].into_iter().enumerate() {
+                out.status_points[i][k].push(count as f64);
+            }
         }
         if let (Some(sensors), Some(y)) = (self.sensors, &mut self.sensor_buffer) {
             // Each rank's rows into their place, then one sum over the ranks for all three.
@@ -270,6 +284,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 &out.friction_force[i][from..],
             ));
             series.push((format!("interfaces/{name}/torque"), &out.torque[i][from..]));
+            for (k, status) in ["open", "stick", "slip"].iter().enumerate() {
+                series.push((
+                    format!("interfaces/{name}/{status}_points"),
+                    &out.status_points[i][k][from..],
+                ));
+            }
         }
         for (path, values) in series {
             self.stream.append(&path, values).map_err(io_error)?;
