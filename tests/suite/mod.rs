@@ -9,6 +9,7 @@ pub mod real_modes_verification;
 pub mod reduction;
 pub mod stages;
 pub mod static_solve;
+pub mod stick_slip;
 pub mod time_integration;
 
 use squeal::la::Petsc;
@@ -27,5 +28,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(time_integration::tests());
     v.extend(reduction::tests());
     v.extend(stages::tests());
+    v.extend(stick_slip::tests());
     v
 }

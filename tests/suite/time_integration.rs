@@ -82,17 +82,24 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// steps, 23 cuts, 21 restores, period 2.9e-4 off, energy 1.0e-3: the trapezoidal rule's
 /// O(h^2) at these large steps).
 ///
-/// With Jacobian refresh (J rebuilt with the contact tangent exp(-g) of the current state
-/// before any cut) the same run needs fewer cuts and steps (measured: 302 steps, 7 cuts, 34
-/// refreshes, 47 factorizations against 479 steps and 23 cuts); since more of the run goes at
-/// h = 0.3, the energy error is that of the larger step (3.8e-3, bound 5e-3; period 4.4e-4).
+/// With Jacobian refresh the stalled steps are first retried with J rebuilt at the current
+/// state, then with a full Newton and line search (the consistent tangent exp(-g) at every
+/// iterate; no Newton-Krylov here: no linearization is given): every step converges at
+/// h = 0.3 and none is cut (measured: 100 steps, 0 cuts, 72 refreshes). The whole run then
+/// goes at h = 0.3, so its errors are the trapezoidal rule's at that step: the period
+/// elongation (omega h)^2 / 12 (Hughes §9.1), which for the stiffest contact state
+/// (omega^2 = exp(1.21) = 3.4) is 2.5e-2, bounds the period and energy errors (measured 7.8e-3
+/// and 1.6e-2).
 fn step_cutting(petsc: &Petsc) -> Result<(), String> {
     let plain = cut_and_restore(petsc, false)?;
     let refreshed = cut_and_restore(petsc, true)?;
     if plain.cuts == 0 || plain.restores == 0 || plain.refreshes != 0 {
         return Err(format!("expected cuts and restores: {plain:?}"));
     }
-    if refreshed.refreshes == 0 || refreshed.cuts >= plain.cuts {
+    if refreshed.refreshes == 0
+        || refreshed.full_newton_retries == 0
+        || refreshed.cuts >= plain.cuts
+    {
         return Err(format!(
             "refresh should replace cuts: {refreshed:?} vs {plain:?}"
         ));
@@ -192,9 +199,13 @@ fn cut_and_restore(
             rel(period, 6.88757415)
         ),
     );
-    let energy_bound = if refresh { 5e-3 } else { 2e-3 };
+    let (energy_bound, period_bound) = if refresh {
+        (2.5e-2, 2.5e-2)
+    } else {
+        (2e-3, 1e-3)
+    };
     if (state.time - 30.0).abs() > 0.2
-        || rel(period, 6.88757415) > 1e-3
+        || rel(period, 6.88757415) > period_bound
         || energy_error > energy_bound
     {
         return Err(format!(
@@ -268,7 +279,7 @@ fn rows(petsc: &Petsc, n: usize) -> std::ops::Range<usize> {
 }
 
 /// A symmetric tridiagonal matrix from its diagonal and off-diagonal.
-fn tridiagonal<'p>(
+pub(super) fn tridiagonal<'p>(
     petsc: &'p Petsc,
     diag: &[f64],
     off: &[f64],
@@ -301,7 +312,7 @@ fn tridiagonal<'p>(
     Ok(a)
 }
 
-fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> Result<Vector<'p>, String> {
+pub(super) fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> Result<Vector<'p>, String> {
     let local = rows(petsc, values.len());
     Vector::from_local(petsc, &values[local]).map_err(|e| e.to_string())
 }
