@@ -823,7 +823,7 @@ pub fn integrate_adaptive<'p>(
                 (true, _, _) | (_, 2, _) => {
                     integrator.step_with(state, forces, Correction::Full(&mut *factorize), true)
                 }
-                (_, 1, Some(l)) => {
+                (_, 1, Some(l)) if integrator.jacobian.matrix.is_some() => {
                     integrator.step_with(state, forces, Correction::Krylov(&mut **l), true)
                 }
                 _ => integrator.step(state, forces),
@@ -833,8 +833,11 @@ pub fn integrate_adaptive<'p>(
                     // Newton-Krylov stays on for the steps that follow (a point that crossed
                     // the friction band crosses back within the cycle); the fixed J is tried
                     // again after `restore_after` good steps.
-                    if control.fallback == 2 || control.good + 1 >= restore_after {
+                    // (after a full-Newton rescue, back to Newton-Krylov where there is one).
+                    if control.good + 1 >= restore_after {
                         control.fallback = 0;
+                    } else if control.fallback == 2 {
+                        control.fallback = u8::from(linearize.is_some());
                     }
                     control.steps += 1;
                     control.fresh = false;
