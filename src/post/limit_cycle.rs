@@ -129,11 +129,6 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
         );
         return out;
     }
-    out.saturation_time = env
-        .iter()
-        .skip(k_min)
-        .find(|e| e.1 >= 0.9 * a_sat)
-        .map(|e| e.0);
     // The linear phase: after the smallest amplitude, below 30 % of saturation.
     let linear: Vec<(f64, f64)> = env
         .iter()
@@ -145,6 +140,27 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
         out.growth_rate = Some(slope(&linear));
         out.growth_window = Some((linear[0].0, linear.last().unwrap().0));
     }
+    // Still growing at the end (the last fifth's amplitude rises by more than 20 % across
+    // it): there is no saturated amplitude to judge yet.
+    let last: Vec<(f64, f64)> = env[env.len() - tail.len()..]
+        .iter()
+        .map(|e| (e.0, e.1.ln()))
+        .collect();
+    if last.len() >= 3 {
+        let rate = slope(&last);
+        let span = last[last.len() - 1].0 - last[0].0;
+        if rate * span > 0.2_f64.ln_1p() {
+            out.verdict = format!(
+                "no saturation yet: the amplitude still grows at {rate:.0} 1/s over the last fifth of the run; run longer"
+            );
+            return out;
+        }
+    }
+    out.saturation_time = env
+        .iter()
+        .skip(k_min)
+        .find(|e| e.1 >= 0.9 * a_sat)
+        .map(|e| e.0);
     let Some(t_sat) = out.saturation_time else {
         out.verdict = "no saturation time found".into();
         return out;
@@ -363,7 +379,11 @@ mod tests {
             decay.verdict
         );
         let growth = characterize(&t, &wave(&|t| (500.0 * t).exp()), dt, &s);
-        assert!(!growth.reached, "{}", growth.verdict);
+        assert!(
+            !growth.reached && growth.saturation_time.is_none(),
+            "{}",
+            growth.verdict
+        );
         let mut bad = wave(&|_| 1.0);
         bad[100] = f64::NAN;
         assert!(!characterize(&t, &bad, dt, &s).reached);

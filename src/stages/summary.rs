@@ -560,6 +560,15 @@ impl RunSummary {
             )
         });
         writeln!(f, "    growth rate {growth}{predicted}")?;
+        if let Some(p) = &r.predicted {
+            if (p.3 - c.dominant_frequency).abs() > 0.1 * c.dominant_frequency {
+                writeln!(
+                    f,
+                    "    the run grows at {:.1} Hz but the most unstable complex mode computed is at {:.1} Hz: the modes near the growing frequency are missing (raise real_modes.count for the projected route) or the growth comes from the nonlinear response",
+                    c.dominant_frequency, p.3
+                )?;
+            }
+        }
         writeln!(
             f,
             "    dominant frequency {:.1} Hz, period {}, saturation at {}, amplitude {:.3e} N m (half peak-to-peak), {} cycles after saturation",

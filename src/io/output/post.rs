@@ -78,22 +78,17 @@ fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Resul
         });
     let end = tr.time.last().copied().unwrap_or(1.0);
     let c = &report.cycle;
+    let state = if c.reached {
+        "limit cycle"
+    } else {
+        "no cycle yet"
+    };
     let title = match (c.growth_rate, report.predicted.as_ref()) {
         (Some(g), Some(p)) => format!(
-            "braking torque: growth {g:.0} 1/s (complex mode {}: {:.0} 1/s), {:.1} Hz; {}",
-            p.1,
-            p.2,
-            c.dominant_frequency,
-            if c.reached {
-                "limit cycle"
-            } else {
-                "no limit cycle yet"
-            }
+            "torque: growth {g:.0} 1/s ({}: {:.0} 1/s), {:.0} Hz, {state}",
+            p.1, p.2, c.dominant_frequency
         ),
-        _ => format!(
-            "braking torque, {:.1} Hz: {}",
-            c.dominant_frequency, c.verdict
-        ),
+        _ => format!("torque, {:.0} Hz, {state}", c.dominant_frequency),
     };
     let mut fig = Figure::new(
         1200,
