@@ -219,30 +219,9 @@ pub fn run<'p>(
         contact_forces(&input, &mut fc, q, v, f, &last_contact, &status_changes)
     };
 
-    // A fresh stream, or the checkpoint's state, step control and Jacobian state with the
-    // stream cut back to the checkpoint's rows.
-    let sensor_names = input.sensors.map(|s| s.names.clone()).unwrap_or_default();
-    let out = Transient::empty(settings.steps, contact.interfaces.len(), sensor_names);
-    let interval = settings.state_interval;
     let mut control = StepControl::default();
-    let (mut recorder, restart_at) = if files.restart {
-        let checkpoint = Checkpoint::read(petsc, files, settings, &state)?;
-        let r = Recorder::resume(
-            petsc,
-            files,
-            contact,
-            input.sensors,
-            interval,
-            out,
-            &checkpoint,
-        )?;
-        control = checkpoint.control;
-        state = checkpoint.state;
-        (r, checkpoint.jacobian_at)
-    } else {
-        let r = Recorder::create(petsc, files, contact, input.sensors, interval, out, &state)?;
-        (r, None)
-    };
+    let (mut recorder, restart_at) =
+        open_record(petsc, settings, &input, files, &mut state, &mut control)?;
     let builder = RefCell::new(JacobianBuilder::new(
         petsc,
         contact,
@@ -358,6 +337,42 @@ pub fn run<'p>(
     out.seconds_stepping = t.elapsed().as_secs_f64();
     out.count_factorizations(&builder.into_inner(), &control, seconds_start);
     Ok((out, result.err()))
+}
+
+/// The record of the run: a fresh stream, or the checkpoint's state, step control and
+/// Jacobian state (returned) with the stream cut back to the checkpoint's rows.
+///
+/// # Collective
+fn open_record<'a, 'p>(
+    petsc: &'p Petsc,
+    settings: &TransientSettings,
+    input: &TransientInputs<'a, 'p>,
+    files: &TransientFiles,
+    state: &mut State<'p>,
+    control: &mut StepControl,
+) -> Result<(Recorder<'a, 'p>, Option<(Vector<'p>, Vector<'p>)>), TimeError> {
+    let contact = input.contact;
+    let sensor_names = input.sensors.map(|s| s.names.clone()).unwrap_or_default();
+    let out = Transient::empty(settings.steps, contact.interfaces.len(), sensor_names);
+    let interval = settings.state_interval;
+    if files.restart {
+        let checkpoint = Checkpoint::read(petsc, files, settings, state)?;
+        let r = Recorder::resume(
+            petsc,
+            files,
+            contact,
+            input.sensors,
+            interval,
+            out,
+            &checkpoint,
+        )?;
+        *control = checkpoint.control;
+        *state = checkpoint.state;
+        Ok((r, checkpoint.jacobian_at))
+    } else {
+        let r = Recorder::create(petsc, files, contact, input.sensors, interval, out, state)?;
+        Ok((r, None))
+    }
 }
 
 /// The progress bar's line: time, steps per second, mean iterations over the last 500 steps.
