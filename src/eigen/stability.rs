@@ -118,8 +118,15 @@ impl ModalProjection {
 }
 
 /// The contact parts of the projected stiffness (symmetric contact, sticking, sliding
-/// friction) and of the damping (friction damping).
-const STIFFNESS: [Part; 3] = [Part::Normal, Part::Stick, Part::Friction];
+/// friction, and the sticking joints' gap coupling: their traction mu k_c(g) slip changes
+/// with the gap, an unsymmetric term that destabilizes the brakes' ~4.8 kHz mode) and of the
+/// damping (friction damping).
+const STIFFNESS: [Part; 4] = [
+    Part::Normal,
+    Part::Stick,
+    Part::Friction,
+    Part::StickCoupling,
+];
 const DAMPING: [Part; 1] = [Part::Damping];
 
 /// Stability of contact states on the nominal real modes. The observation of the modes is

@@ -124,7 +124,12 @@ fn quadratic_operators<'p>(
                 petsc,
                 Base::Plus(&ops.k0),
                 state,
-                &[Part::Normal, Part::Stick, Part::Friction],
+                &[
+                    Part::Normal,
+                    Part::Stick,
+                    Part::Friction,
+                    Part::StickCoupling,
+                ],
             )?;
             let mut rayleigh = contact.joined_matrix(petsc, &ops.k0)?;
             rayleigh.scale(damping.rayleigh_beta)?;
