@@ -4,6 +4,7 @@ pub mod common;
 pub mod complex_modes;
 pub mod contact_statics;
 pub mod convergence;
+pub mod growth;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
 pub mod reduction;
@@ -29,5 +30,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(reduction::tests());
     v.extend(stages::tests());
     v.extend(stick_slip::tests());
+    v.extend(growth::tests());
     v
 }

@@ -1,0 +1,56 @@
+//! The time/frequency link on the small brake (DESIGN.md §2b): the self-excited growth of the
+//! transient is the most unstable complex mode of the same preloaded model.
+//!
+//! Reference: the full-route complex modes (SLEPc PEP on the 6k brake, backward errors
+//! ~1e-14): C48, 4,758 Hz, Re(s) = 2,157 1/s, the largest below 6 kHz once the sticking
+//! joints' gap coupling is in the tangent (without it the largest was 248 1/s, and the
+//! transient's 2,077 1/s had no mode to match). The transient (reduced on 100 modes, 2 us
+//! steps, 1 nm kick along real mode 2; on 40 modes the basis stops below the mode and the
+//! fit gives 1,731 1/s) is fitted by `[post.limit_cycle]` on its torque
+//! envelope between the envelope's minimum and 30 % of its final value, about two decades:
+//! asserted within 10 % of Re(s) (the fit mixes in the slower unstable modes, 98-236 1/s,
+//! and the kick's decaying content during the first decade; measured 3.8 %).
+
+use squeal::la::Petsc;
+
+use super::common::{rel, say};
+
+pub fn tests() -> Vec<super::NamedTest> {
+    vec![(
+        "small_brake_transient_grows_at_the_rate_of_its_unstable_complex_mode",
+        growth_matches_complex_mode,
+    )]
+}
+
+fn growth_matches_complex_mode(petsc: &Petsc) -> Result<(), String> {
+    let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
+        [contact]\ndisc_speed = 6.2832\n\
+        [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
+        friction = { law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }\n\
+        [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 100\n\
+        [complex_modes]\nmethod = \"full\"\nf_max_hz = 6000.0\n[reduction]\n\
+        [transient]\nstep = 2.0e-6\nsteps = 4500\nmode = 2\namplitude = 1.0e-9\n\
+        state_interval = 0.0\n[post.limit_cycle]\n";
+    let scene = squeal::scene::Scene::parse(text, "growth").map_err(|e| e.to_string())?;
+    let out = super::common::suite_dir().join("growth");
+    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
+        .map_err(|e| e.to_string())?;
+    let report = run.limit_cycle.as_ref().ok_or("no limit-cycle report")?;
+    let growth = report.cycle.growth_rate.ok_or("no growth rate fitted")?;
+    let (_, name, re, f) = report.predicted.clone().ok_or("no unstable complex mode")?;
+    say(
+        petsc,
+        &format!(
+            "transient growth {growth:.0} 1/s at {:.0} Hz; complex mode {name}: Re(s) {re:.0} 1/s at {f:.0} Hz ({:.1e})",
+            report.cycle.dominant_frequency,
+            rel(growth, re)
+        ),
+    );
+    let error = rel(growth, re);
+    if error.is_nan() || error >= 0.1 {
+        return Err(format!(
+            "growth {growth} 1/s vs Re(s) {re} 1/s of {name} ({f} Hz)"
+        ));
+    }
+    Ok(())
+}
