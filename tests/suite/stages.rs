@@ -35,12 +35,31 @@ const BRAKE: &str = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_b
      [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
      friction = { law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }\n[statics]\n";
 
-/// Model and operators of the small brake, by the stage function.
-fn preloaded<'p>(petsc: &'p Petsc) -> Result<stages::ModelAndOperators<'p>, String> {
+/// The small brake through the first stages: scene, model, operators and preload.
+struct SmallBrake<'p> {
+    scene: Scene,
+    model: squeal::stages::model::Model,
+    ops: squeal::stages::operators::Operators<'p>,
+    preload: squeal::stages::statics::Preloaded<'p>,
+}
+
+fn small_brake<'p>(petsc: &'p Petsc) -> Result<SmallBrake<'p>, String> {
+    let e = |e: RunError| e.to_string();
     let scene = Scene::parse(BRAKE, "stages test").map_err(|e| e.to_string())?;
     let mut timings = Timings::default();
-    stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings)
-        .map_err(|e| e.to_string())
+    let (model, _, ops) =
+        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings).map_err(e)?;
+    let model = model.ok_or("a brake model")?;
+    let statics = scene.statics.as_ref().ok_or("[statics]")?;
+    let contact = scene.contact.clone().unwrap_or_default();
+    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
+        .map_err(e)?;
+    Ok(SmallBrake {
+        scene,
+        model,
+        ops,
+        preload,
+    })
 }
 
 /// Rayleigh-Ritz on a subspace that holds the modes exactly (DESIGN.md §2, reduction): the
@@ -49,14 +68,12 @@ fn preloaded<'p>(petsc: &'p Petsc) -> Result<stages::ModelAndOperators<'p>, Stri
 /// static shape (1e-10), and the stage keeps every contact point.
 fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
     let e = |e: RunError| e.to_string();
-    let scene = Scene::parse(BRAKE, "stages test").map_err(|e| e.to_string())?;
-    let (model, _, ops) = preloaded(petsc)?;
-    let model = model.ok_or("a brake model")?;
-    let mut timings = Timings::default();
-    let statics = scene.statics.as_ref().ok_or("[statics]")?;
-    let contact = scene.contact.clone().unwrap_or_default();
-    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
-        .map_err(e)?;
+    let SmallBrake {
+        model,
+        ops,
+        preload,
+        ..
+    } = small_brake(petsc)?;
     let request = RealModeRequest {
         count: 30,
         tolerance: 1e-10,
@@ -91,15 +108,14 @@ fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
 /// nominal laws it changed.
 fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
     let e = |e: RunError| e.to_string();
-    let scene = Scene::parse(BRAKE, "stages test").map_err(|e| e.to_string())?;
-    let (model, _, ops) = preloaded(petsc)?;
-    let model = model.ok_or("a brake model")?;
+    let SmallBrake {
+        scene,
+        model,
+        ops,
+        mut preload,
+    } = small_brake(petsc)?;
     let mut timings = Timings::default();
     let statics = scene.statics.as_ref().ok_or("[statics]")?;
-    let contact = scene.contact.clone().unwrap_or_default();
-    let mut preload =
-        stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
-            .map_err(e)?;
     let request = RealModeRequest {
         count: 30,
         ..Default::default()
