@@ -8,6 +8,7 @@
 
 pub mod contact;
 pub mod eigen;
+pub mod fault;
 pub mod fem;
 pub mod io;
 pub mod la;

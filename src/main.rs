@@ -1,4 +1,5 @@
-//! squeal: MPI init (rsmpi first), panic hook -> MPI_Abort, command line, dispatch.
+//! squeal: MPI init (rsmpi first), panic hook -> MPI_Abort, command line, dispatch; a
+//! failure on any rank ends every rank (squeal::fault).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -78,14 +79,14 @@ fn run_command(
     squeal::la::install_panic_hook();
     let rank = {
         use mpi::traits::Communicator;
-        universe.world().rank()
+        let world = universe.world();
+        squeal::fault::init(&world);
+        world.rank()
     };
     let fail = |message: String| {
-        // Every rank reaches the same error (inputs are read on all ranks, solver failures
-        // are collective); rank 0 says it.
-        if rank == 0 {
-            eprintln!("squeal: error: {message}");
-        }
+        // Collective failures: rank 0 says it; a failure on one rank alone ends all ranks.
+        squeal::fault::report_failed_run(&message);
+        squeal::fault::finish();
         ExitCode::FAILURE
     };
     let (scene, text, name, dir) = match &scene_path {
@@ -144,5 +145,6 @@ fn run_command(
         Err(e) => fail(e.to_string()),
     };
     drop(petsc);
+    squeal::fault::finish();
     code
 }

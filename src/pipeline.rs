@@ -1,9 +1,13 @@
 //! The driver: runs the stages a scene asks for (`crate::stages`, in order), times them and
 //! hands each output to its writer (`crate::io::output`). No physics and no output code here.
+//! Every failure is agreed on by all ranks where it happens (`crate::fault::checked`), before
+//! collective objects (HDF5 files, MUMPS factors) are dropped: a rank that fails alone ends
+//! the run instead of hanging the others.
 
 use std::path::Path;
 use std::time::Instant;
 
+use crate::fault::checked;
 use crate::io::output;
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
@@ -63,10 +67,12 @@ pub fn run_with(
         return Err(RunError::scene("transient", message));
     }
     if petsc.rank() == 0 {
-        std::fs::create_dir_all(output).map_err(|source| RunError::Io {
-            path: output.to_path_buf(),
-            source,
-        })?;
+        checked(
+            std::fs::create_dir_all(output).map_err(|source| RunError::Io {
+                path: output.to_path_buf(),
+                source,
+            }),
+        )?;
     }
     crate::parallel::barrier(petsc.world());
     let mut timings = Timings::default();
@@ -74,15 +80,21 @@ pub fn run_with(
 
     // What the stages before the transient found goes to results.h5 before it starts.
     let start = Instant::now();
-    let file = ResultsFile::create(petsc.world(), &output.join("results.h5"))?;
+    let file = checked(ResultsFile::create(
+        petsc.world(),
+        &output.join("results.h5"),
+    ))?;
     let header = (scene_text, petsc_options);
-    output::write_analyses(petsc, &file, &a, header, scene.output.write_inp, output)?;
+    let write_inp = scene.output.write_inp;
+    checked(output::write_analyses(
+        petsc, &file, &a, header, write_inp, output,
+    ))?;
     let seconds_output = start.elapsed().as_secs_f64();
     file.flush()?;
 
     // The transient streams into transient.h5 (linked as /transient) while it runs.
     let trajectory = match &scene.transient {
-        Some(settings) => Some(timings.time("transient", || {
+        Some(settings) => Some(timings.stage("transient", || {
             stages::transient::transient(
                 petsc,
                 settings,
@@ -108,17 +120,23 @@ pub fn run_with(
     };
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
-        output::transient::write_transient(petsc, &file, &t.signals, settings, output)?;
+        let signals = &t.signals;
+        checked(output::transient::write_transient(
+            petsc, &file, signals, settings, output,
+        ))?;
         if let Some(lc) = &limit_cycle {
-            output::post::write_limit_cycle(petsc, &file, lc, &t.signals, output)?;
+            checked(output::post::write_limit_cycle(
+                petsc, &file, lc, signals, output,
+            ))?;
         }
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
-        output::write_xdmf_and_preview(output, model, a.modes.as_ref(), &a.complex)?;
+        let written = output::write_xdmf_and_preview(output, model, a.modes.as_ref(), &a.complex);
+        checked(written)?;
     }
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
     timings.stages.push(("output".into(), seconds_output));
-    output::write_timings(&file, &timings)?;
+    checked(output::write_timings(&file, &timings))?;
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.
     let signals = match trajectory {

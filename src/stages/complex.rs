@@ -49,8 +49,8 @@ pub fn complex_modes<'p>(
     modes: Option<&RealModes<'p>>,
     timings: &mut Timings,
 ) -> Result<Vec<ComplexModes<'p>>, RunError> {
-    let (kf, cf) = timings.time("complex operators", || {
-        quadratic_operators(petsc, damping, ops, preload)
+    let (kf, cf) = timings.stage("complex operators", || -> Result<_, RunError> {
+        Ok(quadratic_operators(petsc, damping, ops, preload)?)
     })?;
     let quadratic = crate::eigen::complex_modes::Operators::new(&kf, &cf, &ops.m)?;
     let mut out = Vec::new();
@@ -86,21 +86,22 @@ pub fn complex_modes<'p>(
                 }
             },
         )?;
-        let projected = timings.time("complex modes (projected)", || {
-            crate::eigen::complex_modes::projected(
-                &modes.shapes,
-                &kp,
-                &cp,
-                Some(&quadratic),
-                settings,
-            )
+        let projected = timings.stage("complex modes (projected)", || -> Result<_, RunError> {
+            let quadratic = Some(&quadratic);
+            let (shapes, kp, cp) = (&modes.shapes, &kp, &cp);
+            Ok(crate::eigen::complex_modes::projected(
+                shapes, kp, cp, quadratic, settings,
+            )?)
         })?;
         out.push(projected);
     }
     if settings.method != Route::Projected {
         let default_count = modes.map_or(20, |m| m.shapes.len());
-        let full = timings.time("complex modes (full)", || {
-            crate::eigen::complex_modes::full(petsc, &quadratic, settings, default_count)
+        let full = timings.stage("complex modes (full)", || -> Result<_, RunError> {
+            let count = default_count;
+            Ok(crate::eigen::complex_modes::full(
+                petsc, &quadratic, settings, count,
+            )?)
         })?;
         out.push(full);
     }

@@ -68,6 +68,8 @@ pub enum RunError {
     Time(#[from] crate::time::newmark::TimeError),
     #[error("output: {0}")]
     Output(#[from] WriteError),
+    #[error("{0}")]
+    Injected(#[from] crate::fault::InjectedFault),
     #[error("{path}: {source}")]
     Io {
         path: PathBuf,
@@ -123,6 +125,20 @@ pub struct Timings {
 }
 
 impl Timings {
+    /// Runs and times a stage that can fail. A failure is agreed on by all ranks before
+    /// anything is dropped ([`crate::fault::agree`]); a developer can provoke one
+    /// ([`crate::fault::inject`]).
+    pub fn stage<T, E: Into<RunError>>(
+        &mut self,
+        name: &str,
+        f: impl FnOnce() -> Result<T, E>,
+    ) -> Result<T, RunError> {
+        let result = crate::fault::inject(name)
+            .map_err(RunError::from)
+            .and_then(|()| self.time(name, f).map_err(Into::into));
+        crate::fault::checked(result)
+    }
+
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
         let start = Instant::now();
         let out = f();
@@ -161,12 +177,12 @@ pub fn analyses<'p>(
     };
     for format in &scene.output.export_matrices {
         let k = modes::symmetric_stiffness(&ops, preload.as_ref());
-        timings.time("export matrices", || {
+        timings.stage("export matrices", || {
             crate::io::output::export_matrices(petsc, format, k, &ops.m, output)
         })?;
     }
     let modes = match &scene.real_modes {
-        Some(request) => Some(timings.time("real modes", || {
+        Some(request) => Some(timings.stage("real modes", || {
             modes::real_modes(petsc, &ops, preload.as_ref(), request)
         })?),
         None => None,
@@ -189,7 +205,7 @@ pub fn analyses<'p>(
             let preload = need(preload.as_mut(), "sweep", "[statics]")?;
             let statics = need(scene.statics.as_ref(), "sweep", "[statics]")?;
             let settings = scene.complex_modes.clone().unwrap_or_default();
-            Some(timings.time("sweep", || {
+            Some(timings.stage("sweep", || {
                 sweep::sweep(petsc, sweep, &settings, &damping, statics, preload, input)
             })?)
         }
@@ -200,7 +216,7 @@ pub fn analyses<'p>(
             let model = need(model.as_ref(), "reduction", "a mesh model")?;
             let preload = need(preload.as_ref(), "reduction", "[statics]")?;
             let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
-            Some(timings.time("reduction", || {
+            Some(timings.stage("reduction", || {
                 reduce::reduce(petsc, settings, model, &ops, preload, modes)
             })?)
         }

@@ -161,18 +161,18 @@ pub fn from_scene<'p>(
 ) -> Result<super::ModelAndOperators<'p>, RunError> {
     if let source @ ModelSource::Matrices { .. } = &scene.model {
         let complex = scene.complex_modes.is_some();
-        let ops = timings.time("read matrices", || {
+        let ops = timings.stage("read matrices", || {
             read_matrices(petsc, source, complex, scene_dir)
         })?;
         return Ok((None, Vec::new(), ops));
     }
-    let model = timings.time("mesh", || {
+    let model = timings.stage("mesh", || {
         super::model::build_model(&scene.model, scene_dir)
     })?;
     let model = model.ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
-    let quality = timings.time("mesh quality", || crate::mesh::quality::check(&model.mesh))?;
+    let quality = timings.stage("mesh quality", || crate::mesh::quality::check(&model.mesh))?;
     // The static Newton's tangent K0 + contact is unsymmetric (LU): AIJ then.
     let format = scene.statics.as_ref().map(|_| MatrixFormat::Aij);
-    let ops = timings.time("assembly", || assemble(petsc, &model, format))?;
+    let ops = timings.stage("assembly", || assemble(petsc, &model, format))?;
     Ok((Some(model), quality, ops))
 }

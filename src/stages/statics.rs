@@ -49,14 +49,14 @@ pub fn preload<'p>(
     let interfaces = contact_settings
         .resolve(&model.interfaces)
         .map_err(|m| RunError::scene("contact", m))?;
-    let contact = timings.time("contact pairing", || {
+    let contact = timings.stage("contact pairing", || {
         ContactModel::new(petsc, &model.mesh, dofs, interfaces, contact_settings)
     })?;
     let load =
         crate::statics::pressure_load(petsc, &model.mesh, dofs, &model.loads, model.pressure)
             .map_err(|m| RunError::scene("model", m))?;
     let rank0 = petsc.rank() == 0;
-    let state = timings.time("static preload", || {
+    let state = timings.stage("static preload", || {
         crate::statics::solve(petsc, &ops.k0, dofs, &contact, &load, settings, None, |r| {
             if rank0 {
                 println!(
@@ -72,7 +72,7 @@ pub fn preload<'p>(
             }
         })
     })?;
-    let tangent = timings.time("tangent state", || -> Result<SparseMatrix<'p>, RunError> {
+    let tangent = timings.stage("tangent state", || -> Result<SparseMatrix<'p>, RunError> {
         let kt = contact.linearize(
             petsc,
             Base::Plus(&ops.k0),

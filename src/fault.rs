@@ -1,0 +1,142 @@
+//! Failing well on many ranks: a failure on one rank must end every rank within seconds
+//! (never leave the others waiting in a collective call), and a developer must be able to
+//! provoke one anywhere to check that.
+//!
+//! Fault injection (for developers and the CLI tests): `SQUEAL_FAULT=<stage>@<rank>[:panic]`
+//! makes the stage named `<stage>` (as in the timings table: `mesh`, `assembly`,
+//! `static preload`, `real modes`, `complex modes (full)`, `reduction`, `transient`, ...) fail
+//! on rank `<rank>` before it starts, with an error (default) or a panic. `<rank>` may be `*`
+//! for every rank (a collective failure).
+
+use std::cell::RefCell;
+use std::fmt::Display;
+use std::time::{Duration, Instant};
+
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+/// The environment variable read by [`inject`].
+pub const FAULT_VARIABLE: &str = "SQUEAL_FAULT";
+
+/// A failure provoked through [`FAULT_VARIABLE`].
+#[derive(Debug, thiserror::Error)]
+#[error("injected fault in stage '{stage}' on rank {rank} ({FAULT_VARIABLE})")]
+pub struct InjectedFault {
+    pub stage: String,
+    pub rank: i32,
+}
+
+/// Fails (error or panic) when [`FAULT_VARIABLE`] names this stage and this rank.
+pub fn inject(stage: &str) -> Result<(), InjectedFault> {
+    let Ok(spec) = std::env::var(FAULT_VARIABLE) else {
+        return Ok(());
+    };
+    let rank = SimpleCommunicator::world().rank();
+    let (target, panic) = match spec.strip_suffix(":panic") {
+        Some(t) => (t, true),
+        None => (spec.as_str(), false),
+    };
+    let Some((name, on)) = target.rsplit_once('@') else {
+        return Ok(());
+    };
+    let on_this_rank = on == "*" || on.parse::<i32>() == Ok(rank);
+    if name != stage || !on_this_rank {
+        return Ok(());
+    }
+    if panic {
+        panic!("injected panic in stage '{stage}' ({FAULT_VARIABLE})");
+    }
+    Err(InjectedFault {
+        stage: stage.to_string(),
+        rank,
+    })
+}
+
+/// How long a failing rank waits for the others to fail too before it ends them all.
+pub const GRACE: Duration = Duration::from_secs(3);
+
+thread_local! {
+    /// A communicator duplicated for failures only, so the barrier of [`agree`] can never
+    /// match a collective call of the computation.
+    static FAILURES: RefCell<Option<SimpleCommunicator>> = const { RefCell::new(None) };
+}
+
+/// Makes failures agreed on over `world` ([`agree`]); call [`finish`] before MPI finalizes.
+///
+/// # Collective
+pub fn init(world: &SimpleCommunicator) {
+    let failures = world.duplicate();
+    FAILURES.with(|f| *f.borrow_mut() = Some(failures));
+}
+
+/// Frees the communicator of [`init`] (before MPI finalizes).
+pub fn finish() {
+    FAILURES.with(|f| drop(f.borrow_mut().take()));
+}
+
+/// Called by a rank that failed with `message`, where the failure is detected and before
+/// anything collective is dropped (a MUMPS factor, an HDF5 file): returns when every rank
+/// failed within [`GRACE`] (a collective failure: inputs are read on every rank, solver
+/// failures are agreed on), so they can unwind together. Otherwise this rank failed alone
+/// while the others compute or wait in a collective call: it prints the message with its
+/// rank and calls MPI_Abort, which ends every rank with a non-zero exit code. Does nothing
+/// before [`init`] (library use).
+pub fn agree(message: &dyn Display) {
+    FAILURES.with(|f| {
+        let guard = f.borrow();
+        let Some(failures) = guard.as_ref() else {
+            return;
+        };
+        let mut pending = failures.immediate_barrier();
+        let start = Instant::now();
+        loop {
+            match pending.test() {
+                Ok(_) => return,
+                Err(still) => pending = still,
+            }
+            if start.elapsed() > GRACE {
+                let rank = failures.rank();
+                eprintln!("squeal: error on rank {rank} (alone; ending all ranks): {message}");
+                std::mem::forget(pending);
+                failures.abort(1);
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    });
+}
+
+/// [`agree`] on the error of `result`, if any, and pass it on.
+pub fn checked<T, E: Display>(result: Result<T, E>) -> Result<T, E> {
+    if let Err(e) = &result {
+        agree(e);
+    }
+    result
+}
+
+/// Ends this rank's part of a failed run: [`agree`], then rank 0 prints the message and a
+/// rank whose message differs prints its own; the caller exits with an error code.
+///
+/// # Collective (on failure)
+pub fn report_failed_run(message: &str) {
+    agree(&message);
+    let rank = SimpleCommunicator::world().rank();
+    FAILURES.with(|f| {
+        let hash = fnv1a(message.as_bytes());
+        let mut root_hash = hash;
+        if let Some(failures) = f.borrow().as_ref() {
+            failures.process_at_rank(0).broadcast_into(&mut root_hash);
+        }
+        if rank == 0 {
+            eprintln!("squeal: error: {message}");
+        } else if hash != root_hash {
+            eprintln!("squeal: error on rank {rank}: {message}");
+        }
+    });
+}
+
+/// FNV-1a: a stable hash to tell whether two ranks failed with the same message.
+fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}

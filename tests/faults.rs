@@ -1,0 +1,136 @@
+//! Failures on one rank end every rank, quickly, with the error and a non-zero exit; what was
+//! written before stays readable (DESIGN.md §4). Faults are provoked with SQUEAL_FAULT
+//! (src/fault.rs) in every stage of a scene that runs them all on the small brake.
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+#[path = "support/launch.rs"]
+mod launch;
+
+/// Every stage of a squeal run, short: 4,000-DOF brake, contact preload, 10 real modes,
+/// projected complex modes, reduction, 20 transient steps.
+const SCENE: &str = r#"
+[model]
+source = "brake"
+target_dofs = 4000
+pressure_bar = 20.0
+[contact]
+disc_speed = 6.2832
+[contact.sliding]
+normal = { law = "exponential", p0 = 1.0e6, lambda = 2.0e5 }
+friction = { law = "coulomb", mu = 0.4, slip_speed = 1.0e-3 }
+[statics]
+[real_modes]
+count = 10
+[complex_modes]
+method = "projected"
+[reduction]
+[transient]
+step = 2.0e-6
+steps = 20
+start = "mode"
+mode = 2
+amplitude = 1.0e-9
+[output]
+directory = "results"
+"#;
+
+/// A hang is reported after this long (a run of the scene takes ~5 s on 2 ranks).
+const DEADLINE: Duration = Duration::from_secs(120);
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("squeal-faults-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("scene.toml"), SCENE).unwrap();
+    dir
+}
+
+fn run_with_fault(dir: &Path, fault: &str) -> launch::Outcome {
+    let env = [("SQUEAL_FAULT", fault), ("SQUEAL_PROGRESS", "0")];
+    launch::squeal_run(2, &["run", "scene.toml"], dir, &env, DEADLINE)
+}
+
+fn assert_ends_with(out: &launch::Outcome, what: &str, needle: &str) {
+    let log = format!("stdout:\n{}\nstderr:\n{}", out.stdout, out.stderr);
+    let status = out
+        .status
+        .unwrap_or_else(|| panic!("{what}: hung ({DEADLINE:?})\n{log}"));
+    assert!(!status.success(), "{what}: exit code 0\n{log}");
+    assert!(
+        out.stderr.contains(needle),
+        "{what}: '{needle}' not said\n{log}"
+    );
+}
+
+#[test]
+fn an_error_on_one_rank_in_any_stage_ends_every_rank() {
+    let dir = scratch("stages");
+    let stages = [
+        "mesh",
+        "assembly",
+        "contact pairing",
+        "static preload",
+        "real modes",
+        "complex modes (projected)",
+        "reduction",
+        "transient",
+    ];
+    for stage in stages {
+        let out = run_with_fault(&dir, &format!("{stage}@1"));
+        let needle = format!("injected fault in stage '{stage}' on rank 1");
+        assert_ends_with(&out, stage, &needle);
+    }
+}
+
+#[test]
+fn a_panic_on_one_rank_ends_every_rank() {
+    let dir = scratch("panic");
+    let out = run_with_fault(&dir, "static preload@1:panic");
+    assert_ends_with(&out, "panic", "injected panic in stage 'static preload'");
+}
+
+#[test]
+fn a_failure_on_every_rank_is_said_once() {
+    let dir = scratch("collective");
+    let out = run_with_fault(&dir, "real modes@*");
+    assert_ends_with(&out, "collective", "squeal: error: injected fault");
+    assert!(
+        !out.stderr.contains("alone"),
+        "a collective failure is not a lone one:\n{}",
+        out.stderr
+    );
+}
+
+#[test]
+fn results_written_before_a_failure_stay_readable() {
+    let dir = scratch("kept");
+    let out = run_with_fault(&dir, "transient@1");
+    assert_ends_with(&out, "transient", "injected fault in stage 'transient'");
+    let file = hdf5::File::open(dir.join("results/results.h5")).expect("results.h5 opens");
+    for group in ["model", "static", "modes", "reduced"] {
+        assert!(
+            file.group(group).is_ok(),
+            "/{group} missing from results.h5"
+        );
+    }
+}
+
+#[test]
+fn an_output_folder_that_cannot_be_made_ends_every_rank() {
+    let dir = scratch("folder");
+    let out = launch::squeal_run(
+        2,
+        &[
+            "run",
+            "scene.toml",
+            "--output",
+            "/proc/squeal-cannot-write-here",
+        ],
+        &dir,
+        &[("SQUEAL_PROGRESS", "0")],
+        DEADLINE,
+    );
+    assert_ends_with(&out, "output folder", "/proc/squeal-cannot-write-here");
+}
