@@ -2,11 +2,12 @@
 //! (never leave the others waiting in a collective call), and a developer must be able to
 //! provoke one anywhere to check that.
 //!
-//! Fault injection (for developers and the CLI tests): `SQUEAL_FAULT=<stage>@<rank>[:panic]`
-//! makes the stage named `<stage>` (as in the timings table: `mesh`, `assembly`,
-//! `static preload`, `real modes`, `complex modes (full)`, `reduction`, `transient`, ...) fail
-//! on rank `<rank>` before it starts, with an error (default) or a panic. `<rank>` may be `*`
-//! for every rank (a collective failure).
+//! Fault injection (for developers and the CLI tests):
+//! `SQUEAL_FAULT=<stage>@<rank>[:panic|:nan]` makes the stage named `<stage>` (as in the
+//! timings table: `mesh`, `assembly`, `static preload`, `real modes`, `complex modes (full)`,
+//! `reduction`, `transient`, ...) fail on rank `<rank>` before it starts, with an error
+//! (default) or a panic; `:nan` puts a NaN into the stage's input instead (`transient`: its
+//! start state). `<rank>` may be `*` for every rank (a collective failure).
 
 use std::cell::RefCell;
 use std::fmt::Display;
@@ -26,30 +27,44 @@ pub struct InjectedFault {
     pub rank: i32,
 }
 
+/// How an injected fault shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Error,
+    Panic,
+    /// A NaN in the stage's input (stages that support it: `transient`, its start state).
+    Nan,
+}
+
+/// The fault [`FAULT_VARIABLE`] asks for in `stage` on this rank, if any.
+fn requested(stage: &str) -> Option<Kind> {
+    let spec = std::env::var(FAULT_VARIABLE).ok()?;
+    let (target, kind) = match spec.rsplit_once(':') {
+        Some((t, "panic")) => (t, Kind::Panic),
+        Some((t, "nan")) => (t, Kind::Nan),
+        _ => (spec.as_str(), Kind::Error),
+    };
+    let (name, on) = target.rsplit_once('@')?;
+    let rank = SimpleCommunicator::world().rank();
+    let on_this_rank = on == "*" || on.parse::<i32>() == Ok(rank);
+    (name == stage && on_this_rank).then_some(kind)
+}
+
 /// Fails (error or panic) when [`FAULT_VARIABLE`] names this stage and this rank.
 pub fn inject(stage: &str) -> Result<(), InjectedFault> {
-    let Ok(spec) = std::env::var(FAULT_VARIABLE) else {
-        return Ok(());
-    };
-    let rank = SimpleCommunicator::world().rank();
-    let (target, panic) = match spec.strip_suffix(":panic") {
-        Some(t) => (t, true),
-        None => (spec.as_str(), false),
-    };
-    let Some((name, on)) = target.rsplit_once('@') else {
-        return Ok(());
-    };
-    let on_this_rank = on == "*" || on.parse::<i32>() == Ok(rank);
-    if name != stage || !on_this_rank {
-        return Ok(());
+    match requested(stage) {
+        Some(Kind::Panic) => panic!("injected panic in stage '{stage}' ({FAULT_VARIABLE})"),
+        Some(Kind::Error) => Err(InjectedFault {
+            stage: stage.to_string(),
+            rank: SimpleCommunicator::world().rank(),
+        }),
+        Some(Kind::Nan) | None => Ok(()),
     }
-    if panic {
-        panic!("injected panic in stage '{stage}' ({FAULT_VARIABLE})");
-    }
-    Err(InjectedFault {
-        stage: stage.to_string(),
-        rank,
-    })
+}
+
+/// Whether [`FAULT_VARIABLE`] asks for a NaN in this stage's input on this rank.
+pub fn poisoned(stage: &str) -> bool {
+    requested(stage) == Some(Kind::Nan)
 }
 
 /// How long a failing rank waits for the others to fail too before it ends them all.

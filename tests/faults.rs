@@ -1,6 +1,7 @@
 //! Failures on one rank end every rank, quickly, with the error and a non-zero exit; what was
 //! written before stays readable (DESIGN.md §4). Faults are provoked with SQUEAL_FAULT
-//! (src/fault.rs) in every stage of a scene that runs them all on the small brake.
+//! (src/fault.rs) in every stage of a scene that runs them all on the small brake, and a NaN
+//! in the transient's start.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -133,4 +134,17 @@ fn an_output_folder_that_cannot_be_made_ends_every_rank() {
         DEADLINE,
     );
     assert_ends_with(&out, "output folder", "/proc/squeal-cannot-write-here");
+}
+
+#[test]
+fn a_nan_in_the_transient_stops_it_naming_the_step() {
+    let dir = scratch("nan");
+    let out = run_with_fault(&dir, "transient@1:nan");
+    assert_ends_with(&out, "nan", "time step 0 (t = 0.000000e0 s)");
+    assert!(out.stderr.contains("not finite"), "{}", out.stderr);
+    let file = hdf5::File::open(dir.join("results/results.h5")).expect("results.h5 opens");
+    assert!(
+        file.group("modes").is_ok(),
+        "/modes missing from results.h5"
+    );
 }

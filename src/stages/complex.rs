@@ -8,7 +8,7 @@ use super::{RunError, Timings};
 use crate::contact::kernel::Part;
 use crate::contact::linearize::Base;
 use crate::eigen::complex_modes::{
-    project_operators, ComplexModeSettings, ComplexModes, DampingSettings, Route,
+    project_operators, ComplexMode, ComplexModeSettings, ComplexModes, DampingSettings, Route,
 };
 use crate::eigen::real_modes::RealModes;
 use crate::eigen::stability::ProjectedStability;
@@ -104,6 +104,16 @@ pub fn complex_modes<'p>(
             )?)
         })?;
         out.push(full);
+    }
+    for route in &out {
+        let finite = |m: &&ComplexMode| m.eigenvalue.0.is_finite() && m.eigenvalue.1.is_finite();
+        if let Some(bad) = route.modes.iter().find(|m| !finite(m)) {
+            return Err(RunError::from(LaError::Invalid(format!(
+                "complex modes ({:?} route): {} has eigenvalue {:?}: not finite; the operators \
+                 hold NaN or Inf (check the materials, damping, matrix files and contact state)",
+                route.route, bad.name, bad.eigenvalue
+            ))));
+        }
     }
     Ok(out)
 }

@@ -147,6 +147,11 @@ pub enum StaticError {
         target: f64,
         interface: String,
     },
+    #[error(
+        "static preload, load step {step}: the residual at the last converged state is not \
+         finite (NaN or Inf); check the materials, the pressure and the contact law's values"
+    )]
+    NotFinite { step: usize },
     #[error("static preload: {0}")]
     La(#[from] LaError),
 }
@@ -270,6 +275,10 @@ pub fn solve<'p>(
         f.copy_from(f_ext)?;
         f.scale(phi)?;
         let (mut r, mut reference, mut state) = eval(&q, psi, &f, &mut residual)?;
+        if !(r.is_finite() && reference.is_finite()) {
+            // At the last converged state: no smaller load increment can help.
+            return Err(StaticError::NotFinite { step });
+        }
         let mut history = Vec::new();
         let mut iteration = 0;
         let outcome = loop {

@@ -144,6 +144,16 @@ pub enum TimeError {
         residual: f64,
         target: f64,
     },
+    /// NaN or Inf where the run can only have finite numbers: not retried, the run stops.
+    #[error(
+        "time step {step} (t = {time:.6e} s): {what} is not finite (NaN or Inf); the run stops \
+         here, its results up to the last step stay readable"
+    )]
+    NotFinite {
+        step: usize,
+        time: f64,
+        what: &'static str,
+    },
     #[error("transient output: {0}")]
     Output(String),
     #[error(transparent)]
@@ -351,6 +361,15 @@ impl<'a, 'p> Newmark<'a, 'p> {
         };
         // R = z - f at the predictor; later iterates come evaluated from the correction.
         let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
+        if !(r.is_finite() && reference.is_finite()) {
+            // The predictor is built from the last accepted state alone: no smaller step or
+            // better Jacobian can help.
+            return Err(TimeError::NotFinite {
+                step: state.step + 1,
+                time: t1,
+                what: "the residual at the predictor (from the last accepted state and the forces)",
+            });
+        }
         let mut history = Vec::new();
         loop {
             let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);

@@ -71,7 +71,95 @@ pub fn tests() -> Vec<super::NamedTest> {
             "brake_transient_impulse_start_moves_along_the_impulse_and_scales_with_it",
             impulse_start,
         ),
+        (
+            "newmark_nan_in_the_forces_stops_the_run_at_its_step_without_retries",
+            nan_stops_the_run,
+        ),
     ]
+}
+
+/// A NaN appearing in the forces (here from t > 3 on, the exponential-contact oscillator at
+/// h = 0.3) stops the adaptive run at the first step that sees it (step 11, t = 3.3) with
+/// TimeError::NotFinite, naming that step and time, and without refreshes, retries or cuts
+/// (no smaller step can make a NaN finite). The steps before it are accepted as usual.
+fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
+    use squeal::time::newmark::{integrate_adaptive, Adaptivity, StepControl, TimeError};
+    let e = |e: squeal::la::LaError| e.to_string();
+    let m = tridiagonal(petsc, &[1.0], &[])?;
+    let k = tridiagonal(petsc, &[0.0], &[])?;
+    let settings = NewmarkSettings {
+        step: 0.3,
+        tolerance: 1e-12,
+        max_iterations: 30,
+        ..Default::default()
+    };
+    let mut forces = |t: f64, q: &Vector, v: &Vector, f: &mut Vector| {
+        contact_force(t, q, v, f)?;
+        if t > 3.0 {
+            f.local_mut()?.iter_mut().for_each(|x| *x = f64::NAN);
+        }
+        Ok(())
+    };
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
+    let mut state = State {
+        time: 0.0,
+        step: 0,
+        q: vector(petsc, &[1.0])?,
+        v: vector(petsc, &[0.0])?,
+        a: vector(petsc, &[0.0])?,
+        linear: None,
+    };
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    let mut factorize = |ns: &NewmarkSettings, _at: Option<&State>| {
+        let mock = tridiagonal(petsc, &[1.0], &[]).map_err(squeal::la::LaError::Invalid)?;
+        let j = jacobian(ns, &m, Damping::None, &k, Some(&mock))?;
+        Ok(Jacobian {
+            factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
+            extra: Some(Box::new(mock)),
+            matrix: None,
+        })
+    };
+    let mut accepted = 0;
+    let mut on_step = |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl| {
+        accepted += 1;
+        Ok(())
+    };
+    let mut control = StepControl::default();
+    let adaptivity = Adaptivity {
+        max_cuts: 8,
+        restore_after: 20,
+        refresh: true,
+        full_newton: false,
+    };
+    let result = integrate_adaptive(
+        settings,
+        &m,
+        Damping::None,
+        &k,
+        &mut factorize,
+        None,
+        &mut state,
+        &mut forces,
+        30.0,
+        adaptivity,
+        &mut control,
+        &mut on_step,
+        &mut |_| {},
+    );
+    say(
+        petsc,
+        &format!("{result:?} after {accepted} steps, {control:?}"),
+    );
+    match result {
+        Err(TimeError::NotFinite { step: 11, time, .. }) if (time - 3.3).abs() < 1e-12 => {}
+        other => return Err(format!("expected NotFinite at step 11, t = 3.3: {other:?}")),
+    }
+    if accepted != 10 || control.cuts + control.refreshes + control.krylov_retries > 0 {
+        return Err(format!(
+            "{accepted} steps accepted (10 expected), {control:?}"
+        ));
+    }
+    Ok(())
 }
 
 /// A step size near the limit of the fixed Jacobian: the exponential-contact oscillator (g0 = 2,

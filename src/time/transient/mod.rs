@@ -400,6 +400,14 @@ fn start_state<'p>(
     match input.kick {
         Kick::Displacement(shape) => {
             let largest = shape.norm_inf()?;
+            if !largest.is_finite() {
+                let what = "the start's kick (the real mode or the random shape)";
+                return Err(TimeError::NotFinite {
+                    step: 0,
+                    time: 0.0,
+                    what,
+                });
+            }
             if largest > 0.0 {
                 q.axpy(settings.amplitude / largest, shape)?;
             }
