@@ -60,3 +60,31 @@ pub fn peak_rss_bytes() -> Option<f64> {
     let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb * 1024.0)
 }
+
+/// Memory this node can still give (bytes): MemAvailable of /proc/meminfo, lowered to what
+/// the job's cgroup still allows (SLURM confines jobs with cgroups; /proc/meminfo shows the
+/// whole node). None where neither can be read.
+pub fn available_memory_bytes() -> Option<f64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+            let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+            Some(kb * 1024.0)
+        });
+    let read =
+        |path: &str| -> Option<f64> { std::fs::read_to_string(path).ok()?.trim().parse().ok() };
+    // cgroup v2, then v1 ("max" or a huge number: no limit).
+    let cgroup = read("/sys/fs/cgroup/memory.max")
+        .zip(read("/sys/fs/cgroup/memory.current"))
+        .or_else(|| {
+            read("/sys/fs/cgroup/memory/memory.limit_in_bytes")
+                .zip(read("/sys/fs/cgroup/memory/memory.usage_in_bytes"))
+        })
+        .filter(|(limit, _)| *limit < 1e18)
+        .map(|(limit, used)| (limit - used).max(0.0));
+    match (meminfo, cgroup) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
+    }
+}

@@ -148,3 +148,19 @@ fn a_nan_in_the_transient_stops_it_naming_the_step() {
         "/modes missing from results.h5"
     );
 }
+
+#[test]
+fn a_factorization_that_cannot_fit_says_how_much_it_needs() {
+    // MUMPS may use 1 MB per rank (ICNTL(23); squeal otherwise sets it to the node's
+    // available memory over its ranks): the static preload's factorization is refused before
+    // it allocates, and the error says what it needs and what to do.
+    let dir = scratch("memory");
+    let args = ["run", "scene.toml", "--", "-static_mat_mumps_icntl_23", "1"];
+    let out = launch::squeal_run(2, &args, &dir, &[("SQUEAL_PROGRESS", "0")], DEADLINE);
+    assert_ends_with(&out, "memory", "MB per rank in core");
+    assert!(
+        out.stderr.contains("-static_mat_mumps_icntl_22 1"),
+        "{}",
+        out.stderr
+    );
+}

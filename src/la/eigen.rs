@@ -7,7 +7,10 @@ use petsc_sys as ffi;
 
 use super::error::{call, LaError, Result};
 use super::matrix::SparseMatrix;
-use super::solver::{configure_mumps_pc, mumps_report, Factorization, FactorizationReport};
+use super::solver::{
+    cap_mumps_memory, configure_mumps_pc, mumps_memory_error, mumps_report, Factorization,
+    FactorizationReport,
+};
 use super::vector::Vector;
 use super::{cconst, cstr, report_destroy, Petsc};
 
@@ -138,7 +141,18 @@ impl<'p> GeneralizedEigen<'p> {
             call!(EPSSetTarget(eps.raw, opts.shift))?;
             call!(EPSSetWhichEigenpairs(eps.raw, ffi::EPS_TARGET_MAGNITUDE))?;
         }
+        let st_prefix = format!("{}st_", opts.prefix);
+        cap_mumps_memory(petsc, &st_prefix)?;
         call!(EPSSetFromOptions(eps.raw))?;
+        // The set-up factorizes K - sigma M (not with slicing, which factorizes per slice):
+        // a factorization that cannot fit says so here.
+        if let Err(e) = call!(EPSSetUp(eps.raw)) {
+            let mut factor = std::ptr::null_mut();
+            if !slicing && call!(PCFactorGetMatrix(pc, &mut factor)).is_ok() {
+                return Err(mumps_memory_error(factor, &st_prefix).unwrap_or(e));
+            }
+            return Err(e);
+        }
         // Progress: SLEPc calls the monitor after every restart with the converged count.
         let mut monitor_ctx: Option<Box<Monitor>> = progress.map(|f| Box::new(Monitor { f }));
         if let Some(ctx) = monitor_ctx.as_mut() {

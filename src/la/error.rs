@@ -56,6 +56,21 @@ pub enum LaError {
         infog2: i32,
         prefix: String,
     },
+    /// MUMPS' analysis needs more memory per rank than the node can give (INFOG(1) = -19
+    /// against the cap squeal sets in ICNTL(23), or the user's).
+    #[error(
+        "MUMPS {phase} (solver prefix '{prefix}') needs about {needed_mb} MB per rank in core \
+         ({ooc_mb} MB out of core) and may use {allowed_mb} MB per rank here; it was not \
+         started. Run on more ranks or nodes, or out of core with \
+         -{prefix}mat_mumps_icntl_22 1, or (complex modes) use the projected route"
+    )]
+    MumpsMemory {
+        phase: &'static str,
+        needed_mb: i32,
+        ooc_mb: i32,
+        allowed_mb: i32,
+        prefix: String,
+    },
     /// An iterative solver stopped before converging.
     #[error("{solver} did not converge: {detail}")]
     NotConverged {

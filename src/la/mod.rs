@@ -36,6 +36,10 @@ pub struct Petsc<'u> {
     world: SimpleCommunicator,
     rank: i32,
     size: i32,
+    /// Ranks sharing this rank's node (its memory).
+    ranks_on_node: i32,
+    /// The options the user gave (ours are set around them, never over them).
+    user_options: Vec<String>,
     // PETSc keeps pointers into argv; they must outlive the session.
     _args: Vec<CString>,
     _argv: Vec<*mut c_char>,
@@ -76,9 +80,12 @@ impl<'u> Petsc<'u> {
             Some(error::record_error),
             std::ptr::null_mut()
         ))?;
+        let ranks_on_node = world.split_shared(world.rank()).size();
         Ok(Petsc {
             rank: world.rank(),
             size: world.size(),
+            ranks_on_node,
+            user_options: options.to_vec(),
             world,
             _args: args,
             _argv: argv,
@@ -113,6 +120,16 @@ impl<'u> Petsc<'u> {
             k.as_ptr(),
             v.as_ref().map_or(std::ptr::null(), |v| v.as_ptr())
         ))
+    }
+
+    /// Ranks sharing this rank's node.
+    pub fn ranks_on_node(&self) -> i32 {
+        self.ranks_on_node
+    }
+
+    /// Whether the user gave this option (not one squeal set).
+    pub fn user_gave(&self, key: &str) -> bool {
+        self.user_options.iter().any(|o| o == key)
     }
 
     /// Whether an option was given (e.g. to let command-line options override scene values).

@@ -7,7 +7,7 @@ use petsc_sys as ffi;
 
 use super::error::{call, LaError, Result};
 use super::matrix::SparseMatrix;
-use super::solver::{configure_mumps_pc, Factorization};
+use super::solver::{cap_mumps_memory, configure_mumps_pc, mumps_memory_error, Factorization};
 use super::vector::Vector;
 use super::{cconst, cstr, report_destroy, Petsc};
 
@@ -113,7 +113,17 @@ pub fn solve_quadratic<'p>(
     let mut pc = std::ptr::null_mut();
     call!(KSPGetPC(ksp, &mut pc))?;
     configure_mumps_pc(pc, k.format(), Factorization::Lu)?;
+    let st_prefix = format!("{}st_", opts.prefix);
+    cap_mumps_memory(petsc, &st_prefix)?;
     call!(PEPSetFromOptions(pep.raw))?;
+    // The set-up factorizes the shifted operator: a factorization that cannot fit says so.
+    if let Err(e) = call!(PEPSetUp(pep.raw)) {
+        let mut factor = std::ptr::null_mut();
+        if call!(PCFactorGetMatrix(pc, &mut factor)).is_ok() {
+            return Err(mumps_memory_error(factor, &st_prefix).unwrap_or(e));
+        }
+        return Err(e);
+    }
     call!(PEPSolve(pep.raw))?;
 
     let mut reason = 0;

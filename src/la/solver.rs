@@ -49,6 +49,45 @@ impl FactorizationReport {
 }
 
 /// Reads MUMPS' INFOG/RINFOG from a factored matrix and fails on a negative INFOG(1).
+/// Caps MUMPS' working memory per rank (ICNTL(23), MB) at what this node can still give
+/// divided among its ranks, unless the user set it: a factorization that cannot fit then
+/// fails before it allocates, with INFOG(1) = -19 ([`mumps_memory_error`]), instead of being
+/// killed by the kernel. Call before the options are read (KSPSetFromOptions).
+pub(crate) fn cap_mumps_memory(petsc: &Petsc, prefix: &str) -> Result<()> {
+    let key = format!("-{prefix}mat_mumps_icntl_23");
+    if petsc.user_gave(&key) {
+        return Ok(());
+    }
+    let Some(bytes) = crate::parallel::available_memory_bytes() else {
+        return Ok(());
+    };
+    // The smallest share over ranks, so that every rank applies the same cap.
+    let share = bytes / 1048576.0 / f64::from(petsc.ranks_on_node().max(1));
+    let share = -crate::parallel::max(petsc.world(), -share);
+    petsc.set_option(&key, Some(&format!("{}", share.floor().max(1.0) as i64)))
+}
+
+/// The memory error of a failed factorization whose factor is `factor`, if that was why.
+pub(crate) fn mumps_memory_error(factor: ffi::Mat, prefix: &str) -> Option<LaError> {
+    let infog = |i: i32| -> Option<i32> {
+        let mut v = 0;
+        call!(MatMumpsGetInfog(factor, i, &mut v)).ok()?;
+        Some(v)
+    };
+    let icntl23 = {
+        let mut v = 0;
+        call!(MatMumpsGetIcntl(factor, 23, &mut v)).ok()?;
+        v
+    };
+    (infog(1)? == -19).then(|| LaError::MumpsMemory {
+        phase: "factorization",
+        needed_mb: infog(16).unwrap_or(-1),
+        ooc_mb: infog(26).unwrap_or(-1),
+        allowed_mb: icntl23,
+        prefix: prefix.to_string(),
+    })
+}
+
 pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<FactorizationReport> {
     let infog = |i: i32| -> Result<i32> {
         let mut v = 0;
@@ -56,6 +95,9 @@ pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<Factorizati
         Ok(v)
     };
     let info1 = infog(1)?;
+    if let Some(e) = mumps_memory_error(factor, prefix) {
+        return Err(e);
+    }
     if info1 < 0 {
         return Err(LaError::Mumps {
             phase: "factorization",
@@ -125,8 +167,15 @@ impl<'p> DirectSolver<'p> {
         let mut pc = std::ptr::null_mut();
         call!(KSPGetPC(solver.raw, &mut pc))?;
         configure_mumps_pc(pc, a.format(), kind)?;
+        cap_mumps_memory(petsc, prefix)?;
         call!(KSPSetFromOptions(solver.raw))?;
-        call!(KSPSetUp(solver.raw))?;
+        if let Err(e) = call!(KSPSetUp(solver.raw)) {
+            let mut factor = std::ptr::null_mut();
+            if call!(PCFactorGetMatrix(pc, &mut factor)).is_ok() {
+                return Err(mumps_memory_error(factor, prefix).unwrap_or(e));
+            }
+            return Err(e);
+        }
         // The factor belongs to the matrix as it was now: later changes of `a` (a Newton
         // tangent updated in place) must not trigger a silent refactorization inside KSPSolve.
         call!(KSPSetReusePreconditioner(solver.raw, ffi::PETSC_TRUE))?;
