@@ -67,13 +67,16 @@ pub fn poisoned(stage: &str) -> bool {
     requested(stage) == Some(Kind::Nan)
 }
 
-/// How long a failing rank waits for the others to fail too before it ends them all.
-pub const GRACE: Duration = Duration::from_secs(3);
+/// How long a failing rank waits for the others to fail too before it ends them all (long
+/// enough for a rank descheduled on a loaded machine to arrive).
+pub const GRACE: Duration = Duration::from_secs(10);
 
 thread_local! {
     /// A communicator duplicated for failures only, so the barrier of [`agree`] can never
     /// match a collective call of the computation.
     static FAILURES: RefCell<Option<SimpleCommunicator>> = const { RefCell::new(None) };
+    /// Set once every rank agreed that the run failed (later agreements are not needed).
+    static AGREED: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Makes failures agreed on over `world` ([`agree`]); call [`finish`] before MPI finalizes.
@@ -102,11 +105,17 @@ pub fn agree(message: &dyn Display) {
         let Some(failures) = guard.as_ref() else {
             return;
         };
+        if AGREED.get() {
+            return;
+        }
         let mut pending = failures.immediate_barrier();
         let start = Instant::now();
         loop {
             match pending.test() {
-                Ok(_) => return,
+                Ok(_) => {
+                    AGREED.set(true);
+                    return;
+                }
                 Err(still) => pending = still,
             }
             if start.elapsed() > GRACE {
@@ -149,8 +158,9 @@ pub fn report_failed_run(message: &str) {
     });
 }
 
-/// FNV-1a: a stable hash to tell whether two ranks failed with the same message.
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// FNV-1a: a stable hash (the same on every rank and platform), e.g. to tell whether two
+/// ranks failed with the same message.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })

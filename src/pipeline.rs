@@ -13,6 +13,7 @@ use crate::io::results::ResultsFile;
 use crate::la::Petsc;
 use crate::scene::Scene;
 use crate::stages::{self, RunError, Timings};
+use crate::time::transient::TransientFiles;
 
 pub use crate::stages::model::build_model;
 pub use crate::stages::summary::RunSummary;
@@ -104,8 +105,8 @@ pub fn run_with(
                 stages::need(a.preload.as_ref(), "transient", "[statics]")?,
                 stages::need(a.modes.as_ref(), "transient", "[real_modes] (its start)")?,
                 a.reduced.as_ref(),
-                output,
-                options.restart,
+                &TransientFiles::in_directory(output, options.restart)
+                    .with_scene(scene.restart_fingerprint()),
             )
         })?),
         None => None,

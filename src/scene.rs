@@ -152,6 +152,42 @@ pub enum SceneError {
 }
 
 impl Scene {
+    /// What a transient's state depends on, table by table, as stable hashes (a restart
+    /// compares them with its checkpoint's): the model, contact, preload, damping, real modes,
+    /// reduction and the transient's step and start. Left out: what a restart may change
+    /// (the number of steps, the solver's controls, outputs, sensors and post-processing).
+    pub fn restart_fingerprint(&self) -> Vec<(&'static str, u64)> {
+        let transient = self.transient.clone().map(|mut t| {
+            let defaults: crate::time::transient::TransientSettings =
+                toml::from_str("steps = 0").expect("the transient's defaults parse");
+            t.steps = 0;
+            t.checkpoint_every = 0;
+            t.newton = defaults.newton;
+            t.max_cuts = defaults.max_cuts;
+            t.refresh = defaults.refresh;
+            t.tolerance = defaults.tolerance;
+            t.max_iterations = defaults.max_iterations;
+            t.state_interval = 0.0;
+            t.sensors.clear();
+            t.spectrogram_max_hz = 0.0;
+            t
+        });
+        let text = |value: Result<String, toml::ser::Error>| value.unwrap_or_default();
+        let tables = [
+            ("model", text(toml::to_string(&self.model))),
+            ("contact", text(toml::to_string(&self.contact))),
+            ("statics", text(toml::to_string(&self.statics))),
+            ("damping", text(toml::to_string(&self.damping))),
+            ("real_modes", text(toml::to_string(&self.real_modes))),
+            ("reduction", text(toml::to_string(&self.reduction))),
+            ("transient", text(toml::to_string(&transient))),
+        ];
+        tables
+            .into_iter()
+            .map(|(name, t)| (name, crate::fault::fnv1a(t.as_bytes())))
+            .collect()
+    }
+
     /// Parses and validates a scene; `file` names it in errors.
     pub fn parse(text: &str, file: &str) -> Result<Scene, SceneError> {
         let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Invalid {
@@ -392,6 +428,45 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn restart_fingerprint_sees_the_model_and_not_the_run_length() {
+        let base = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\n[statics]\n\
+                    [real_modes]\ncount = 20\n[transient]\nstep = 2e-6\nsteps = 100\n";
+        let print = |text: &str| Scene::parse(text, "t").unwrap().restart_fingerprint();
+        let reference = print(base);
+        let given = ["model", "statics", "real_modes", "transient"];
+        for (table, hash) in &reference {
+            assert_eq!(
+                *hash != fnv1a_empty(),
+                given.contains(table),
+                "{reference:?}"
+            );
+        }
+        let longer = print(&base.replace("steps = 100", "steps = 900\nnewton = \"full\""));
+        assert_eq!(
+            reference, longer,
+            "a longer run with another Newton is the same run"
+        );
+        for (changed, table) in [
+            (base.replace("6000", "7000"), "model"),
+            (base.replace("count = 20", "count = 30"), "real_modes"),
+            (base.replace("step = 2e-6", "step = 1e-6"), "transient"),
+        ] {
+            let other = print(&changed);
+            let differs: Vec<_> = reference
+                .iter()
+                .zip(&other)
+                .filter(|(a, b)| a.1 != b.1)
+                .map(|(a, _)| a.0)
+                .collect();
+            assert_eq!(differs, vec![table], "{changed}");
+        }
+    }
+
+    fn fnv1a_empty() -> u64 {
+        crate::fault::fnv1a(b"")
+    }
 
     #[test]
     fn a_brake_scene_takes_defaults_and_names_unknown_keys() {

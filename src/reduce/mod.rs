@@ -149,6 +149,11 @@ impl Reduction {
         self.kept + self.modal
     }
 
+    /// A new full-model vector (this rank's layout).
+    pub fn full_vector<'p>(&self, petsc: &'p Petsc) -> Result<Vector<'p>, LaError> {
+        Vector::new(petsc, self.full_local)
+    }
+
     /// A new reduced vector (this rank's layout).
     pub fn new_vector<'p>(&self, petsc: &'p Petsc) -> Result<Vector<'p>, LaError> {
         Vector::new(petsc, self.columns.len())

@@ -2,8 +2,6 @@
 //! model: its start (a real mode, a random modal combination or an impulse), sensors, modal
 //! damping, and the run itself (`crate::time::transient`).
 
-use std::path::Path;
-
 use super::model::Model;
 use super::operators::Operators;
 use super::reduce::Reduced;
@@ -64,8 +62,8 @@ pub struct Trajectory {
     pub failure: Option<TimeError>,
 }
 
-/// Runs the transient from the preloaded state; `output` holds transient.h5 and the
-/// checkpoint (`restart`: resume from it).
+/// Runs the transient from the preloaded state; `files`: where transient.h5 and the
+/// checkpoint go, and whether to resume from it.
 ///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // the stages it joins
@@ -78,8 +76,7 @@ pub fn transient<'p>(
     preload: &Preloaded<'p>,
     modes: &RealModes<'p>,
     reduced: Option<&Reduced<'p>>,
-    output: &Path,
-    restart: bool,
+    files: &TransientFiles,
 ) -> Result<Trajectory, RunError> {
     let dofs = ops.dofs.as_ref().ok_or(TransientSetupError::NoMesh)?;
     let reduction = reduced.map(|r| &r.model.reduction);
@@ -161,8 +158,9 @@ pub fn transient<'p>(
             },
             sensors: sensors.as_ref(),
             modal_damping: modal.as_ref(),
+            reduction,
         },
-        &TransientFiles::in_directory(output, restart),
+        files,
     )?;
     Ok(Trajectory { signals, failure })
 }

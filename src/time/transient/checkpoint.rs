@@ -1,10 +1,36 @@
 //! The transient's checkpoint: the state, the step control, the state the Jacobian was built
 //! at and how many rows the stream held, written atomically (temporary file, then rename).
 
-use super::{io_error, Transient, TransientFiles, TransientSettings};
+use super::{io_error, Transient, TransientFiles, TransientInputs, TransientSettings};
 use crate::io::series::SeriesFile;
-use crate::la::{Petsc, Vector};
+use crate::la::{LaError, Petsc, Vector};
 use crate::time::newmark::{State, StepControl, TimeError};
+
+/// w^T K w and w^T M w of the integrated operators for a fixed w (w_i = sin(0.7 i + 0.3) over
+/// global indices): they change when the operators do (another model, or a reduction basis
+/// that came out rotated inside a doublet).
+///
+/// # Collective
+fn operator_fingerprint<'p>(
+    input: &TransientInputs<'_, 'p>,
+    like: &Vector<'p>,
+) -> Result<[f64; 2], LaError> {
+    let mut w = like.duplicate()?;
+    let start = like.ownership().start;
+    for (i, x) in w.local_mut()?.iter_mut().enumerate() {
+        *x = (0.7 * (start + i) as f64 + 0.3).sin();
+    }
+    let mut product = like.duplicate()?;
+    input.k0.mult(&w, &mut product)?;
+    let k = product.dot(&w)?;
+    input.m.mult(&w, &mut product)?;
+    Ok([k, product.dot(&w)?])
+}
+
+/// A 52-bit hash as an exact f64 (the checkpoint stores numbers).
+fn hash_number(h: u64) -> f64 {
+    (h >> 12) as f64
+}
 
 /// A resumable point of the run: the state, the step control, the state J was built at, and
 /// how many rows the stream held.
@@ -15,6 +41,8 @@ pub(super) struct Checkpoint<'p> {
     pub signal_rows: usize,
     pub state_rows: usize,
     pub state_time: f64,
+    /// What the restart had to do beyond reading (a re-projection), for the log.
+    pub note: Option<String>,
 }
 
 impl<'p> Checkpoint<'p> {
@@ -22,10 +50,12 @@ impl<'p> Checkpoint<'p> {
     /// interruption while writing keeps the previous checkpoint).
     ///
     /// # Collective
+    #[allow(clippy::too_many_arguments)] // the run's files, settings, model, state and record
     pub fn write(
         petsc: &'p Petsc,
         files: &TransientFiles,
         settings: &TransientSettings,
+        input: &TransientInputs<'_, 'p>,
         s: &State<'p>,
         c: &StepControl,
         jacobian_at: Option<&(Vector<'p>, Vector<'p>)>,
@@ -60,6 +90,28 @@ impl<'p> Checkpoint<'p> {
             ];
             for (name, value) in numbers {
                 f.set_number(name, value).map_err(io_error)?;
+            }
+            for (table, hash) in &files.scene {
+                f.set_number(&format!("scene_{table}"), hash_number(*hash))
+                    .map_err(io_error)?;
+            }
+            let [k, m] = operator_fingerprint(input, &s.q)?;
+            f.set_number("operators_k", k).map_err(io_error)?;
+            f.set_number("operators_m", m).map_err(io_error)?;
+            // The full-model state as well: what the reduced coordinates mean.
+            if let Some(r) = input.reduction {
+                let mut states = vec![("full_q", &s.q), ("full_v", &s.v), ("full_a", &s.a)];
+                if let Some((q, v)) = jacobian_at {
+                    states.push(("full_jacobian_q", q));
+                    states.push(("full_jacobian_v", v));
+                }
+                let mut full = r.full_vector(petsc)?;
+                for (name, x) in states {
+                    r.recover(petsc, x, &mut full)?;
+                    let (range, n) = (full.ownership(), full.global_len());
+                    f.write_vector(name, &full.local()?, range, n)
+                        .map_err(io_error)?;
+                }
             }
             let n = s.q.global_len();
             let range = s.q.ownership();
@@ -98,6 +150,7 @@ impl<'p> Checkpoint<'p> {
         petsc: &'p Petsc,
         files: &TransientFiles,
         settings: &TransientSettings,
+        input: &TransientInputs<'_, 'p>,
         like: &State<'p>,
     ) -> Result<Self, TimeError> {
         let path = &files.checkpoint;
@@ -120,6 +173,25 @@ impl<'p> Checkpoint<'p> {
             }
             Ok(())
         };
+        if f.number("operators_k").is_err() {
+            return Err(TimeError::Output(format!(
+                "--restart: {} was written by an older squeal (it does not say which scene \
+                 and model it belongs to); run without --restart",
+                path.display()
+            )));
+        }
+        for (table, hash) in &files.scene {
+            let stored = number(&format!("scene_{table}"))?;
+            if stored != hash_number(*hash) {
+                return Err(TimeError::Output(format!(
+                    "--restart: the scene's [{table}] differs from the one that wrote {}; \
+                     restart with that scene (only the number of steps, the solver's \
+                     controls, outputs, sensors and [post] may change) or run without \
+                     --restart",
+                    path.display()
+                )));
+            }
+        }
         expect("ranks", petsc.size() as f64, "number of MPI ranks")?;
         expect("unknowns", like.q.global_len() as f64, "model (unknowns)")?;
         expect("nominal_step", settings.step, "key 'transient.step'")?;
@@ -162,13 +234,84 @@ impl<'p> Checkpoint<'p> {
             fallback: number("fallback")? as u8,
         };
         let state_rows = number("state_rows")? as usize;
-        Ok(Checkpoint {
+        let mut checkpoint = Checkpoint {
             state_time: state.time,
             state,
             control,
             jacobian_at,
             signal_rows: number("signal_rows")? as usize,
             state_rows,
-        })
+            note: None,
+        };
+        let stored = [number("operators_k")?, number("operators_m")?];
+        let now = operator_fingerprint(input, &like.q)?;
+        let same = (0..2).all(|i| (stored[i] - now[i]).abs() <= 1e-10 * now[i].abs());
+        if !same {
+            let Some(r) = input.reduction else {
+                return Err(TimeError::Output(format!(
+                    "--restart: the model's operators differ from those that wrote {} \
+                     (w'Kw {:.12e} vs {:.12e}); restart with the same scene and model",
+                    path.display(),
+                    now[0],
+                    stored[0]
+                )));
+            };
+            checkpoint.note = Some(checkpoint.reproject(petsc, &f, r, stored, now)?);
+        }
+        Ok(checkpoint)
+    }
+
+    /// The reduction basis came out different from the one that wrote the checkpoint (MUMPS
+    /// in parallel is not bitwise reproducible, and the disc's doublets may rotate): the
+    /// reduced coordinates are recomputed from the full-model state the checkpoint keeps, and
+    /// the carried linear force is recomputed at the first step. Fails when the new basis
+    /// does not hold that state (then the model changed).
+    ///
+    /// # Collective
+    fn reproject(
+        &mut self,
+        petsc: &'p Petsc,
+        f: &SeriesFile,
+        r: &crate::reduce::Reduction,
+        stored: [f64; 2],
+        now: [f64; 2],
+    ) -> Result<String, TimeError> {
+        let mut full = r.full_vector(petsc)?;
+        let range = full.ownership();
+        let mut recovered = full.duplicate()?;
+        let mut worst = 0.0f64;
+        let mut project = |name: &str| -> Result<Vector<'p>, TimeError> {
+            let values = f.read_vector(name, range.clone()).map_err(io_error)?;
+            full.local_mut()?.copy_from_slice(&values);
+            let x = r.restrict(petsc, &full)?;
+            r.recover(petsc, &x, &mut recovered)?;
+            let size = full.norm2()?;
+            recovered.axpy(-1.0, &full)?;
+            if size > 0.0 {
+                worst = worst.max(recovered.norm2()? / size);
+            }
+            Ok(x)
+        };
+        self.state.q = project("full_q")?;
+        self.state.v = project("full_v")?;
+        self.state.a = project("full_a")?;
+        self.state.linear = None;
+        if self.jacobian_at.is_some() {
+            self.jacobian_at = Some((project("full_jacobian_q")?, project("full_jacobian_v")?));
+        }
+        // The span must hold the state (to the basis' orthonormality, ~1e-9).
+        if worst.is_nan() || worst > 1e-6 {
+            return Err(TimeError::Output(format!(
+                "--restart: the reduction basis of this run does not hold the checkpoint's \
+                 state (relative error {worst:.1e}): the model changed; restart with the same \
+                 scene or run without --restart"
+            )));
+        }
+        Ok(format!(
+            "the reduced operators differ from the checkpoint's (w'Kw {:.9e} vs {:.9e}, \
+             w'Mw {:.9e} vs {:.9e}: the real modes came out rotated or perturbed); the state \
+             was re-projected from its full-model values (relative error {worst:.1e})",
+            now[0], stored[0], now[1], stored[1]
+        ))
     }
 }

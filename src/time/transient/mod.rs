@@ -98,6 +98,10 @@ pub struct TransientInputs<'a, 'p> {
     pub sensors: Option<&'a Sensors<'p>>,
     /// Modal damping over a band, applied as a force (on top of `c`).
     pub modal_damping: Option<&'a ModalDamping<'p>>,
+    /// The reduction the unknowns are coordinates of (None: the full model's unknowns); a
+    /// checkpoint keeps the full-model state too, so a restart whose basis came out rotated
+    /// (parallel MUMPS is not bitwise reproducible) re-projects it.
+    pub reduction: Option<&'a crate::reduce::Reduction>,
 }
 
 impl Transient {
@@ -164,11 +168,14 @@ impl Transient {
     }
 }
 
-/// Where the stream and the checkpoint go, and whether to resume from the checkpoint.
+/// Where the stream and the checkpoint go, whether to resume from the checkpoint, and what
+/// the run's state depends on in the scene ([`crate::scene::Scene::restart_fingerprint`]; a
+/// restart must match it).
 pub struct TransientFiles {
     pub stream: PathBuf,
     pub checkpoint: PathBuf,
     pub restart: bool,
+    pub scene: Vec<(&'static str, u64)>,
 }
 
 impl TransientFiles {
@@ -177,7 +184,14 @@ impl TransientFiles {
             stream: dir.join("transient.h5"),
             checkpoint: dir.join("checkpoint.h5"),
             restart,
+            scene: Vec::new(),
         }
+    }
+
+    /// With the scene's restart fingerprint.
+    pub fn with_scene(mut self, scene: Vec<(&'static str, u64)>) -> Self {
+        self.scene = scene;
+        self
     }
 }
 
@@ -274,7 +288,9 @@ pub fn run<'p>(
                 } else {
                     b.built_at.as_ref()
                 };
-                if let Err(e) = Checkpoint::write(petsc, files, settings, s, c, j, &recorder.out) {
+                if let Err(e) =
+                    Checkpoint::write(petsc, files, settings, &input, s, c, j, &recorder.out)
+                {
                     checkpoint_failure = Some(e.to_string());
                 }
             }
@@ -328,7 +344,16 @@ pub fn run<'p>(
     if result.is_err() && settings.checkpoint_every > 0 {
         let b = builder.borrow();
         let at = b.built_at.as_ref();
-        Checkpoint::write(petsc, files, settings, &state, &control, at, &recorder.out)?;
+        Checkpoint::write(
+            petsc,
+            files,
+            settings,
+            &input,
+            &state,
+            &control,
+            at,
+            &recorder.out,
+        )?;
     }
     if let Some(e) = checkpoint_failure {
         return Err(TimeError::Output(e));
@@ -356,7 +381,10 @@ fn open_record<'a, 'p>(
     let out = Transient::empty(settings.steps, contact.interfaces.len(), sensor_names);
     let interval = settings.state_interval;
     if files.restart {
-        let checkpoint = Checkpoint::read(petsc, files, settings, state)?;
+        let checkpoint = Checkpoint::read(petsc, files, settings, input, state)?;
+        if let (Some(note), 0) = (&checkpoint.note, petsc.rank()) {
+            println!("  transient: restart: {note}");
+        }
         let r = Recorder::resume(
             petsc,
             files,
