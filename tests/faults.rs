@@ -1,7 +1,7 @@
 //! Failures on one rank end every rank, quickly, with the error and a non-zero exit; what was
 //! written before stays readable (DESIGN.md §4). Faults are provoked with SQUEAL_FAULT
 //! (src/fault.rs) in every stage of a scene that runs them all on the small brake, and a NaN
-//! in the transient's start.
+//! in the transient's start; a restart extends a run and refuses another scene.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -163,4 +163,35 @@ fn a_factorization_that_cannot_fit_says_how_much_it_needs() {
         "{}",
         out.stderr
     );
+}
+
+#[test]
+fn a_restart_extends_the_run_and_refuses_another_scene() {
+    let dir = scratch("restart");
+    let env = [("SQUEAL_PROGRESS", "0")];
+    let run = |args: &[&str]| launch::squeal_run(2, args, &dir, &env, DEADLINE);
+    let first = run(&["run", "scene.toml"]);
+    assert!(
+        first.status.is_some_and(|s| s.success()),
+        "{}",
+        first.stderr
+    );
+    // Another reduction basis size: the state means something else; refused, naming it.
+    std::fs::write(
+        dir.join("scene.toml"),
+        SCENE.replace("count = 10", "count = 12"),
+    )
+    .unwrap();
+    let other = run(&["run", "scene.toml", "--restart"]);
+    assert_ends_with(&other, "another scene", "the scene's [real_modes] differs");
+    // More steps and another Newton variant: the same run, extended.
+    let longer = SCENE.replace("steps = 20", "steps = 30\nnewton = \"full\"");
+    std::fs::write(dir.join("scene.toml"), longer).unwrap();
+    let extended = run(&["run", "scene.toml", "--restart"]);
+    assert!(
+        extended.status.is_some_and(|s| s.success()),
+        "{}",
+        extended.stderr
+    );
+    assert!(extended.stdout.contains("30 steps"), "{}", extended.stdout);
 }
