@@ -497,7 +497,7 @@ impl RunSummary {
         }
         if let Some(t) = &s.transient {
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} fixed-Jacobian iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,

@@ -191,13 +191,23 @@ pub fn integrate_adaptive<'p>(
                 Err(TimeError::NotConverged {
                     residual, target, ..
                 }) if (control.level as usize) < max_cuts => {
+                    // What failed last, for the log.
+                    let failed = if full_newton || control.fallback == 2 {
+                        "the full Newton"
+                    } else if control.fallback == 1 {
+                        "Newton-Krylov"
+                    } else if control.fresh {
+                        "the refreshed Jacobian"
+                    } else {
+                        "the fixed Jacobian"
+                    };
                     control.fallback = 0;
                     control.level += 1;
                     control.cuts += 1;
                     control.good = 0;
                     control.fresh = control.refreshed;
                     log(&format!(
-                        "t = {:.6e} s: fixed-Jacobian iterations stalled (residual {residual:.3e} vs {target:.3e}); step cut to {:.3e} s, Jacobian refactorized",
+                        "t = {:.6e} s: stalled with {failed} (residual {residual:.3e} vs {target:.3e}); step cut to {:.3e} s, Jacobian refactorized",
                         state.time,
                         step_of(control.level)
                     ));

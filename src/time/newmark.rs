@@ -133,9 +133,11 @@ pub struct Jacobian<'x, 'p> {
 #[derive(Debug, thiserror::Error)]
 pub enum TimeError {
     #[error(
-        "time step {step} (t = {time:.6e} s) did not converge in {iterations} fixed-Jacobian \
-         iterations: residual {residual:.3e} vs target {target:.3e}; reduce the time step or \
-         raise the mock contact stiffness"
+        "time step {step} (t = {time:.6e} s) did not converge in {iterations} iterations: \
+         residual {residual:.3e} vs target {target:.3e}, after every retry the run allows \
+         (refreshed Jacobian, Newton-Krylov, full Newton, step cuts: the log lines above); \
+         a smaller transient.step, more transient.max_cuts or a smooth friction law (arctan) \
+         may get through"
     )]
     NotConverged {
         step: usize,
