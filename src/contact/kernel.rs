@@ -47,6 +47,9 @@ pub struct PointResponse {
     d_pressure: f64,
     d_speed: f64,
     stick: f64,
+    /// The joints' dt/d delta and dt/dg.
+    stick_slip: [[f64; 2]; 2],
+    stick_gap: [f64; 2],
 }
 
 impl PointResponse {
@@ -85,19 +88,30 @@ pub fn respond(
             d_pressure: friction_scale * t.d_pressure,
             d_speed: friction_scale * t.d_speed,
             stick: 0.0,
+            stick_slip: [[0.0; 2]; 2],
+            stick_gap: [0.0; 2],
         }
     } else {
         // Joints hold from the start: the friction ramp is for the sliding interfaces only.
-        let kt = friction.stick_stiffness();
+        let t = friction.stick_traction(&n, o.slip);
         PointResponse {
             pressure: n.pressure,
             stiffness: n.stiffness,
-            traction: [kt * n.stiffness * o.slip[0], kt * n.stiffness * o.slip[1]],
-            status: if open { Status::Open } else { Status::Stick },
+            traction: t.traction,
+            // A joint point slides once its traction is within 10 % of Coulomb's limit.
+            status: if open {
+                Status::Open
+            } else if t.saturation > 0.9 {
+                Status::Slip
+            } else {
+                Status::Stick
+            },
             stiffness_slope: n.stiffness_slope,
             d_pressure: 0.0,
             d_speed: 0.0,
-            stick: kt,
+            stick: friction.stick_stiffness(),
+            stick_slip: t.d_slip,
+            stick_gap: t.d_gap,
         }
     }
 }
@@ -135,14 +149,15 @@ pub fn force(rows: &PointRows, weight: f64, r: &PointResponse, out: &mut [f64]) 
 pub enum Part {
     /// K_c = C_NOR^T diag(w k_c) C_NOR (symmetric).
     Normal,
-    /// K_stick = C_TAN^T diag(w mu k_c) C_TAN over both stick directions (symmetric).
+    /// K_stick = C_TAN^T diag(w dt/d delta) C_TAN over both stick directions (symmetric;
+    /// w mu k_c at small slip).
     Stick,
     /// K_f: friction of sliding points (unsymmetric).
     Friction,
-    /// The joints' stick traction t = mu k_c(g) slip depends on the gap through k_c: its
-    /// consistent tangent couples slip rows to normal columns (unsymmetric, non-conservative).
-    /// The Newton solver needs it; the modal stages follow DESIGN.md and keep the joints
-    /// symmetric (this part alone destabilizes a joint mode of the brake even at mu = 0).
+    /// The joints' traction depends on the gap (through p and k_c): its consistent tangent
+    /// couples slip rows to normal columns (unsymmetric, non-conservative), in the Newton
+    /// solvers and the complex modes alike (it is what makes the brake's ~4.76 kHz joint
+    /// mode unstable).
     StickCoupling,
     /// C_f = C_TAN^T diag(w dt/dw) C_TAN, the friction damping (where the law has a slope).
     Damping,
@@ -174,7 +189,6 @@ impl PointRows {
 pub fn tangent_terms(
     weight: f64,
     omega: f64,
-    o: &Observed,
     r: &PointResponse,
     part: Part,
 ) -> Vec<(f64, Channel, Channel)> {
@@ -182,13 +196,18 @@ pub fn tangent_terms(
     let terms = match part {
         Part::Normal => vec![(weight * r.stiffness, Nor, Nor)],
         Part::Stick => {
-            let k = weight * r.stick * r.stiffness;
-            vec![(k, Tan, Tan), (k, Tan2, Tan2)]
+            let k = r.stick_slip.map(|row| row.map(|x| weight * x));
+            vec![
+                (k[0][0], Tan, Tan),
+                (k[0][1], Tan, Tan2),
+                (k[1][0], Tan2, Tan),
+                (k[1][1], Tan2, Tan2),
+            ]
         }
         Part::StickCoupling if r.stick != 0.0 => {
-            // t_i = mu k_c(g) slip_i: the coupling through dk_c/dg.
-            let c = weight * r.stick * r.stiffness_slope;
-            vec![(c * o.slip[0], Tan, Nor), (c * o.slip[1], Tan2, Nor)]
+            // The joints' traction depends on the gap through p and k_c.
+            let c = r.stick_gap.map(|x| weight * x);
+            vec![(c[0], Tan, Nor), (c[1], Tan2, Nor)]
         }
         Part::Friction if r.stick == 0.0 => {
             // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
@@ -208,13 +227,12 @@ pub fn add_tangent(
     rows: &PointRows,
     weight: f64,
     omega: f64,
-    o: &Observed,
     r: &PointResponse,
     part: Part,
     out: &mut [f64],
 ) {
     let n = rows.dofs.len();
-    for (coef, a, b) in tangent_terms(weight, omega, o, r, part) {
+    for (coef, a, b) in tangent_terms(weight, omega, r, part) {
         let (a, b) = (rows.row(a), rows.row(b));
         for i in 0..n {
             if a[i] == 0.0 {
@@ -273,6 +291,8 @@ mod tests {
             (-1e-3, 0.7, 1e-6),
             (1e-6, 2e-4, 1e-6),
             (1e-6, 0.0, 1e-6),
+            // Slips of ~1e-5 m: the joints' traction near Coulomb's limit (lambda |delta| ~ 2).
+            (1e-6, 0.9, 1e-4),
         ];
         for normal in [exp, lin] {
             for friction in frictions {
@@ -297,9 +317,9 @@ mod tests {
                         Part::Friction,
                         Part::StickCoupling,
                     ] {
-                        add_tangent(&rows, weight, omega, &o, &r, part, &mut k);
+                        add_tangent(&rows, weight, omega, &r, part, &mut k);
                     }
-                    add_tangent(&rows, weight, omega, &o, &r, Part::Damping, &mut c);
+                    add_tangent(&rows, weight, omega, &r, Part::Damping, &mut c);
                     // Steps relative to the state, so round-off stays below the truncation error.
                     let hv = 1e-5 * o.speed.abs().max(1e-3);
                     for (what, matrix, h) in [("stiffness", &k, 1e-11), ("damping", &c, hv)] {
@@ -362,7 +382,7 @@ mod tests {
         let pattern = |friction: FrictionLaw, part: Part| {
             let r = respond(&law, &friction, 1.0, o);
             let mut m = vec![0.0; 36];
-            add_tangent(&rows, 1.0, 0.0, &o, &r, part, &mut m);
+            add_tangent(&rows, 1.0, 0.0, &r, part, &mut m);
             m
         };
         let nz = |m: &[f64]| -> Vec<(usize, usize)> {

@@ -147,8 +147,9 @@ pub enum FrictionLaw {
         decay_speed: f64,
         slip_speed: f64,
     },
-    /// Elastic stick in the tangent plane: t = mu k_c(g) delta (the joints between
-    /// components, which do not slide).
+    /// The joints between components: elastic stick in the tangent plane with stiffness
+    /// mu k_c(g), smoothly limited by Coulomb's mu p(g): t = mu p tanh(|s|) s / |s| with
+    /// s = (k_c / p) delta ([`FrictionLaw::stick_traction`]).
     Stick { mu: f64 },
     /// Frictionless.
     None,
@@ -160,6 +161,17 @@ pub struct Traction {
     pub traction: f64,
     pub d_pressure: f64,
     pub d_speed: f64,
+}
+
+/// The joints' traction and its derivatives ([`FrictionLaw::stick_traction`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StickTraction {
+    pub traction: [f64; 2],
+    /// dt_i / d delta_j and dt_i / dg.
+    pub d_slip: [[f64; 2]; 2],
+    pub d_gap: [f64; 2],
+    /// |t| / (mu p), in [0, 1).
+    pub saturation: f64,
 }
 
 impl FrictionLaw {
@@ -245,11 +257,60 @@ impl FrictionLaw {
         }
     }
 
-    /// Tangential stiffness factor of elastic stick: traction = factor x k_c x delta.
+    /// Tangential stiffness factor of elastic stick at small slip: traction = factor x k_c x
+    /// delta.
     pub fn stick_stiffness(&self) -> f64 {
         match *self {
             FrictionLaw::Stick { mu } => mu,
             _ => 0.0,
+        }
+    }
+
+    /// The joints' traction at the normal state `n` and tangential slip `delta`:
+    /// t = mu p tanh(rho) s / rho with s = r delta, r = k_c / p, rho = |s|. At small slip it
+    /// is the elastic stick mu k_c delta (the stiffness the modal stages use); it never
+    /// exceeds Coulomb's mu p, so a joint cannot pass more tangential force than its pressure
+    /// allows (an unlimited elastic stick lets a self-excited vibration grow without bound).
+    /// Memoryless: the joint returns to its reference position when unloaded.
+    ///
+    /// Derivatives (with sech^2 = d tanh / d rho, psi = (phi' / rho), phi = tanh(rho) / rho):
+    /// dt/d delta = mu k_c (phi I + psi s s^T); dt/dg = mu (p r' sech^2(rho) - k_c r phi) delta,
+    /// r' = dr/dg = (k_c' p + k_c^2) / p^2 (0 for the exponential law, where r = lambda).
+    pub fn stick_traction(&self, n: &NormalState, delta: [f64; 2]) -> StickTraction {
+        let mu = self.stick_stiffness();
+        let (p, k) = (n.pressure, n.stiffness);
+        if mu == 0.0 || p <= 0.0 || k <= 0.0 {
+            return StickTraction::default();
+        }
+        let r = k / p;
+        let dr = (n.stiffness_slope * p + k * k) / (p * p);
+        let s = [r * delta[0], r * delta[1]];
+        let rho = s[0].hypot(s[1]);
+        // phi = tanh(rho) / rho and psi = phi'(rho) / rho, by their series near 0.
+        let (phi, psi, sech2) = if rho < 1e-3 {
+            let r2 = rho * rho;
+            (1.0 - r2 / 3.0, -2.0 / 3.0 + 8.0 * r2 / 15.0, 1.0 - r2)
+        } else {
+            let th = rho.tanh();
+            let sech2 = 1.0 - th * th;
+            (th / rho, (rho * sech2 - th) / (rho * rho * rho), sech2)
+        };
+        let d_slip = [
+            [
+                mu * k * (phi + psi * s[0] * s[0]),
+                mu * k * psi * s[0] * s[1],
+            ],
+            [
+                mu * k * psi * s[1] * s[0],
+                mu * k * (phi + psi * s[1] * s[1]),
+            ],
+        ];
+        let gap_factor = mu * (p * dr * sech2 - k * r * phi);
+        StickTraction {
+            traction: [mu * p * phi * s[0], mu * p * phi * s[1]],
+            d_slip,
+            d_gap: [gap_factor * delta[0], gap_factor * delta[1]],
+            saturation: rho.tanh(),
         }
     }
 

@@ -85,7 +85,6 @@ impl<'p> ContactModel<'p> {
                     rows,
                     self.points[id].weight,
                     omega,
-                    &state.observed[k],
                     &state.response[k],
                     part,
                     &mut dense,
@@ -113,13 +112,7 @@ impl<'p> ContactModel<'p> {
                 parts
                     .iter()
                     .flat_map(|&part| {
-                        kernel::tangent_terms(
-                            point.weight,
-                            omega,
-                            &state.observed[k],
-                            &state.response[k],
-                            part,
-                        )
+                        kernel::tangent_terms(point.weight, omega, &state.response[k], part)
                     })
                     .collect()
             })

@@ -328,10 +328,10 @@ fn contact_point(model: &TwoDof, mu: f64) -> (PointRows, Observed, kernel::Point
 
 /// The tangent K(mu) assembled by the kernel (dense 2 x 2, row-major).
 fn tangent(model: &TwoDof, mu: f64) -> [f64; 4] {
-    let (rows, o, r) = contact_point(model, mu);
+    let (rows, _, r) = contact_point(model, mu);
     let mut k = [model.k11, model.k12, model.k12, model.k22_springs];
     for part in [Part::Normal, Part::Stick, Part::Friction] {
-        kernel::add_tangent(&rows, 1.0, 0.0, &o, &r, part, &mut k);
+        kernel::add_tangent(&rows, 1.0, 0.0, &r, part, &mut k);
     }
     k
 }
@@ -365,7 +365,7 @@ fn projected_eigenvalues(
 ) -> Result<Vec<(f64, f64)>, String> {
     let (omega2, phi) = real_modes(model);
     let rank0 = petsc.rank() == 0;
-    let (rows, o, r) = contact_point(model, mu);
+    let (rows, _, r) = contact_point(model, mu);
     let points = usize::from(rank0);
     // P_a = rows_a . phi_k (points x modes, column-major): the point lives on rank 0.
     let channel = |c: Channel| -> Vec<f64> {
@@ -389,7 +389,7 @@ fn projected_eigenvalues(
         }
         vec![parts
             .iter()
-            .flat_map(|&p| kernel::tangent_terms(1.0, 0.0, &o, &r, p))
+            .flat_map(|&p| kernel::tangent_terms(1.0, 0.0, &r, p))
             .collect()]
     };
     let projection = ModalProjection::new(

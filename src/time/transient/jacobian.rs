@@ -13,7 +13,7 @@ use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vecto
 use crate::time::newmark::{jacobian, Damping, Jacobian, NewmarkSettings, State};
 
 /// The contact tangent parts of the consistent Jacobian (with the friction damping through
-/// gamma / (beta h)): the joints' stick traction mu k_c(g) slip also moves with the gap
+/// gamma / (beta h)): the joints' stick traction also moves with the gap
 /// (StickCoupling).
 const CONSISTENT: [Part; 4] = [
     Part::Normal,
@@ -126,7 +126,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         let c1 = ns.gamma / (ns.beta * ns.step);
         let (j, extra) = if let Some((q, v)) = at {
             let cs = contact.evaluate(q, Some(v), 1.0)?;
-            // The consistent tangent: the joints' stick traction mu k_c(g) slip also moves with
+            // The consistent tangent: the joints' stick traction also moves with
             // the gap (StickCoupling).
             let parts = [
                 Part::Normal,
