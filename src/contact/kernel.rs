@@ -155,9 +155,9 @@ pub enum Part {
     /// K_f: friction of sliding points (unsymmetric).
     Friction,
     /// The joints' traction depends on the gap (through p and k_c): its consistent tangent
-    /// couples slip rows to normal columns (unsymmetric, non-conservative), in the Newton
-    /// solvers and the complex modes alike (it is what makes the brake's ~4.76 kHz joint
-    /// mode unstable).
+    /// couples slip rows to normal columns (unsymmetric, non-conservative: a source of
+    /// mode-coupling instability like the pads' friction), in the Newton solvers and the
+    /// complex modes alike.
     StickCoupling,
     /// C_f = C_TAN^T diag(w dt/dw) C_TAN, the friction damping (where the law has a slope).
     Damping,

@@ -118,9 +118,8 @@ impl ModalProjection {
 }
 
 /// The contact parts of the projected stiffness (symmetric contact, sticking, sliding
-/// friction, and the sticking joints' gap coupling: their traction (mu k_c(g) slip at small slip)
-/// changes with the gap, an unsymmetric term that destabilizes the brakes' ~4.8 kHz mode) and of the
-/// damping (friction damping).
+/// friction, and the sticking joints' gap coupling: their traction changes with the gap, an
+/// unsymmetric, non-conservative term) and of the damping (friction damping).
 const STIFFNESS: [Part; 4] = [
     Part::Normal,
     Part::Stick,
