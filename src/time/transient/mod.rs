@@ -202,6 +202,10 @@ fn io_error(e: crate::io::results::ResultsError) -> TimeError {
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
 /// step come back with the error, so the caller can write them before reporting it.
 ///
+/// Long (~160 lines): the step callback, the log and the factorization closures share the
+/// recorder, the Jacobian builder and the last contact state of this one run; apart, they
+/// would need a struct of RefCells to say the same.
+///
 /// # Collective
 pub fn run<'p>(
     petsc: &'p Petsc,
