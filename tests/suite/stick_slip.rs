@@ -22,12 +22,12 @@
 use squeal::contact::law::FrictionLaw;
 use squeal::la::{DirectSolver, Factorization, Operator, Petsc, Vector};
 use squeal::time::newmark::{
-    initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Damping, Jacobian,
-    NewmarkSettings, State, StepControl, StepReport, TimeError,
+    initial_acceleration, integrate_adaptive, Adaptivity, Damping, NewmarkSettings, State,
+    StepControl, StepReport, TimeError,
 };
 
 use super::common::{rel, say};
-use super::time_integration::{tridiagonal, vector};
+use super::time_integration::{one_dof_jacobian, one_dof_state, tridiagonal};
 
 pub fn tests() -> Vec<super::NamedTest> {
     vec![(
@@ -154,16 +154,9 @@ fn run(
         Ok(ns.gamma / (ns.beta * ns.step) * law.traction(1.0, V - v).d_speed)
     };
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
-    let mut state = State {
-        time: 0.0,
-        step: 0,
-        q: vector(petsc, &[0.0])?,
-        // Riding on the belt: the stick phase starts the cycle (from rest the mass would
-        // oscillate about x_k without ever reaching the belt's speed, a pure-slip orbit).
-        v: vector(petsc, &[V])?,
-        a: vector(petsc, &[0.0])?,
-        linear: None,
-    };
+    // Riding on the belt: the stick phase starts the cycle (from rest the mass would
+    // oscillate about x_k without ever reaching the belt's speed, a pure-slip orbit).
+    let mut state = one_dof_state(petsc, 0.0, V)?;
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
     // The fixed J knows nothing of the friction (the sliding start has none); refreshed ones
     // carry it at their state, unless `frictionless_jacobian` (then only the linearization
@@ -173,13 +166,7 @@ fn run(
             Some(s) if !frictionless_jacobian => damping_at(ns, s)?,
             _ => 0.0,
         };
-        let mock = tridiagonal(petsc, &[c], &[]).map_err(squeal::la::LaError::Invalid)?;
-        let j = jacobian(ns, &m, Damping::None, &k, Some(&mock))?;
-        Ok(Jacobian {
-            factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
-            extra: Some(Box::new(mock)),
-            matrix: Some(j),
-        })
+        one_dof_jacobian(petsc, ns, &m, &k, c, true)
     };
     let mut linearize = |ns: &NewmarkSettings, s: &State| {
         let c = damping_at(ns, s)?;

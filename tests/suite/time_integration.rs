@@ -101,24 +101,10 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
         Ok(())
     };
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
-    let mut state = State {
-        time: 0.0,
-        step: 0,
-        q: vector(petsc, &[1.0])?,
-        v: vector(petsc, &[0.0])?,
-        a: vector(petsc, &[0.0])?,
-        linear: None,
-    };
+    let mut state = one_dof_state(petsc, 1.0, 0.0)?;
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
-    let mut factorize = |ns: &NewmarkSettings, _at: Option<&State>| {
-        let mock = tridiagonal(petsc, &[1.0], &[]).map_err(squeal::la::LaError::Invalid)?;
-        let j = jacobian(ns, &m, Damping::None, &k, Some(&mock))?;
-        Ok(Jacobian {
-            factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
-            extra: Some(Box::new(mock)),
-            matrix: None,
-        })
-    };
+    let mut factorize =
+        |ns: &NewmarkSettings, _at: Option<&State>| one_dof_jacobian(petsc, ns, &m, &k, 1.0, false);
     let mut accepted = 0;
     let mut on_step = |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl| {
         accepted += 1;
@@ -212,14 +198,7 @@ fn cut_and_restore(
     let g0: f64 = 2.0;
     let mut forces = contact_force;
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
-    let mut state = State {
-        time: 0.0,
-        step: 0,
-        q: vector(petsc, &[g0])?,
-        v: vector(petsc, &[0.0])?,
-        a: vector(petsc, &[0.0])?,
-        linear: None,
-    };
+    let mut state = one_dof_state(petsc, g0, 0.0)?;
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
         // The mock 1, or the contact tangent -df/dg = exp(-g) of the given state.
@@ -227,13 +206,7 @@ fn cut_and_restore(
             Some(s) => (-s.q.gather_all()?[0]).exp(),
             None => 1.0,
         };
-        let mock = tridiagonal(petsc, &[stiffness], &[]).map_err(squeal::la::LaError::Invalid)?;
-        let j = jacobian(ns, &m, Damping::None, &k, Some(&mock))?;
-        Ok(Jacobian {
-            factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
-            extra: Some(Box::new(mock)),
-            matrix: None,
-        })
+        one_dof_jacobian(petsc, ns, &m, &k, stiffness, false)
     };
     let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State,
@@ -403,6 +376,40 @@ pub(super) fn tridiagonal<'p>(
 pub(super) fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> Result<Vector<'p>, String> {
     let local = rows(petsc, values.len());
     Vector::from_local(petsc, &values[local]).map_err(|e| e.to_string())
+}
+
+/// A 1-DOF state at rest in acceleration (set by `initial_acceleration`) at (q0, v0).
+pub(super) fn one_dof_state<'p>(petsc: &'p Petsc, q0: f64, v0: f64) -> Result<State<'p>, String> {
+    Ok(State {
+        time: 0.0,
+        step: 0,
+        q: vector(petsc, &[q0])?,
+        v: vector(petsc, &[v0])?,
+        a: vector(petsc, &[0.0])?,
+        linear: None,
+    })
+}
+
+/// The factored Newmark Jacobian of a 1-DOF model with the nonlinear forces' tangent
+/// `tangent` (J's `extra`), keeping J itself when `keep_matrix` (Newton-Krylov needs it).
+pub(super) fn one_dof_jacobian<'f, 'p>(
+    petsc: &'p Petsc,
+    ns: &NewmarkSettings,
+    m: &SparseMatrix<'p>,
+    k: &SparseMatrix<'p>,
+    tangent: f64,
+    keep_matrix: bool,
+) -> Result<Jacobian<'f, 'p>, squeal::la::LaError>
+where
+    'p: 'f,
+{
+    let mock = tridiagonal(petsc, &[tangent], &[]).map_err(squeal::la::LaError::Invalid)?;
+    let j = jacobian(ns, m, Damping::None, k, Some(&mock))?;
+    Ok(Jacobian {
+        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
+        extra: Some(Box::new(mock)),
+        matrix: keep_matrix.then_some(j),
+    })
 }
 
 /// Integrates M q'' + K q = f(t, q) for `steps` steps from (q0, v0); `observe` sees every
