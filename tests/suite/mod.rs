@@ -5,6 +5,7 @@ pub mod complex_modes;
 pub mod contact_statics;
 pub mod convergence;
 pub mod growth;
+pub mod mode_coupling;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
 pub mod reduction;
@@ -30,6 +31,7 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(reduction::tests());
     v.extend(stages::tests());
     v.extend(stick_slip::tests());
+    v.extend(mode_coupling::tests());
     v.extend(growth::tests());
     v
 }
