@@ -1,6 +1,6 @@
 //! Adaptive stepping around the Newmark integrator: how a stalled step is retried (refreshed
-//! Jacobian, Newton-Krylov, full Newton, each with line search) before it is cut, and the step
-//! control a checkpoint carries.
+//! Jacobian, Newton-Krylov, full Newton where Newton-Krylov's linear solves were inexact, each
+//! with line search) before it is cut, and the step control a checkpoint carries.
 
 use super::newmark::{
     Damping, Forces, Jacobian, Newmark, NewmarkSettings, State, StepReport, TimeError,
@@ -70,10 +70,10 @@ pub enum Correction<'r, 'f, 'p> {
 /// fixed-Jacobian iterations fail, J is first rebuilt with the tangent of the current state
 /// (when `refresh` is set) and the step retried; if that fails, the step is retried on the
 /// consistent tangent with line search: by Newton-Krylov (when `linearize` is given and J is
-/// kept), then by a full Newton; if that fails too,
-/// the step is halved (J refactorized) and retried from the same state, at most `max_cuts`
-/// levels deep; after
-/// `restore_after` good steps the step is doubled back towards the nominal one. Once refreshed,
+/// kept), then by a full Newton only if a GMRES solve ended inexact (otherwise the full
+/// Newton's iterates are Newton-Krylov's own, each at the price of a factorization); if that
+/// fails too, the step is halved (J refactorized) and retried from the same state, at most
+/// `max_cuts` levels deep; after `restore_after` good steps the step is doubled back towards the nominal one. Once refreshed,
 /// every later factorization uses the current state's tangent. Every change goes to `log`.
 /// Only when the smallest step fails too is the error returned. `control` starts at its
 /// default, or where a checkpoint left it.
@@ -167,9 +167,16 @@ pub fn integrate_adaptive<'p>(
                     ));
                     break;
                 }
+                // A Newton-Krylov whose linear solves converged took the full Newton's own
+                // iterates (the same consistent tangent, the same line search): only a
+                // smaller step can help then.
                 Err(TimeError::NotConverged {
                     residual, target, ..
-                }) if refresh && !full_newton && control.fallback < 2 => {
+                }) if refresh
+                    && !full_newton
+                    && (control.fallback == 0
+                        || (control.fallback == 1 && integrator.krylov_exhausted())) =>
+                {
                     // Newton-Krylov needs the assembled J and a linearization; without them
                     // straight to the full Newton.
                     let krylov =

@@ -213,6 +213,8 @@ pub struct Newmark<'a, 'p> {
     dz: Vector<'p>,
     /// GMRES basis (Newton-Krylov corrections), grown on first use.
     basis: Vec<Vector<'p>>,
+    /// A GMRES solve of the last step attempt ended without reaching its tolerance.
+    krylov_exhausted: bool,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -243,6 +245,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             dq: q1.duplicate()?,
             dz: q1.duplicate()?,
             basis: Vec::new(),
+            krylov_exhausted: false,
             q1,
         })
     }
@@ -343,6 +346,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
     ) -> Result<StepReport, TimeError> {
         let h = self.settings.step;
         let t1 = state.time + h;
+        self.krylov_exhausted = false;
         // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
         self.q1.copy_from(&state.q)?;
         self.q1.axpy(h, &state.v)?;
@@ -454,6 +458,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
         }
     }
 
+    /// Whether a Newton-Krylov correction of the last step attempt was inexact (GMRES ended
+    /// at its iteration limit): only then can a full Newton do what it did not.
+    pub fn krylov_exhausted(&self) -> bool {
+        self.krylov_exhausted
+    }
+
     /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to
     /// the factor's accuracy): -R + X dq.
     fn linear_change(
@@ -547,6 +557,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 break;
             }
         }
+        // (A NaN counts as inexact.)
+        let reached = g[k].abs() <= 1e-4 * beta0;
+        self.krylov_exhausted |= !reached;
         // y from the triangular system, then dq = P^-1 (V y).
         let mut y = vec![0.0; k];
         for i in (0..k).rev() {

@@ -158,10 +158,11 @@ fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
             "linear phase: growth {growth} vs {sigma}, frequency {frequency} vs {omega}"
         ));
     }
-    if !(cycle.spread < 1e-3) {
+    // (NaN fails.)
+    if cycle.spread.is_nan() || cycle.spread >= 1e-3 {
         return Err(format!("the cycle is not closed: spread {}", cycle.spread));
     }
-    if !(cycle.open_fraction > 0.0) {
+    if cycle.open_fraction.is_nan() || cycle.open_fraction <= 0.0 {
         return Err("the contact never opens on the cycle".into());
     }
     let identity = cycle.energy_change - (cycle.friction_work - cycle.dissipation);
