@@ -211,13 +211,24 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     let variation = (hi - lo) / (last.iter().sum::<f64>() / last.len() as f64);
     out.variation = Some(variation);
     out.reached = variation <= settings.tolerance;
-    out.verdict = format!(
-        "{}: the peak-to-peak amplitude varies by {:.1} % over the last {} cycles (tolerance {:.1} %)",
-        if out.reached { "reached" } else { "not reached" },
-        100.0 * variation,
-        settings.cycles,
-        100.0 * settings.tolerance
-    );
+    out.verdict = if out.reached {
+        format!(
+            "reached: the peak-to-peak amplitude varies by {:.1} % over the last {} cycles (tolerance {:.1} %)",
+            100.0 * variation,
+            settings.cycles,
+            100.0 * settings.tolerance
+        )
+    } else {
+        // Bounded (saturated, no growth over the last fifth) but not one repeating cycle:
+        // several components beat (more than one unstable mode, or sidebands of the contact's
+        // opening and closing).
+        format!(
+            "saturated, not periodic: bounded since {t_sat:.4e} s, but the peak-to-peak amplitude varies by {:.1} % over the last {} cycles (tolerance {:.1} %): a modulated vibration, not a single limit cycle",
+            100.0 * variation,
+            settings.cycles,
+            100.0 * settings.tolerance
+        )
+    };
     out
 }
 
@@ -361,7 +372,7 @@ mod tests {
     }
 
     /// A decaying signal has no saturation; a growing one that never saturates is not
-    /// reached; NaN is refused.
+    /// reached; a saturated beating one is bounded but not a cycle; NaN is refused.
     #[test]
     fn decay_growth_and_nan_are_not_limit_cycles() {
         let dt = 2e-6;
@@ -383,6 +394,24 @@ mod tests {
             !growth.reached && growth.saturation_time.is_none(),
             "{}",
             growth.verdict
+        );
+        // Saturated but beating (two components 10 % apart): bounded, no single cycle.
+        let beating: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                let w = 2.0 * std::f64::consts::PI * 3000.0 * t;
+                let e = (800.0 * t).exp();
+                let a = 1e-3 * e / (1.0 + 1e-6 * (e * e - 1.0)).sqrt();
+                a * (w.sin() + 0.5 * (1.1 * w).sin())
+            })
+            .collect();
+        let modulated = characterize(&t, &beating, dt, &s);
+        assert!(
+            !modulated.reached
+                && modulated.saturation_time.is_some()
+                && modulated.verdict.starts_with("saturated, not periodic"),
+            "{}",
+            modulated.verdict
         );
         let mut bad = wave(&|_| 1.0);
         bad[100] = f64::NAN;

@@ -80,6 +80,8 @@ fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Resul
     let c = &report.cycle;
     let state = if c.reached {
         "limit cycle"
+    } else if c.variation.is_some() {
+        "saturated, not periodic"
     } else {
         "no cycle yet"
     };
