@@ -16,6 +16,27 @@ pub struct LimitCycleReport {
     /// Per interface: the fraction of its points open, sticking, slipping, averaged over the
     /// last cycles (or the last fifth of the run when no cycle was found).
     pub contact_fractions: Vec<(String, [f64; 3])>,
+    /// What the stepping cost before and after the saturation time (None: no saturation).
+    pub phase_costs: Option<[PhaseCost; 2]>,
+}
+
+/// The stepping's cost over one phase of the run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseCost {
+    pub simulated: f64,
+    pub steps: usize,
+    pub iterations: usize,
+    pub wall_seconds: f64,
+}
+
+/// The cost of the rows [from, to) of a trajectory (from the per-step wall times).
+fn phase_cost(tr: &crate::time::transient::Transient, from: usize, to: usize) -> PhaseCost {
+    PhaseCost {
+        simulated: tr.time[to - 1] - tr.time[from.saturating_sub(1)],
+        steps: to - from,
+        iterations: tr.iterations[from..to].iter().sum(),
+        wall_seconds: tr.wall_seconds[to - 1] - tr.wall_seconds[from.saturating_sub(1)],
+    }
 }
 
 /// Characterizes the braking torque of the run.
@@ -58,9 +79,18 @@ pub fn limit_cycle(
             (name.clone(), f.map(|x| x / steps / points))
         })
         .collect();
+    // Growth [1, saturation) and saturated [saturation, end) rows (the wall times continue
+    // across restarts; work lost after a checkpoint is not counted).
+    let n = tr.time.len();
+    let phase_costs = cycle
+        .saturation_time
+        .map(|t_sat| tr.time.partition_point(|&t| t < t_sat))
+        .filter(|&k| k > 1 && k < n && tr.wall_seconds.len() == n)
+        .map(|k| [phase_cost(tr, 1, k), phase_cost(tr, k, n)]);
     LimitCycleReport {
         cycle,
         predicted,
         contact_fractions,
+        phase_costs,
     }
 }

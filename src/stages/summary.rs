@@ -578,6 +578,20 @@ impl RunSummary {
             c.saturated_amplitude,
             c.amplitudes.len()
         )?;
+        if let Some(phases) = &r.phase_costs {
+            for (phase, p) in ["growth", "saturated"].iter().zip(phases) {
+                writeln!(
+                    f,
+                    "    {phase:9} phase: {:.4e} s simulated in {} steps, {:.2} iterations per step, {:.2} ms per step, {:.1} s wall ({:.3} s per simulated ms)",
+                    p.simulated,
+                    p.steps,
+                    p.iterations as f64 / p.steps.max(1) as f64,
+                    1e3 * p.wall_seconds / p.steps.max(1) as f64,
+                    p.wall_seconds,
+                    p.wall_seconds / (1e3 * p.simulated).max(1e-300)
+                )?;
+            }
+        }
         for (name, fr) in &r.contact_fractions {
             writeln!(
                 f,

@@ -983,6 +983,17 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
             failures.push(format!("{name} differs by {diff:e} (bound {bound:e})"));
         }
     }
+    // The wall-time column continues across the restart: one row per step, never falling.
+    let wall = read(&resumed, "wall_seconds")?;
+    if wall.len() != read(&whole, "time")?.len()
+        || wall[0] != 0.0
+        || wall.windows(2).any(|w| w[1].is_nan() || w[1] < w[0])
+    {
+        return Err(format!(
+            "wall_seconds after the restart: {} rows, not a non-decreasing series from 0",
+            wall.len()
+        ));
+    }
     say(
         petsc,
         &format!("restart at step 80 of 120: {}", report.join("; ")),

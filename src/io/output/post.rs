@@ -40,6 +40,18 @@ pub fn write_limit_cycle(
     for (name, value) in numbers {
         file.set_number(g, name, value)?;
     }
+    if let Some(phases) = &report.phase_costs {
+        for (phase, p) in ["growth", "saturated"].iter().zip(phases) {
+            for (what, value) in [
+                ("simulated_s", p.simulated),
+                ("steps", p.steps as f64),
+                ("iterations", p.iterations as f64),
+                ("wall_s", p.wall_seconds),
+            ] {
+                file.set_number(g, &format!("{phase}_{what}"), value)?;
+            }
+        }
+    }
     file.set_text(g, "verdict", &c.verdict)?;
     if let Some((route, name, _, _)) = &report.predicted {
         file.set_text(

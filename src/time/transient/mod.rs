@@ -55,6 +55,9 @@ pub struct Transient {
     pub iterations: Vec<usize>,
     /// The step size of each step (0 at the start).
     pub step_size: Vec<f64>,
+    /// Wall time of the stepping when each step was accepted (s; 0 at the start, summed over
+    /// restarts): the cost of each phase of the run (growth, saturation).
+    pub wall_seconds: Vec<f64>,
     /// Per sensor: displacement, velocity, acceleration (x, y, z per sample, row-major).
     pub sensor_names: Vec<String>,
     pub sensor_values: Vec<[Vec<f64>; 3]>,
@@ -140,6 +143,7 @@ impl Transient {
         Transient {
             time: Vec::with_capacity(steps + 1),
             step_size: Vec::with_capacity(steps + 1),
+            wall_seconds: Vec::with_capacity(steps + 1),
             normal_force: series(),
             friction_force: series(),
             torque: series(),
@@ -261,6 +265,7 @@ pub fn run<'p>(
     let first_step = ((state.time / settings.step).round() as usize).min(settings.steps);
     bar.resume_from(first_step);
     let t = Instant::now();
+    let wall_before = recorder.out.wall_seconds.last().copied().unwrap_or(0.0);
     let end_time = settings.steps as f64 * settings.step;
     let mut checkpoint_failure = None;
     let mut on_step =
@@ -276,7 +281,8 @@ pub fn run<'p>(
             out.krylov_iterations += report.krylov_iterations;
             let evaluated = last_contact.borrow();
             let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
-            recorder.record(s, h, report.iterations, evaluated)?;
+            let wall = wall_before + t.elapsed().as_secs_f64();
+            recorder.record(s, h, report.iterations, wall, evaluated)?;
             recorder.sample_state(s, h)?;
             let at_end = s.time >= end_time - 0.25 * h;
             recorder.flush_if_due(at_end)?;

@@ -15,10 +15,16 @@ const STATE_PATHS: [&str; 3] = ["states/time", "states/displacement", "states/ve
 
 /// The full-rate series of the stream.
 fn signal_paths(interfaces: &[String]) -> Vec<String> {
-    let mut v: Vec<String> = ["time", "step_size", "iterations", "braking_torque"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+    let mut v: Vec<String> = [
+        "time",
+        "step_size",
+        "iterations",
+        "wall_seconds",
+        "braking_torque",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     for name in interfaces {
         for s in [
             "normal_force",
@@ -76,7 +82,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
         for path in signal_paths(&r.names) {
             let units = match path.rsplit('/').next().unwrap_or("") {
-                "time" | "step_size" => "s",
+                "time" | "step_size" | "wall_seconds" => "s",
                 "iterations" => "1",
                 "torque" | "braking_torque" => "N m",
                 "open_points" | "stick_points" | "slip_points" => "1",
@@ -98,7 +104,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 .create_series(path, width, units)
                 .map_err(io_error)?;
         }
-        r.record(start, 0.0, 0, None)?;
+        r.record(start, 0.0, 0, 0.0, None)?;
         if interval > 0.0 {
             r.write_state(start)?;
             r.out.states = 1;
@@ -121,6 +127,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
     ) -> Result<Self, TimeError> {
         let stream = SeriesFile::open(petsc.world(), &files.stream).map_err(io_error)?;
         let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
+        if !r.stream.has("wall_seconds") {
+            return Err(TimeError::Output(format!(
+                "--restart: {} was written by an older squeal (it has no wall_seconds series); run without --restart to start afresh",
+                files.stream.display()
+            )));
+        }
         let rows = checkpoint.signal_rows;
         let sensor_series = sensor_paths(&r.out.sensor_names);
         for path in signal_paths(&r.names).iter().chain(&sensor_series) {
@@ -140,6 +152,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             .into_iter()
             .map(|x| x as usize)
             .collect();
+        out.wall_seconds = read("wall_seconds")?;
         for (i, name) in r.names.iter().enumerate() {
             out.normal_force[i] = read(&format!("interfaces/{name}/normal_force"))?;
             out.friction_force[i] = read(&format!("interfaces/{name}/friction_force"))?;
@@ -193,6 +206,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         s: &State<'p>,
         h: f64,
         iterations: usize,
+        wall_seconds: f64,
         evaluated: Option<&ContactState>,
     ) -> Result<(), LaError> {
         let contact = self.contact;
@@ -204,6 +218,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         out.time.push(s.time);
         out.step_size.push(h);
         out.iterations.push(iterations);
+        out.wall_seconds.push(wall_seconds);
         for (i, sum) in sums.iter().enumerate() {
             out.normal_force[i].push(sum.normal_force);
             out.friction_force[i].push(sum.friction_force);
@@ -272,6 +287,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             ("time".into(), &out.time[from..]),
             ("step_size".into(), &out.step_size[from..]),
             ("iterations".into(), &its),
+            ("wall_seconds".into(), &out.wall_seconds[from..]),
             ("braking_torque".into(), &torque),
         ];
         for (i, name) in self.names.iter().enumerate() {
