@@ -319,7 +319,7 @@ fn median(v: &[f64]) -> f64 {
 }
 
 /// Least-squares slope of (x, y).
-fn slope(p: &[(f64, f64)]) -> f64 {
+pub fn slope(p: &[(f64, f64)]) -> f64 {
     let n = p.len() as f64;
     let (mx, my) = (
         p.iter().map(|q| q.0).sum::<f64>() / n,

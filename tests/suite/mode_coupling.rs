@@ -41,6 +41,8 @@ use squeal::time::newmark::{
     NewmarkSettings, State, StepControl, StepReport, TimeError,
 };
 
+use squeal::post::limit_cycle::slope;
+
 use super::common::{rel, say};
 
 pub fn tests() -> Vec<super::NamedTest> {
@@ -320,18 +322,6 @@ fn interpolated_peak(r: &Record, i: usize) -> f64 {
         let (vm, v0) = (r.v[i - 1][1], r.v[i][1]);
         r.t[i - 1] + (r.t[i] - r.t[i - 1]) * vm / (vm - v0)
     }
-}
-
-/// Least-squares slope of points (t, y).
-fn slope(points: &[(f64, f64)]) -> f64 {
-    let n = points.len() as f64;
-    let (mt, my) = points
-        .iter()
-        .fold((0.0, 0.0), |(a, b), &(t, y)| (a + t / n, b + y / n));
-    let (sty, stt) = points.iter().fold((0.0, 0.0), |(a, b), &(t, y)| {
-        (a + (t - mt) * (y - my), b + (t - mt) * (t - mt))
-    });
-    sty / stt
 }
 
 /// A 2 x 2 matrix, row i on rank i (1 rank: both).
