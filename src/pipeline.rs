@@ -119,6 +119,20 @@ pub fn run_with(
         }),
         _ => None,
     };
+    // The link analyses read the stored states back; an error there is reported after the
+    // transient's results are written.
+    let link = match &trajectory {
+        Some(t) => stages::link::link(
+            petsc,
+            scene,
+            &a,
+            t,
+            limit_cycle.as_ref().map(|r| &r.cycle),
+            &TransientFiles::in_directory(output, false).stream,
+            &mut timings,
+        ),
+        None => Ok(stages::link::Link::default()),
+    };
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         let signals = &t.signals;
@@ -130,6 +144,9 @@ pub fn run_with(
                 petsc, &file, lc, signals, output,
             ))?;
         }
+        if let Ok(link) = &link {
+            checked(output::link::write_link(petsc, &file, link, output))?;
+        }
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         let written = output::write_xdmf_and_preview(output, model, a.modes.as_ref(), &a.complex);
@@ -140,6 +157,7 @@ pub fn run_with(
     checked(output::write_timings(&file, &timings))?;
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.
+    let link = link?;
     let signals = match trajectory {
         Some(t) => match t.failure {
             Some(e) => return Err(RunError::Time(e)),
@@ -151,5 +169,6 @@ pub fn run_with(
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
     let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
     summary.limit_cycle = limit_cycle;
+    summary.link = link;
     Ok(summary)
 }

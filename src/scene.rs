@@ -57,6 +57,19 @@ pub struct PostSettings {
     /// Growth, saturation, frequency, period and amplitude per cycle of the braking torque.
     #[serde(default)]
     pub limit_cycle: Option<crate::post::limit_cycle::LimitCycleSettings>,
+    /// Modal coordinates and energies of every real mode along the stored states.
+    #[serde(default)]
+    pub modal_energy: Option<crate::post::modal_energy::ModalEnergySettings>,
+    /// Complex modes of the tangent at stored states along the last periods, tracked.
+    #[serde(default)]
+    pub dynamic_stability: Option<crate::post::dynamic_stability::DynamicStabilitySettings>,
+}
+
+impl PostSettings {
+    /// Whether an analysis of the stored states is asked for (they need the period).
+    pub fn uses_states(&self) -> bool {
+        self.modal_energy.is_some() || self.dynamic_stability.is_some()
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -412,6 +425,19 @@ impl Scene {
             }
             if let Some(lc) = &post.limit_cycle {
                 lc.validate()?;
+            }
+            if let Some(me) = &post.modal_energy {
+                me.validate()?;
+            }
+            if let Some(ds) = &post.dynamic_stability {
+                ds.validate()?;
+            }
+            let stored = self.transient.as_ref().map_or(0.0, |t| t.state_interval);
+            if post.uses_states() && stored <= 0.0 {
+                return Err("key 'post': modal_energy and dynamic_stability analyse the stored states: 'transient.state_interval' must be > 0".into());
+            }
+            if post.uses_states() && (self.statics.is_none() || self.real_modes.is_none()) {
+                return Err("key 'post': modal_energy and dynamic_stability work on the real modes of the preloaded model: they need [statics] and [real_modes]".into());
             }
         }
         for e in &self.output.export_matrices {

@@ -11,7 +11,7 @@ pub const GREY: Rgb = [200, 200, 200];
 pub const BLUE: Rgb = [31, 119, 180];
 pub const RED: Rgb = [214, 39, 40];
 /// A cycle of distinguishable colours for series.
-pub const PALETTE: [Rgb; 8] = [
+pub const PALETTE: [Rgb; 10] = [
     [31, 119, 180],
     [255, 127, 14],
     [44, 160, 44],
@@ -20,6 +20,8 @@ pub const PALETTE: [Rgb; 8] = [
     [140, 86, 75],
     [227, 119, 194],
     [127, 127, 127],
+    [188, 189, 34],
+    [23, 190, 207],
 ];
 
 /// A figure with one set of axes.
@@ -319,6 +321,24 @@ impl Figure {
             .write_image_data(&self.rgb)
             .map_err(std::io::Error::other)?;
         Ok(())
+    }
+
+    /// Figures of equal width stacked top to bottom into one PNG (panels sharing a time axis).
+    pub fn save_column(figures: &[&Figure], path: &Path) -> std::io::Result<()> {
+        let width = figures.first().map_or(0, |f| f.width);
+        assert!(
+            figures.iter().all(|f| f.width == width),
+            "panels of one width"
+        );
+        let column = Figure {
+            width,
+            height: figures.iter().map(|f| f.height).sum(),
+            rgb: figures.iter().flat_map(|f| f.rgb.iter().copied()).collect(),
+            area: [0.0; 4],
+            x: (0.0, 1.0),
+            y: (0.0, 1.0),
+        };
+        column.save(path)
     }
 
     /// Number of non-white pixels (for tests).

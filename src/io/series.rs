@@ -97,6 +97,11 @@ impl SeriesFile {
         self.file.dataset(path).map_err(self.err())
     }
 
+    /// Values per row of a series (1 for a signal).
+    pub fn columns(&self, path: &str) -> Result<usize, ResultsError> {
+        Ok(self.dataset(path)?.shape().get(1).copied().unwrap_or(1))
+    }
+
     /// Rows in a series.
     pub fn rows(&self, path: &str) -> Result<usize, ResultsError> {
         Ok(self.dataset(path)?.shape().first().copied().unwrap_or(0))
@@ -168,6 +173,20 @@ impl SeriesFile {
     /// A whole series (row-major), read on every rank.
     pub fn read(&self, path: &str) -> Result<Vec<f64>, ResultsError> {
         self.dataset(path)?.read_raw::<f64>().map_err(self.err())
+    }
+
+    /// This rank's `columns` of row `row` of a 2D series (one stored state's own part).
+    pub fn read_row_part(
+        &self,
+        path: &str,
+        row: usize,
+        columns: std::ops::Range<usize>,
+    ) -> Result<Vec<f64>, ResultsError> {
+        let ds = self.dataset(path)?;
+        let a: Array2<f64> = ds
+            .read_slice_2d(s![row..row + 1, columns.start..columns.end])
+            .map_err(self.err())?;
+        Ok(a.iter().copied().collect())
     }
 
     /// Pushes what was written to the file, so a crash keeps it.

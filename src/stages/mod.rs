@@ -10,6 +10,7 @@
 //! run's summary is [`summary::RunSummary`].
 
 pub mod complex;
+pub mod link;
 pub mod model;
 pub mod modes;
 pub mod operators;
@@ -64,6 +65,8 @@ pub enum RunError {
     Reduction(#[from] reduce::ReductionError),
     #[error("{0}")]
     TransientSetup(#[from] transient::TransientSetupError),
+    #[error("post: {0}")]
+    States(#[from] crate::post::states::StatesError),
     #[error("transient: {0}")]
     Time(#[from] crate::time::newmark::TimeError),
     #[error("output: {0}")]

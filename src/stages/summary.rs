@@ -44,6 +44,8 @@ pub struct RunSummary {
     pub reduction: Option<ReductionSummary>,
     /// The limit cycle of the transient, when `[post.limit_cycle]` asked for it.
     pub limit_cycle: Option<super::post::LimitCycleReport>,
+    /// Modal energies and dynamic stability along the run, when `[post]` asked for them.
+    pub link: super::link::Link,
 }
 
 /// The superelement reduction, for the summary.
@@ -173,6 +175,7 @@ impl RunSummary {
             transient: None,
             reduction: None,
             limit_cycle: None,
+            link: Default::default(),
         }
     }
 }
@@ -346,6 +349,7 @@ impl fmt::Display for RunSummary {
         self.fmt_modes(f)?;
         self.fmt_reduction_transient_sweep(f)?;
         self.fmt_limit_cycle(f)?;
+        super::link::fmt_link(&self.link, f)?;
         self.fmt_timings(f)
     }
 }

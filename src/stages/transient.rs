@@ -354,13 +354,7 @@ pub fn modal_damping<'p>(
         if c <= 0.0 {
             continue;
         }
-        let x = match reduction {
-            Some(r) => r.restrict(petsc, shape)?,
-            None => shape.try_clone()?,
-        };
-        let mut mass_shape = x.duplicate()?;
-        m.mult(&x, &mut mass_shape)?;
-        shapes.push(mass_shape);
+        shapes.push(mass_shape(petsc, shape, m, reduction)?);
         coefficients.push(c);
     }
     if shapes.is_empty() {
@@ -372,4 +366,23 @@ pub fn modal_damping<'p>(
         });
     }
     Ok(ModalDamping::new(shapes, coefficients))
+}
+
+/// M x of a full-model mode shape in the integrated unknowns: M phi of the full model, or
+/// M_r x with x the reduced coordinates of phi (exact: the modes lie in the reduction's span).
+///
+/// # Collective
+pub fn mass_shape<'p>(
+    petsc: &'p Petsc,
+    shape: &Vector<'p>,
+    m: &SparseMatrix<'p>,
+    reduction: Option<&crate::reduce::Reduction>,
+) -> Result<Vector<'p>, crate::la::LaError> {
+    let x = match reduction {
+        Some(r) => r.restrict(petsc, shape)?,
+        None => shape.try_clone()?,
+    };
+    let mut out = x.duplicate()?;
+    m.mult(&x, &mut out)?;
+    Ok(out)
 }

@@ -5,6 +5,7 @@ pub mod complex_modes;
 pub mod contact_statics;
 pub mod convergence;
 pub mod growth;
+pub mod link;
 pub mod mode_coupling;
 pub mod parallel_and_solvers;
 pub mod real_modes_verification;
@@ -33,5 +34,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(stick_slip::tests());
     v.extend(mode_coupling::tests());
     v.extend(growth::tests());
+    v.extend(link::tests());
     v
 }

@@ -1,6 +1,7 @@
 //! One writer per stage output (DESIGN.md §5): HDF5 groups of results.h5, CSV, PNG, XDMF.
 //! Writers only write: what they show was computed by the stages or by `post`.
 
+pub mod link;
 pub mod modes;
 pub mod post;
 pub mod reduction;

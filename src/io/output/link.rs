@@ -1,0 +1,298 @@
+//! Writers of the time/frequency link: /post/modal_energy with modal_energy.png, and
+//! /post/dynamic_stability with dynamic_stability.png and dynamic_stability_time.png.
+
+use std::path::Path;
+
+use super::WriteError;
+use crate::io::plot::{colormap, padded, Figure, BLACK, BLUE, GREY, PALETTE, RED};
+use crate::io::results::ResultsFile;
+use crate::la::Petsc;
+use crate::post::dynamic_stability::TrackedMode;
+use crate::stages::link::{DynamicStabilityReport, Link, ModalEnergyReport};
+
+/// # Collective
+pub fn write_link(
+    petsc: &Petsc,
+    file: &ResultsFile,
+    link: &Link,
+    output: &Path,
+) -> Result<(), WriteError> {
+    if let Some(r) = &link.modal_energy {
+        write_modal_energy(file, r)?;
+        if petsc.rank() == 0 {
+            plot_modal_energy(r, output)?;
+        }
+    }
+    if let Some(r) = &link.dynamic_stability {
+        write_dynamic_stability(file, r)?;
+        if petsc.rank() == 0 {
+            plot_stability_diagram(r, output)?;
+            plot_stability_in_time(r, output)?;
+        }
+    }
+    Ok(())
+}
+
+fn write_modal_energy(file: &ResultsFile, r: &ModalEnergyReport) -> Result<(), WriteError> {
+    let g = "post/modal_energy";
+    let e = &r.energy;
+    file.write_table(&format!("{g}/time"), &e.times, "s")?;
+    let numbers: Vec<f64> = (1..=e.energy.len()).map(|k| k as f64).collect();
+    file.write_table(&format!("{g}/mode"), &numbers, "real mode number")?;
+    file.write_table(&format!("{g}/frequency"), &r.frequencies_hz, "Hz")?;
+    let flat: Vec<f64> = e.energy.iter().flatten().copied().collect();
+    file.write_table(
+        &format!("{g}/energy"),
+        &flat,
+        "J; mode-major: mode k's energy at every stored time, then mode k+1's",
+    )?;
+    file.write_table(&format!("{g}/kinetic_energy"), &e.kinetic, "J")?;
+    file.write_table(
+        &format!("{g}/kinetic_energy_in_basis"),
+        &e.kinetic_in_basis,
+        "J",
+    )?;
+    let column = |f: &dyn Fn(&crate::post::modal_energy::RankedMode) -> f64| -> Vec<f64> {
+        e.ranked.iter().map(f).collect()
+    };
+    let ranked = [
+        ("mode", column(&|m| (m.mode + 1) as f64), "real mode number"),
+        ("energy", column(&|m| m.energy), "J"),
+        (
+            "share",
+            column(&|m| m.share),
+            "of the sum of the modal energies",
+        ),
+        (
+            "oscillation",
+            column(&|m| m.oscillation),
+            "half peak-to-peak over the mean, over the window",
+        ),
+    ];
+    for (name, values, units) in ranked {
+        file.write_table(&format!("{g}/ranked/{name}"), &values, units)?;
+    }
+    file.set_number(g, "ranking_time_s", e.at)?;
+    file.set_number(g, "window_start_s", e.window.0)?;
+    file.set_number(g, "window_end_s", e.window.1)?;
+    Ok(())
+}
+
+fn save(fig: &Figure, output: &Path, name: &str) -> Result<(), WriteError> {
+    let path = output.join(name);
+    fig.save(&path)
+        .map_err(|source| WriteError::Io { path, source })
+}
+
+/// The ranked modes' energies against time, log scale, labelled with mode and frequency.
+fn plot_modal_energy(r: &ModalEnergyReport, output: &Path) -> Result<(), WriteError> {
+    let e = &r.energy;
+    let log = |x: f64| x.max(1e-300).log10();
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for m in &e.ranked {
+        for &v in &e.energy[m.mode] {
+            if v > 0.0 {
+                lo = lo.min(log(v));
+                hi = hi.max(log(v));
+            }
+        }
+    }
+    // Twelve decades below the largest are enough to see the growth.
+    let lo = lo.max(hi - 12.0);
+    let end = e.times.last().copied().unwrap_or(1.0);
+    let mut fig = Figure::new(
+        1200,
+        600,
+        padded(e.times[0], end, 0.0),
+        padded(lo, hi, 0.05),
+        &format!(
+            "modal energies: the {} largest at {:.4} s",
+            e.ranked.len(),
+            e.at
+        ),
+        "time (s)",
+        "log10 modal energy (J)",
+    );
+    for (k, m) in e.ranked.iter().enumerate() {
+        let c = PALETTE[k % PALETTE.len()];
+        let points: Vec<(f64, f64)> = e
+            .times
+            .iter()
+            .zip(&e.energy[m.mode])
+            .filter(|(_, &v)| v > 0.0)
+            .map(|(&t, &v)| (t, log(v).max(lo)))
+            .collect();
+        fig.line(&points, c);
+        let label = format!(
+            "R{} {:.0} Hz: {:.1} %",
+            m.mode + 1,
+            r.frequencies_hz[m.mode],
+            100.0 * m.share
+        );
+        fig.legend(k, &label, c);
+    }
+    save(&fig, output, "modal_energy.png")
+}
+
+fn write_dynamic_stability(
+    file: &ResultsFile,
+    r: &DynamicStabilityReport,
+) -> Result<(), WriteError> {
+    let g = "post/dynamic_stability";
+    let s = &r.stability;
+    file.write_table(&format!("{g}/time"), &s.times, "s")?;
+    file.write_table(&format!("{g}/braking_torque"), &s.torque, "N m")?;
+    file.set_number(g, "period_s", r.period)?;
+    file.set_number(g, "seconds_per_linearization", s.seconds_per_point)?;
+    file.set_number(g, "tracks_followed", s.followed as f64)?;
+    file.set_number(g, "tracks_lost", s.lost as f64)?;
+    for t in &s.tracks {
+        let m = format!("{g}/modes/{}", t.name);
+        let (re, im): (Vec<f64>, Vec<f64>) = t.eigenvalue.iter().copied().unzip();
+        let note = "at the static state, then at every time";
+        file.write_table(&format!("{m}/re_s"), &re, &format!("1/s; {note}"))?;
+        file.write_table(&format!("{m}/im_s"), &im, &format!("rad/s; {note}"))?;
+        file.write_table(&format!("{m}/frequency"), &t.frequencies_hz(), "Hz")?;
+        file.write_table(&format!("{m}/damping_ratio"), &t.damping_ratios(), "1")?;
+        file.write_table(&format!("{m}/mac"), &t.mac, "MAC with the previous point")?;
+        file.set_number(&m, "unstable_fraction", t.unstable_fraction)?;
+        file.set_number(&m, "mean_damping_ratio", t.mean_damping_ratio)?;
+        file.set_number(&m, "torque_correlation", t.torque_correlation)?;
+    }
+    Ok(())
+}
+
+/// Frequency against damping ratio of the tracked modes, points coloured by time (dark:
+/// first, bright: last); the static state's modes as black rings.
+fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(), WriteError> {
+    let s = &r.stability;
+    let tracks = shown(r);
+    let (mut f, mut z) = (Vec::new(), Vec::new());
+    for t in &tracks {
+        f.extend(t.frequencies_hz().into_iter().filter(|x| x.is_finite()));
+        z.extend(t.damping_ratios().into_iter().filter(|x| x.is_finite()));
+    }
+    let range = |v: &[f64]| {
+        v.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            })
+    };
+    let (z0, z1) = range(&z);
+    let (f0, f1) = range(&f);
+    let mut fig = Figure::new(
+        1000,
+        700,
+        padded(z0.min(0.0), z1.max(0.0), 0.08),
+        padded(f0, f1, 0.08),
+        &format!(
+            "dynamic stability: {} modes along {} states (colour: time)",
+            tracks.len(),
+            s.times.len()
+        ),
+        "damping ratio (1); < 0: unstable",
+        "frequency (Hz)",
+    );
+    let n = s.times.len().max(2) as f64;
+    for (k, t) in tracks.iter().enumerate() {
+        let (fr, zr) = (t.frequencies_hz(), t.damping_ratios());
+        for i in 1..fr.len() {
+            fig.marker(zr[i], fr[i], colormap((i - 1) as f64 / (n - 1.0)), 2);
+        }
+        fig.marker(zr[0], fr[0], BLACK, 4);
+        fig.label(zr[0], fr[0], &t.name, BLACK, k % 2 == 1);
+    }
+    // The stability boundary.
+    fig.line(&[(0.0, f0 - (f1 - f0)), (0.0, f1 + (f1 - f0))], RED);
+    save(&fig, output, "dynamic_stability.png")
+}
+
+/// Frequency and damping ratio of the tracked modes against time, the braking torque
+/// underneath (three panels on one time axis).
+fn plot_stability_in_time(r: &DynamicStabilityReport, output: &Path) -> Result<(), WriteError> {
+    let s = &r.stability;
+    let tracks = shown(r);
+    let (t0, t1) = (s.times[0], *s.times.last().unwrap_or(&s.times[0]));
+    let x = padded(t0, t1, 0.0);
+    let finite = |v: Vec<f64>| v.into_iter().filter(|x| x.is_finite()).collect::<Vec<_>>();
+    let span = |v: &[f64]| {
+        v.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            })
+    };
+    let mut panels = Vec::new();
+    for (title, label, pick) in [
+        (
+            "tracked modes along the run: frequency",
+            "frequency (Hz)",
+            0usize,
+        ),
+        ("damping ratio (< 0: unstable)", "damping ratio (1)", 1),
+    ] {
+        let values = |t: &TrackedMode| {
+            let v = if pick == 0 {
+                t.frequencies_hz()
+            } else {
+                t.damping_ratios()
+            };
+            v[1..].to_vec()
+        };
+        // Overdamped moments (zeta = 1: the pair became real) would hide the rest: off the axes.
+        let all: Vec<f64> = tracks
+            .iter()
+            .flat_map(|t| finite(values(t)))
+            .filter(|z| pick == 0 || z.abs() < 0.99)
+            .collect();
+        let (lo, hi) = span(&all);
+        let mut fig = Figure::new(1200, 330, x, padded(lo, hi, 0.08), title, "time (s)", label);
+        if pick == 1 {
+            fig.hline(0.0, RED);
+        }
+        for (k, t) in tracks.iter().enumerate() {
+            let c = PALETTE[k % PALETTE.len()];
+            let points: Vec<(f64, f64)> = s.times.iter().copied().zip(values(t)).collect();
+            fig.line(&points, c);
+            for &(ti, v) in &points {
+                fig.marker(ti, v, c, 1);
+            }
+            fig.legend(k, &t.name, c);
+        }
+        panels.push(fig);
+    }
+    let (lo, hi) = span(&s.torque);
+    let mut torque = Figure::new(
+        1200,
+        260,
+        x,
+        padded(lo, hi, 0.08),
+        "braking torque",
+        "time (s)",
+        "torque (N m)",
+    );
+    let points: Vec<(f64, f64)> = s
+        .times
+        .iter()
+        .copied()
+        .zip(s.torque.iter().copied())
+        .collect();
+    torque.line(&points, BLUE);
+    for &(ti, v) in &points {
+        torque.marker(ti, v, GREY, 1);
+    }
+    panels.push(torque);
+    let path = output.join("dynamic_stability_time.png");
+    Figure::save_column(&panels.iter().collect::<Vec<_>>(), &path)
+        .map_err(|source| WriteError::Io { path, source })
+}
+
+/// The tracks the plots show: the headline ones (unstable at rest or on average), at most as
+/// many as the palette has colours.
+fn shown(r: &DynamicStabilityReport) -> Vec<&TrackedMode> {
+    r.stability
+        .tracks
+        .iter()
+        .filter(|t| t.headline(r.margin))
+        .take(PALETTE.len())
+        .collect()
+}

@@ -1,0 +1,104 @@
+//! The states a transient stored (transient.h5 `/states`: time, displacement, velocity every
+//! `transient.state_interval`), read back one at a time in the integrated unknowns' layout:
+//! what the analyses of a trajectory work on. Reading them back rather than keeping them in
+//! memory lets the analyses run again on a finished run (`--restart` after the last step).
+
+use std::path::Path;
+
+use crate::io::results::ResultsError;
+use crate::io::series::SeriesFile;
+use crate::la::{LaError, Petsc, Vector};
+
+/// Why the stored states cannot be analysed.
+#[derive(Debug, thiserror::Error)]
+pub enum StatesError {
+    #[error("{0}")]
+    File(#[from] ResultsError),
+    #[error("{0}")]
+    La(#[from] LaError),
+    #[error(
+        "{path}: {found} states stored; the analyses of [post] need at least {needed} (lower 'transient.state_interval' or run longer)"
+    )]
+    TooFew {
+        path: String,
+        found: usize,
+        needed: usize,
+    },
+    #[error(
+        "{path}: the stored states have {stored} unknowns, the model has {model} (the file is from another scene)"
+    )]
+    Layout {
+        path: String,
+        stored: usize,
+        model: usize,
+    },
+}
+
+pub struct StoredStates {
+    file: SeriesFile,
+    path: String,
+    pub times: Vec<f64>,
+}
+
+impl StoredStates {
+    /// Opens the states of `path` (transient.h5), with at least `needed` of them.
+    ///
+    /// # Collective
+    pub fn open(petsc: &Petsc, path: &Path, needed: usize) -> Result<Self, StatesError> {
+        let file = SeriesFile::open(petsc.world(), path)?;
+        let times = file.read("states/time")?;
+        let name = path.display().to_string();
+        if times.len() < needed {
+            return Err(StatesError::TooFew {
+                path: name,
+                found: times.len(),
+                needed,
+            });
+        }
+        Ok(StoredStates {
+            file,
+            path: name,
+            times,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+
+    /// The stored states at times in [from, to].
+    pub fn between(&self, from: f64, to: f64) -> Vec<usize> {
+        (0..self.len())
+            .filter(|&i| self.times[i] >= from && self.times[i] <= to)
+            .collect()
+    }
+
+    /// State `k` into `q` and `v` (each rank reads its own part).
+    ///
+    /// # Collective
+    pub fn read<'p>(
+        &self,
+        k: usize,
+        q: &mut Vector<'p>,
+        v: &mut Vector<'p>,
+    ) -> Result<(), StatesError> {
+        let columns = q.ownership();
+        let stored = self.file.columns("states/displacement")?;
+        if stored != q.global_len() {
+            return Err(StatesError::Layout {
+                path: self.path.clone(),
+                stored,
+                model: q.global_len(),
+            });
+        }
+        for (path, x) in [("states/displacement", q), ("states/velocity", v)] {
+            let part = self.file.read_row_part(path, k, columns.clone())?;
+            x.local_mut()?.copy_from_slice(&part);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,319 @@
+//! Stage 9: the time/frequency link on the transient's stored states (DESIGN.md §2b): modal
+//! sensors and dynamic stability along the cycle, each run when the scene's `[post]` asks.
+
+use std::path::Path;
+
+use super::transient::{mass_shape, Trajectory};
+use super::{Analyses, RunError};
+use crate::eigen::complex_modes::{ComplexModeSettings, DampingSettings};
+use crate::eigen::stability::ProjectedStability;
+use crate::la::{Petsc, Vector};
+use crate::post::dynamic_stability::{
+    choose_states, dynamic_stability, DynamicStability, DynamicStabilitySettings, Lift,
+    Linearization,
+};
+use crate::post::limit_cycle::LimitCycle;
+use crate::post::modal_energy::{modal_energy, ModalEnergy, ModalEnergySettings, ModalSensors};
+use crate::post::states::StoredStates;
+
+/// The modal energies with the basis' frequencies.
+pub struct ModalEnergyReport {
+    pub energy: ModalEnergy,
+    pub frequencies_hz: Vec<f64>,
+}
+
+/// Dynamic stability with what the summary says about its sampling.
+pub struct DynamicStabilityReport {
+    pub stability: DynamicStability,
+    pub period: f64,
+    pub states_per_period: f64,
+    pub wanted_per_period: usize,
+    pub state_interval: f64,
+    pub margin: f64,
+}
+
+/// The period of the run's vibration: the cycle's, else that of the dominant frequency.
+pub fn period_of(cycle: &LimitCycle) -> f64 {
+    cycle
+        .period
+        .unwrap_or(1.0 / cycle.dominant_frequency.max(1e-300))
+}
+
+/// Modal energies of every real mode along the stored states.
+///
+/// # Collective
+pub fn modal_energies<'p>(
+    petsc: &'p Petsc,
+    a: &Analyses<'p>,
+    stream: &Path,
+    settings: &ModalEnergySettings,
+    cycle: &LimitCycle,
+) -> Result<ModalEnergyReport, RunError> {
+    let modes = super::need(a.modes.as_ref(), "post.modal_energy", "[real_modes]")?;
+    let preload = super::need(a.preload.as_ref(), "post.modal_energy", "[statics]")?;
+    let reduction = a.reduced.as_ref().map(|r| &r.model.reduction);
+    let (m, q_static) = match &a.reduced {
+        Some(r) => (&r.model.mass, &r.q_static),
+        None => (&a.ops.m, &preload.state.displacement),
+    };
+    let mass_shapes = modes
+        .shapes
+        .iter()
+        .map(|phi| mass_shape(petsc, phi, m, reduction))
+        .collect::<Result<Vec<Vector>, _>>()?;
+    let states = StoredStates::open(petsc, stream, 2)?;
+    let sensors = ModalSensors {
+        mass_shapes: &mass_shapes,
+        omega2: &modes.eigenvalues,
+        mass: m,
+        q_static,
+    };
+    let energy = modal_energy(&states, &sensors, settings, period_of(cycle))?;
+    Ok(ModalEnergyReport {
+        energy,
+        frequencies_hz: modes.frequencies_hz.clone(),
+    })
+}
+
+/// Dynamic stability at the stored states of the last periods (or the scene's times).
+///
+/// # Collective
+#[allow(clippy::too_many_arguments)] // the run's parts it joins
+pub fn dynamic_stability_along<'p>(
+    petsc: &'p Petsc,
+    a: &Analyses<'p>,
+    damping: DampingSettings,
+    trajectory: &Trajectory,
+    stream: &Path,
+    settings: &DynamicStabilitySettings,
+    complex: Option<&ComplexModeSettings>,
+    state_interval: f64,
+    cycle: &LimitCycle,
+) -> Result<DynamicStabilityReport, RunError> {
+    let key = "post.dynamic_stability";
+    let modes = super::need(a.modes.as_ref(), key, "[real_modes]")?;
+    let preload = super::need(a.preload.as_ref(), key, "[statics]")?;
+    let (contact, nominal) = (&preload.contact, &preload.state.contact);
+    let stability = ProjectedStability::new(petsc.world(), contact, modes, nominal, damping)?;
+    let states = StoredStates::open(petsc, stream, 2)?;
+    let period = period_of(cycle);
+    let indices = choose_states(&states, settings, &cycle.cycle_starts, period);
+    if indices.is_empty() {
+        return Err(RunError::scene(
+            key,
+            format!(
+                "no stored state in the last {} periods of {period:.4e} s (states every {state_interval:.1e} s); lower 'transient.state_interval'",
+                settings.periods
+            ),
+        ));
+    }
+    let tr = &trajectory.signals;
+    let torque_signal = tr.braking_torque();
+    let torque = indices
+        .iter()
+        .map(|&i| {
+            let t = states.times[i];
+            let k = tr.time.partition_point(|&x| x < t).min(tr.time.len() - 1);
+            torque_signal[k]
+        })
+        .collect();
+    let (state_template, lift) = match &a.reduced {
+        Some(r) => (&r.q_static, Lift::Reduced(&r.model.reduction)),
+        None => (&preload.state.displacement, Lift::Full),
+    };
+    let margin = complex.map_or(ComplexModeSettings::default().instability_margin, |c| {
+        c.instability_margin
+    });
+    let lin = Linearization {
+        petsc,
+        contact,
+        nominal,
+        stability: &stability,
+        lift,
+        full_template: &preload.state.displacement,
+        state_template,
+        margin,
+    };
+    let stability = dynamic_stability(&states, &indices, torque, &lin)?;
+    let window = match &settings.times {
+        Some(_) => f64::NAN,
+        None => indices.len() as f64 / settings.periods as f64,
+    };
+    Ok(DynamicStabilityReport {
+        stability,
+        period,
+        states_per_period: window,
+        wanted_per_period: settings.per_period,
+        state_interval,
+        margin,
+    })
+}
+
+/// What the link analyses produced (None: not asked for).
+#[derive(Default)]
+pub struct Link {
+    pub modal_energy: Option<ModalEnergyReport>,
+    pub dynamic_stability: Option<DynamicStabilityReport>,
+}
+
+/// The link analyses `[post]` asks for, timed; `limit_cycle`: the run's characterization if
+/// `[post.limit_cycle]` made one (else the torque is characterized here for the period).
+///
+/// # Collective
+pub fn link<'p>(
+    petsc: &'p Petsc,
+    scene: &crate::scene::Scene,
+    a: &Analyses<'p>,
+    trajectory: &Trajectory,
+    limit_cycle: Option<&LimitCycle>,
+    stream: &Path,
+    timings: &mut super::Timings,
+) -> Result<Link, RunError> {
+    let (Some(post), Some(transient)) = (&scene.post, &scene.transient) else {
+        return Ok(Link::default());
+    };
+    if !post.uses_states() {
+        return Ok(Link::default());
+    }
+    let own;
+    let cycle = match limit_cycle {
+        Some(c) => c,
+        None => {
+            let tr = &trajectory.signals;
+            let settings = crate::post::limit_cycle::LimitCycleSettings::default();
+            let torque = tr.braking_torque();
+            own = crate::post::limit_cycle::characterize(
+                &tr.time,
+                &torque,
+                transient.step,
+                &settings,
+            );
+            &own
+        }
+    };
+    let mut out = Link::default();
+    if let Some(settings) = &post.modal_energy {
+        out.modal_energy = Some(timings.stage("modal energy", || {
+            modal_energies(petsc, a, stream, settings, cycle)
+        })?);
+    }
+    if let Some(settings) = &post.dynamic_stability {
+        let damping = scene.damping.unwrap_or_default();
+        out.dynamic_stability = Some(timings.stage("dynamic stability", || {
+            dynamic_stability_along(
+                petsc,
+                a,
+                damping,
+                trajectory,
+                stream,
+                settings,
+                scene.complex_modes.as_ref(),
+                transient.state_interval,
+                cycle,
+            )
+        })?);
+    }
+    Ok(out)
+}
+
+/// The summary's lines of the link analyses.
+pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+    if let Some(r) = &link.modal_energy {
+        let e = &r.energy;
+        let i = e
+            .times
+            .partition_point(|&t| t < e.at)
+            .min(e.times.len() - 1);
+        writeln!(
+            f,
+            "modal energy at t = {:.4e} s: {:.3e} J in the {} real modes, which hold {:.1} % of the kinetic energy; largest:",
+            e.at,
+            e.total(i),
+            e.energy.len(),
+            100.0 * e.kinetic_in_basis[i] / e.kinetic[i]
+        )?;
+        for m in &e.ranked {
+            writeln!(
+                f,
+                "    R{:<4} {:9.1} Hz {:6.1} % of the modal energy, oscillating by {:5.1} % over [{:.4e}, {:.4e}] s",
+                m.mode + 1,
+                r.frequencies_hz[m.mode],
+                100.0 * m.share,
+                100.0 * m.oscillation,
+                e.window.0,
+                e.window.1
+            )?;
+        }
+    }
+    if let Some(r) = &link.dynamic_stability {
+        let s = &r.stability;
+        let sampling = if r.states_per_period.is_nan() {
+            "at the scene's times".to_string()
+        } else if r.states_per_period + 0.5 < r.wanted_per_period as f64 {
+            format!(
+                "{:.1} per period, fewer than the {} wanted: lower 'transient.state_interval' ({:.1e} s) to {:.1e} s",
+                r.states_per_period,
+                r.wanted_per_period,
+                r.state_interval,
+                r.period / r.wanted_per_period as f64
+            )
+        } else {
+            format!("{:.1} per period", r.states_per_period)
+        };
+        writeln!(
+            f,
+            "dynamic stability at {} states from {:.4e} to {:.4e} s ({sampling}; period {:.4e} s), {:.3} s per linearization; {} nominal modes tracked, {} lost on the way:",
+            s.times.len(),
+            s.times.first().copied().unwrap_or(f64::NAN),
+            s.times.last().copied().unwrap_or(f64::NAN),
+            r.period,
+            s.seconds_per_point,
+            s.followed,
+            s.lost
+        )?;
+        if s.tracks.is_empty() {
+            writeln!(
+                f,
+                "    no mode is unstable at the static state or along the run"
+            )?;
+        }
+        for t in s.tracks.iter().filter(|t| t.headline(r.margin)) {
+            let (fr, z) = (t.frequencies_hz(), t.damping_ratios());
+            let range = |x: &[f64]| {
+                x[1..]
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    })
+            };
+            let ((f0, f1), (z0, z1)) = (range(&fr), range(&z));
+            let rest = if t.unstable_at_rest(r.margin) {
+                "unstable"
+            } else {
+                "stable"
+            };
+            writeln!(
+                f,
+                "    {:5} at rest {:.1} Hz, zeta {:.2e} ({rest}); along the run {:.1}..{:.1} Hz, zeta {:.2e}..{:.2e}, unstable {:.0} % of the time, mean zeta {:.2e}, correlation of zeta with the torque {:.2}",
+                t.name, fr[0], z[0], f0, f1, z0, z1,
+                100.0 * t.unstable_fraction,
+                t.mean_damping_ratio,
+                t.torque_correlation
+            )?;
+        }
+        let flickering: Vec<_> = s.tracks.iter().filter(|t| !t.headline(r.margin)).collect();
+        if let Some(most) = flickering
+            .iter()
+            .max_by(|a, b| a.unstable_fraction.total_cmp(&b.unstable_fraction))
+        {
+            writeln!(
+                f,
+                "    {} more modes, stable at rest and on average, are unstable for part of the time (longest: {} for {:.0} %; all in /post/dynamic_stability)",
+                flickering.len(),
+                most.name,
+                100.0 * most.unstable_fraction
+            )?;
+        }
+    }
+    Ok(())
+}
