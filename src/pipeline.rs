@@ -145,7 +145,18 @@ pub fn run_with(
             ))?;
         }
         if let Ok(link) = &link {
-            checked(output::link::write_link(petsc, &file, link, output))?;
+            let maps = match (&a.model, &a.preload) {
+                (Some(model), Some(p)) => Some(output::link::MapContext {
+                    mesh: &model.mesh,
+                    points: &p.contact.points,
+                    gauss: p.contact_settings.gauss_points,
+                    axis: p.contact_settings.axis(),
+                    disc_speed: p.contact_settings.disc_speed,
+                }),
+                _ => None,
+            };
+            let written = output::link::write_link(petsc, &file, link, maps.as_ref(), output);
+            checked(written)?;
         }
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {

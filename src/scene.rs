@@ -63,12 +63,17 @@ pub struct PostSettings {
     /// Complex modes of the tangent at stored states along the last periods, tracked.
     #[serde(default)]
     pub dynamic_stability: Option<crate::post::dynamic_stability::DynamicStabilitySettings>,
+    /// Contact pressure and stiffness per point at phases of the last cycle, per pad.
+    #[serde(default)]
+    pub contact_cycle: Option<crate::post::contact_cycle::ContactCycleSettings>,
 }
 
 impl PostSettings {
     /// Whether an analysis of the stored states is asked for (they need the period).
     pub fn uses_states(&self) -> bool {
-        self.modal_energy.is_some() || self.dynamic_stability.is_some()
+        self.modal_energy.is_some()
+            || self.dynamic_stability.is_some()
+            || self.contact_cycle.is_some()
     }
 }
 
@@ -432,12 +437,15 @@ impl Scene {
             if let Some(ds) = &post.dynamic_stability {
                 ds.validate()?;
             }
+            if let Some(cc) = &post.contact_cycle {
+                cc.validate()?;
+            }
             let stored = self.transient.as_ref().map_or(0.0, |t| t.state_interval);
             if post.uses_states() && stored <= 0.0 {
-                return Err("key 'post': modal_energy and dynamic_stability analyse the stored states: 'transient.state_interval' must be > 0".into());
+                return Err("key 'post': modal_energy, dynamic_stability and contact_cycle analyse the stored states: 'transient.state_interval' must be > 0".into());
             }
             if post.uses_states() && (self.statics.is_none() || self.real_modes.is_none()) {
-                return Err("key 'post': modal_energy and dynamic_stability work on the real modes of the preloaded model: they need [statics] and [real_modes]".into());
+                return Err("key 'post': modal_energy, dynamic_stability and contact_cycle work on the preloaded model and its real modes: they need [statics] and [real_modes]".into());
             }
         }
         for e in &self.output.export_matrices {

@@ -9,7 +9,20 @@ use crate::contact::surface::{cross, dot, sub, Face};
 use crate::fem::quadrature::gauss_legendre;
 use crate::mesh::Mesh;
 
-/// Draws `values` (one per point, point-id order) of the points of `interface`.
+/// A rendered map: RGB pixels (row-major) with the colour bar on the right, and the value
+/// range of the bar (bottom, top).
+pub struct MapImage {
+    pub width: usize,
+    pub height: usize,
+    pub rgb: Vec<u8>,
+    pub range: (f64, f64),
+}
+
+/// Width of the colour bar at the right of a map (pixels, with its margin).
+pub const BAR: usize = 60;
+
+/// Draws `values` (one per point, point-id order) of the points of `interface` into a PNG,
+/// its title and range in the file's text chunks.
 #[allow(clippy::too_many_arguments)]
 pub fn write_map(
     path: &Path,
@@ -21,7 +34,50 @@ pub fn write_map(
     axis: Axis,
     label: &str,
 ) -> std::io::Result<()> {
-    let (width, height, bar) = (900usize, 700usize, 60usize);
+    let Some(map) = render_map(
+        mesh,
+        points,
+        values,
+        interface,
+        gauss,
+        axis,
+        None,
+        (900, 700),
+    ) else {
+        return Ok(());
+    };
+    let (width, height, rgb, (lo_v, hi_v)) = (map.width, map.height, map.rgb, map.range);
+    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
+    let mut encoder = png::Encoder::new(file, width as u32, height as u32);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .add_text_chunk("Title".into(), label.into())
+        .map_err(std::io::Error::other)?;
+    encoder
+        .add_text_chunk(
+            "Range".into(),
+            format!("{lo_v:.6e} (bottom of bar) .. {hi_v:.6e} (top)"),
+        )
+        .map_err(std::io::Error::other)?;
+    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+    writer.write_image_data(&rgb).map_err(std::io::Error::other)
+}
+
+/// Renders `values` of the points of `interface` in the disc plane (`range`: of the colour
+/// bar; None: the values' own), or None when the interface has no point.
+#[allow(clippy::too_many_arguments)] // the field, where it lives and how to draw it
+pub fn render_map(
+    mesh: &Mesh,
+    points: &[ContactPoint],
+    values: &[f64],
+    interface: usize,
+    gauss: usize,
+    axis: Axis,
+    range: Option<(f64, f64)>,
+    (width, height): (usize, usize),
+) -> Option<MapImage> {
+    let bar = BAR;
     // In-plane frame: e1 = any direction normal to the axis, e2 = axis x e1.
     let a = axis.direction;
     let seed = if a[0].abs() < 0.9 {
@@ -39,13 +95,15 @@ pub fn write_map(
         .filter(|&i| points[i].interface == interface)
         .collect();
     if mine.is_empty() {
-        return Ok(());
+        return None;
     }
-    let (lo_v, hi_v) = mine
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| {
-            (l.min(values[i]), h.max(values[i]))
-        });
+    let (lo_v, hi_v) = range.unwrap_or_else(|| {
+        mine.iter()
+            .filter(|&&i| values[i].is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| {
+                (l.min(values[i]), h.max(values[i]))
+            })
+    });
     // Polygons (in the plane) with their values.
     let (gp, _) = gauss_legendre(gauss.clamp(1, 4));
     let mut bounds = vec![-1.0];
@@ -124,21 +182,12 @@ pub fn write_map(
             rgb[3 * (y * width + x)..3 * (y * width + x) + 3].copy_from_slice(&c);
         }
     }
-    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    let mut encoder = png::Encoder::new(file, width as u32, height as u32);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .add_text_chunk("Title".into(), label.into())
-        .map_err(std::io::Error::other)?;
-    encoder
-        .add_text_chunk(
-            "Range".into(),
-            format!("{lo_v:.6e} (bottom of bar) .. {hi_v:.6e} (top)"),
-        )
-        .map_err(std::io::Error::other)?;
-    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
-    writer.write_image_data(&rgb).map_err(std::io::Error::other)
+    Some(MapImage {
+        width,
+        height,
+        rgb,
+        range: (lo_v, hi_v),
+    })
 }
 
 /// Blue - cyan - green - yellow - red.

@@ -166,6 +166,27 @@ impl Figure {
         f
     }
 
+    /// A white canvas without axes, to compose panels on (`blit`, `text`).
+    pub fn canvas(width: usize, height: usize) -> Figure {
+        Figure {
+            width,
+            height,
+            rgb: vec![255; width * height * 3],
+            area: [0.0, 0.0, width as f64, height as f64],
+            x: (0.0, 1.0),
+            y: (0.0, 1.0),
+        }
+    }
+
+    /// Copies an RGB image (row-major, `w` wide) with its top-left corner at pixel (x, y).
+    pub fn blit(&mut self, x: usize, y: usize, w: usize, rgb: &[u8]) {
+        for (row, line) in rgb.chunks(3 * w).enumerate() {
+            for (col, c) in line.chunks(3).enumerate() {
+                self.put((x + col) as i64, (y + row) as i64, [c[0], c[1], c[2]]);
+            }
+        }
+    }
+
     /// Data coordinates to pixels.
     pub fn px(&self, x: f64, y: f64) -> (f64, f64) {
         let [l, t, r, b] = self.area;

@@ -8,13 +8,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::states::{StatesError, StoredStates};
-use crate::contact::{ContactModel, ContactState};
+use super::states::{ContactAt, StatesError, StoredStates};
+use crate::contact::ContactState;
 use crate::eigen::complex_modes::{damping_ratio, frequency_hz, projected_coordinates};
 use crate::eigen::stability::ProjectedStability;
 use crate::eigen::tracking::track;
-use crate::la::{LaError, Petsc, Vector};
-use crate::reduce::Reduction;
+use crate::la::LaError;
 
 /// `[post.dynamic_stability]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -111,23 +110,12 @@ pub struct DynamicStability {
     pub seconds_per_point: f64,
 }
 
-/// How the stored states map to the full model's unknowns (where the contact is observed).
-pub enum Lift<'a> {
-    Full,
-    Reduced(&'a Reduction),
-}
-
-/// What the linearizations need: the full model's contact, the nominal state's projection.
+/// What the linearizations need: the contact at the stored states, the nominal state and
+/// its projection.
 pub struct Linearization<'a, 'p> {
-    pub petsc: &'p Petsc<'p>,
-    pub contact: &'a ContactModel<'p>,
+    pub at: ContactAt<'a, 'p>,
     pub nominal: &'a ContactState,
     pub stability: &'a ProjectedStability,
-    pub lift: Lift<'a>,
-    /// A full-model vector (its layout).
-    pub full_template: &'a Vector<'p>,
-    /// A vector of the stored states' layout.
-    pub state_template: &'a Vector<'p>,
     pub margin: f64,
 }
 
@@ -141,30 +129,17 @@ pub fn dynamic_stability(
     torque: Vec<f64>,
     lin: &Linearization,
 ) -> Result<DynamicStability, StatesError> {
+    let (petsc, contact) = (lin.at.petsc, lin.at.contact);
     let (kp, cp) = lin
         .stability
-        .operators_at(lin.petsc.world(), lin.contact, lin.nominal);
+        .operators_at(petsc.world(), contact, lin.nominal);
     let size = lin.stability.projection.size;
     let nominal = projected_coordinates(size, &kp, &cp).map_err(LaError::Invalid)?;
     let mut points = vec![nominal];
-    let mut x = lin.state_template.duplicate()?;
-    let mut xv = lin.state_template.duplicate()?;
-    let mut q = lin.full_template.duplicate()?;
-    let mut v = lin.full_template.duplicate()?;
     let start = std::time::Instant::now();
     for &i in indices {
-        states.read(i, &mut x, &mut xv)?;
-        let state = match lin.lift {
-            Lift::Full => lin.contact.evaluate(&x, Some(&xv), 1.0)?,
-            Lift::Reduced(r) => {
-                r.recover(lin.petsc, &x, &mut q)?;
-                r.recover(lin.petsc, &xv, &mut v)?;
-                lin.contact.evaluate(&q, Some(&v), 1.0)?
-            }
-        };
-        let (kp, cp) = lin
-            .stability
-            .operators_at(lin.petsc.world(), lin.contact, &state);
+        let state = lin.at.state(states, i)?;
+        let (kp, cp) = lin.stability.operators_at(petsc.world(), contact, &state);
         points.push(projected_coordinates(size, &kp, &cp).map_err(LaError::Invalid)?);
     }
     let seconds_per_point = start.elapsed().as_secs_f64() / indices.len().max(1) as f64;

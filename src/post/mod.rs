@@ -1,7 +1,9 @@
-//! Analyses of a trajectory (DESIGN.md §2b): spectra, the limit cycle, modal energies and
-//! dynamic stability along the cycle; pseudo trajectories belong here too. Writers of their
+//! Analyses of a trajectory (DESIGN.md §2b): spectra, the limit cycle, modal energies, the
+//! contact state over the cycle and dynamic stability along it; pseudo trajectories belong
+//! here too. Writers of their
 //! results live in `io::output`.
 
+pub mod contact_cycle;
 pub mod dynamic_stability;
 pub mod limit_cycle;
 pub mod modal_energy;

@@ -5,9 +5,11 @@
 
 use std::path::Path;
 
+use crate::contact::{ContactModel, ContactState};
 use crate::io::results::ResultsError;
 use crate::io::series::SeriesFile;
 use crate::la::{LaError, Petsc, Vector};
+use crate::reduce::Reduction;
 
 /// Why the stored states cannot be analysed.
 #[derive(Debug, thiserror::Error)]
@@ -100,5 +102,42 @@ impl StoredStates {
             x.local_mut()?.copy_from_slice(&part);
         }
         Ok(())
+    }
+}
+
+/// How the stored states map to the full model's unknowns (where the contact is observed).
+pub enum Lift<'a> {
+    Full,
+    Reduced(&'a Reduction),
+}
+
+/// The full model's contact evaluated at stored states.
+pub struct ContactAt<'a, 'p> {
+    pub petsc: &'p Petsc<'p>,
+    pub contact: &'a ContactModel<'p>,
+    pub lift: Lift<'a>,
+    /// A full-model vector (its layout) and one of the stored states' layout.
+    pub full_template: &'a Vector<'p>,
+    pub state_template: &'a Vector<'p>,
+}
+
+impl ContactAt<'_, '_> {
+    /// The contact state (gaps, slips, sliding speeds and the laws' response) at state `k`.
+    ///
+    /// # Collective
+    pub fn state(&self, states: &StoredStates, k: usize) -> Result<ContactState, StatesError> {
+        let mut x = self.state_template.duplicate()?;
+        let mut xv = self.state_template.duplicate()?;
+        states.read(k, &mut x, &mut xv)?;
+        Ok(match self.lift {
+            Lift::Full => self.contact.evaluate(&x, Some(&xv), 1.0)?,
+            Lift::Reduced(r) => {
+                let mut q = self.full_template.duplicate()?;
+                let mut v = self.full_template.duplicate()?;
+                r.recover(self.petsc, &x, &mut q)?;
+                r.recover(self.petsc, &xv, &mut v)?;
+                self.contact.evaluate(&q, Some(&v), 1.0)?
+            }
+        })
     }
 }

@@ -8,13 +8,13 @@ use super::{Analyses, RunError};
 use crate::eigen::complex_modes::{ComplexModeSettings, DampingSettings};
 use crate::eigen::stability::ProjectedStability;
 use crate::la::{Petsc, Vector};
+use crate::post::contact_cycle::{contact_cycle, phase_states, ContactCycle, ContactCycleSettings};
 use crate::post::dynamic_stability::{
-    choose_states, dynamic_stability, DynamicStability, DynamicStabilitySettings, Lift,
-    Linearization,
+    choose_states, dynamic_stability, DynamicStability, DynamicStabilitySettings, Linearization,
 };
 use crate::post::limit_cycle::LimitCycle;
 use crate::post::modal_energy::{modal_energy, ModalEnergy, ModalEnergySettings, ModalSensors};
-use crate::post::states::StoredStates;
+use crate::post::states::{ContactAt, Lift, StoredStates};
 
 /// The modal energies with the basis' frequencies.
 pub struct ModalEnergyReport {
@@ -117,21 +117,13 @@ pub fn dynamic_stability_along<'p>(
             torque_signal[k]
         })
         .collect();
-    let (state_template, lift) = match &a.reduced {
-        Some(r) => (&r.q_static, Lift::Reduced(&r.model.reduction)),
-        None => (&preload.state.displacement, Lift::Full),
-    };
     let margin = complex.map_or(ComplexModeSettings::default().instability_margin, |c| {
         c.instability_margin
     });
     let lin = Linearization {
-        petsc,
-        contact,
+        at: contact_at(petsc, a, preload),
         nominal,
         stability: &stability,
-        lift,
-        full_template: &preload.state.displacement,
-        state_template,
         margin,
     };
     let stability = dynamic_stability(&states, &indices, torque, &lin)?;
@@ -149,11 +141,71 @@ pub fn dynamic_stability_along<'p>(
     })
 }
 
+/// The contact over the cycle with how many phases were asked.
+pub struct ContactCycleReport {
+    pub cycle: ContactCycle,
+    pub wanted_phases: usize,
+}
+
+/// The contact state at phases of the last cycle.
+///
+/// # Collective
+pub fn contact_over_cycle<'p>(
+    petsc: &'p Petsc,
+    a: &Analyses<'p>,
+    stream: &Path,
+    settings: &ContactCycleSettings,
+    cycle: &LimitCycle,
+) -> Result<ContactCycleReport, RunError> {
+    let preload = super::need(a.preload.as_ref(), "post.contact_cycle", "[statics]")?;
+    let contact = &preload.contact;
+    let states = StoredStates::open(petsc, stream, 2)?;
+    let (indices, period) = phase_states(
+        &states,
+        settings.phases,
+        &cycle.cycle_starts,
+        period_of(cycle),
+    );
+    let at = contact_at(petsc, a, preload);
+    let pads: Vec<(usize, String)> = contact
+        .interfaces
+        .iter()
+        .enumerate()
+        .filter(|(_, i)| i.friction.is_sliding())
+        .map(|(k, i)| (k, i.name.clone()))
+        .collect();
+    Ok(ContactCycleReport {
+        cycle: contact_cycle(&states, &at, &indices, period, &pads)?,
+        wanted_phases: settings.phases,
+    })
+}
+
+/// The full model's contact at the stored states (recovered from the reduced unknowns when
+/// the transient ran reduced).
+fn contact_at<'a, 'p>(
+    petsc: &'p Petsc,
+    a: &'a Analyses<'p>,
+    preload: &'a super::statics::Preloaded<'p>,
+) -> ContactAt<'a, 'p> {
+    let (state_template, lift) = match &a.reduced {
+        Some(r) => (&r.q_static, Lift::Reduced(&r.model.reduction)),
+        None => (&preload.state.displacement, Lift::Full),
+    };
+    ContactAt {
+        petsc,
+        contact: &preload.contact,
+        lift,
+        full_template: &preload.state.displacement,
+        state_template,
+    }
+}
+
 /// What the link analyses produced (None: not asked for).
 #[derive(Default)]
 pub struct Link {
     pub modal_energy: Option<ModalEnergyReport>,
     pub dynamic_stability: Option<DynamicStabilityReport>,
+    pub contact_cycle: Option<ContactCycleReport>,
 }
 
 /// The link analyses `[post]` asks for, timed; `limit_cycle`: the run's characterization if
@@ -195,6 +247,11 @@ pub fn link<'p>(
     if let Some(settings) = &post.modal_energy {
         out.modal_energy = Some(timings.stage("modal energy", || {
             modal_energies(petsc, a, stream, settings, cycle)
+        })?);
+    }
+    if let Some(settings) = &post.contact_cycle {
+        out.contact_cycle = Some(timings.stage("contact cycle", || {
+            contact_over_cycle(petsc, a, stream, settings, cycle)
         })?);
     }
     if let Some(settings) = &post.dynamic_stability {
@@ -242,6 +299,31 @@ pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Resul
                 100.0 * m.oscillation,
                 e.window.0,
                 e.window.1
+            )?;
+        }
+    }
+    if let Some(r) = &link.contact_cycle {
+        let c = &r.cycle;
+        writeln!(
+            f,
+            "contact over the last cycle ({} phases of {} asked, period {:.4e} s, from {:.4e} s):",
+            c.times.len(),
+            r.wanted_phases,
+            c.period,
+            c.times.first().copied().unwrap_or(f64::NAN)
+        )?;
+        for p in &c.pads {
+            let (hi, lo) = p.extreme_phases;
+            writeln!(
+                f,
+                "    {:26} largest stiffness {:.3e}..{:.3e} Pa/m (varies by {:.0} %), open {:.1} %, sticking {:.1} %, sliding {:.1} %",
+                p.name,
+                p.largest_stiffness[lo],
+                p.largest_stiffness[hi],
+                100.0 * p.variation,
+                100.0 * p.fractions[0],
+                100.0 * p.fractions[1],
+                100.0 * p.fractions[2]
             )?;
         }
     }

@@ -4,19 +4,41 @@
 use std::path::Path;
 
 use super::WriteError;
+use crate::contact::pairing::{Axis, ContactPoint};
+use crate::io::contact_map::{render_map, BAR};
 use crate::io::plot::{colormap, padded, Figure, BLACK, BLUE, GREY, PALETTE, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
+use crate::mesh::Mesh;
+use crate::post::contact_cycle::{ContactCycle, PadCycle};
 use crate::post::dynamic_stability::TrackedMode;
-use crate::stages::link::{DynamicStabilityReport, Link, ModalEnergyReport};
+use crate::stages::link::{ContactCycleReport, DynamicStabilityReport, Link, ModalEnergyReport};
+
+/// What the contact maps are drawn on.
+pub struct MapContext<'a> {
+    pub mesh: &'a Mesh,
+    pub points: &'a [ContactPoint],
+    pub gauss: usize,
+    pub axis: Axis,
+    pub disc_speed: f64,
+}
 
 /// # Collective
 pub fn write_link(
     petsc: &Petsc,
     file: &ResultsFile,
     link: &Link,
+    maps: Option<&MapContext>,
     output: &Path,
 ) -> Result<(), WriteError> {
+    if let Some(r) = &link.contact_cycle {
+        write_contact_cycle(file, r)?;
+        if let (Some(maps), 0) = (maps, petsc.rank()) {
+            for pad in &r.cycle.pads {
+                plot_contact_cycle(r, pad, maps, output)?;
+            }
+        }
+    }
     if let Some(r) = &link.modal_energy {
         write_modal_energy(file, r)?;
         if petsc.rank() == 0 {
@@ -295,4 +317,125 @@ fn shown(r: &DynamicStabilityReport) -> Vec<&TrackedMode> {
         .filter(|t| t.headline(r.margin))
         .take(PALETTE.len())
         .collect()
+}
+
+fn write_contact_cycle(file: &ResultsFile, r: &ContactCycleReport) -> Result<(), WriteError> {
+    let g = "post/contact_cycle";
+    let c = &r.cycle;
+    file.write_table(&format!("{g}/time"), &c.times, "s")?;
+    file.set_number(g, "period_s", c.period)?;
+    let phase_major = "phase-major: every contact point (point-id order, as /static/contact) at the first phase, then the next";
+    for (name, field, units) in [
+        ("pressure", &c.pressure, "Pa"),
+        ("contact_stiffness", &c.stiffness, "Pa/m"),
+        ("status", &c.status, "0 open, 1 stick, 2 slip"),
+    ] {
+        let flat: Vec<f64> = field.iter().flatten().copied().collect();
+        file.write_table(
+            &format!("{g}/{name}"),
+            &flat,
+            &format!("{units}; {phase_major}"),
+        )?;
+        if name == "status" {
+            continue;
+        }
+        let [lo, hi, variation] = ContactCycle::spread(field);
+        file.write_table(&format!("{g}/{name}_min"), &lo, units)?;
+        file.write_table(&format!("{g}/{name}_max"), &hi, units)?;
+        file.write_table(
+            &format!("{g}/{name}_variation"),
+            &variation,
+            "(max - min) / max over the phases",
+        )?;
+    }
+    for p in &c.pads {
+        let pad = format!("{g}/pads/{}", p.name);
+        file.write_table(
+            &format!("{pad}/largest_stiffness"),
+            &p.largest_stiffness,
+            "Pa/m, per phase",
+        )?;
+        file.set_number(&pad, "largest_stiffness_variation", p.variation)?;
+        for (k, what) in ["open", "stick", "slip"].iter().enumerate() {
+            file.set_number(&pad, &format!("{what}_fraction"), p.fractions[k])?;
+        }
+    }
+    Ok(())
+}
+
+/// contact_cycle_<pad>.png: the contact stiffness at the phases where the pad's largest
+/// stiffness is highest and lowest (one colour scale), and its variation over the cycle.
+fn plot_contact_cycle(
+    r: &ContactCycleReport,
+    pad: &PadCycle,
+    maps: &MapContext,
+    output: &Path,
+) -> Result<(), WriteError> {
+    let c = &r.cycle;
+    let (hi, lo) = pad.extreme_phases;
+    let [_, max, variation] = ContactCycle::spread(&c.stiffness);
+    let mine: Vec<usize> = (0..maps.points.len())
+        .filter(|&j| maps.points[j].interface == pad.interface)
+        .collect();
+    let top = mine.iter().map(|&j| max[j]).fold(0.0, f64::max);
+    let (map_w, map_h, label_w) = (470usize, 420usize, 110usize);
+    let panel_w = map_w + label_w;
+    let mut canvas = Figure::canvas(3 * panel_w, map_h + 90);
+    let title = format!(
+        "{}: contact stiffness over one period of {:.4e} s ({} phases); largest varies by {:.0} %",
+        pad.name,
+        c.period,
+        c.times.len(),
+        100.0 * pad.variation
+    );
+    canvas.text(10.0, 8.0, &title, BLACK, 2);
+    let panels: [(&str, &[f64], Option<(f64, f64)>, &str); 3] = [
+        ("stiffest phase", &c.stiffness[hi], Some((0.0, top)), "Pa/m"),
+        ("softest phase", &c.stiffness[lo], Some((0.0, top)), "Pa/m"),
+        ("variation (max-min)/max", &variation, Some((0.0, 1.0)), "1"),
+    ];
+    for (k, (name, values, range, units)) in panels.into_iter().enumerate() {
+        let x = k * panel_w;
+        let label = match k {
+            0 => format!("{name}, t = {:.5e} s", c.times[hi]),
+            1 => format!("{name}, t = {:.5e} s", c.times[lo]),
+            _ => name.to_string(),
+        };
+        canvas.text(x as f64 + 10.0, 40.0, &label, BLACK, 1);
+        let image = render_map(
+            maps.mesh,
+            maps.points,
+            values,
+            pad.interface,
+            maps.gauss,
+            maps.axis,
+            range,
+            (map_w, map_h),
+        );
+        let Some(image) = image else { continue };
+        canvas.blit(x, 55, image.width, &image.rgb);
+        let bar_x = (x + map_w - BAR + 44) as f64;
+        canvas.text(
+            bar_x,
+            58.0,
+            &format!("{:.2e} {units}", image.range.1),
+            BLACK,
+            1,
+        );
+        let bottom = (55 + map_h - 18) as f64;
+        canvas.text(bar_x, bottom, &format!("{:.2e}", image.range.0), BLACK, 1);
+    }
+    let turning = if maps.disc_speed >= 0.0 {
+        "counter-clockwise"
+    } else {
+        "clockwise"
+    };
+    let caption = format!(
+        "in the disc plane, seen from the tip of the rotation axis: the disc turns {turning}; colour bars: bottom to top"
+    );
+    canvas.text(10.0, (map_h + 65) as f64, &caption, BLACK, 1);
+    let path = output.join(format!("contact_cycle_{}.png", pad.name));
+    canvas
+        .save(&path)
+        .map_err(|source| WriteError::Io { path, source })
 }
