@@ -389,7 +389,9 @@ fn plot_contact_cycle(
         100.0 * pad.variation
     );
     canvas.text(10.0, 8.0, &title, BLACK, 2);
-    let panels: [(&str, &[f64], Option<(f64, f64)>, &str); 3] = [
+    // (title, values, colour range, units) per panel.
+    type Panel<'v> = (&'v str, &'v [f64], Option<(f64, f64)>, &'v str);
+    let panels: [Panel; 3] = [
         ("stiffest phase", &c.stiffness[hi], Some((0.0, top)), "Pa/m"),
         ("softest phase", &c.stiffness[lo], Some((0.0, top)), "Pa/m"),
         ("variation (max-min)/max", &variation, Some((0.0, 1.0)), "1"),
