@@ -146,13 +146,16 @@ pub fn run_with(
         }
         if let Ok(link) = &link {
             let maps = match (&a.model, &a.preload) {
-                (Some(model), Some(p)) => Some(output::link::MapContext {
-                    mesh: &model.mesh,
-                    points: &p.contact.points,
-                    gauss: p.contact_settings.gauss_points,
-                    axis: p.contact_settings.axis(),
-                    disc_speed: p.contact_settings.disc_speed,
-                }),
+                (Some(model), Some(p)) => {
+                    a.ops.dofs.as_ref().map(|dofs| output::link::MapContext {
+                        dofs,
+                        mesh: &model.mesh,
+                        points: &p.contact.points,
+                        gauss: p.contact_settings.gauss_points,
+                        axis: p.contact_settings.axis(),
+                        disc_speed: p.contact_settings.disc_speed,
+                    })
+                }
                 _ => None,
             };
             let written = output::link::write_link(petsc, &file, link, maps.as_ref(), output);
@@ -160,7 +163,11 @@ pub fn run_with(
         }
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
-        let written = output::write_xdmf_and_preview(output, model, a.modes.as_ref(), &a.complex);
+        let shapes = link
+            .as_ref()
+            .map_or(Vec::new(), output::link::tracked_shape_fields);
+        let (modes, complex) = (a.modes.as_ref(), &a.complex);
+        let written = output::write_xdmf_and_preview(output, model, modes, complex, shapes);
         checked(written)?;
     }
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();

@@ -107,16 +107,7 @@ pub fn phase_states(
         _ => (last - period, last),
     };
     let mut chosen: Vec<usize> = (0..phases)
-        .map(|k| {
-            let t = t0 + (t1 - t0) * k as f64 / phases as f64;
-            (0..states.len())
-                .min_by(|&a, &b| {
-                    (states.times[a] - t)
-                        .abs()
-                        .total_cmp(&(states.times[b] - t).abs())
-                })
-                .unwrap_or(0)
-        })
+        .map(|k| states.nearest(t0 + (t1 - t0) * k as f64 / phases as f64))
         .collect();
     chosen.dedup();
     (chosen, t1 - t0)

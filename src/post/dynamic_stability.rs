@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::states::{ContactAt, StatesError, StoredStates};
 use crate::contact::ContactState;
-use crate::eigen::complex_modes::{damping_ratio, frequency_hz, projected_coordinates};
+use crate::eigen::complex_modes::{damping_ratio, frequency_hz, projected_coordinates, Complex};
 use crate::eigen::stability::ProjectedStability;
 use crate::eigen::tracking::track;
 use crate::la::LaError;
@@ -76,6 +76,9 @@ pub struct TrackedMode {
     pub unstable_fraction: f64,
     pub mean_damping_ratio: f64,
     pub torque_correlation: f64,
+    /// Its modal coordinates (on the real modes) where its frequency is highest and lowest
+    /// along the run: (point index into `eigenvalue`, coordinates).
+    pub extremes: [(usize, Vec<Complex>); 2],
 }
 
 impl TrackedMode {
@@ -160,6 +163,14 @@ pub fn dynamic_stability(
         }
         let along = &eigenvalue[1..];
         let zeta: Vec<f64> = along.iter().map(|&s| damping_ratio(s)).collect();
+        let extremes = [true, false].map(|highest| {
+            let i = extreme_point(&eigenvalue, highest);
+            let y = points[i]
+                .iter()
+                .find(|(s, _)| *s == eigenvalue[i])
+                .map_or_else(Vec::new, |(_, y)| y.clone());
+            (i, y)
+        });
         tracks.push(TrackedMode {
             name: format!("C{}", k + 1),
             mac: t.iter().map(|p| p.map_or(f64::NAN, |p| p.1)).collect(),
@@ -167,6 +178,7 @@ pub fn dynamic_stability(
                 / along.len().max(1) as f64,
             mean_damping_ratio: zeta.iter().sum::<f64>() / zeta.len().max(1) as f64,
             torque_correlation: correlation(&zeta, &torque),
+            extremes,
             eigenvalue,
         });
     }
@@ -178,6 +190,22 @@ pub fn dynamic_stability(
         lost,
         seconds_per_point,
     })
+}
+
+/// The point (after the static state, 0 when there is none) where the frequency is highest
+/// (or lowest).
+fn extreme_point(eigenvalue: &[(f64, f64)], highest: bool) -> usize {
+    (1..eigenvalue.len())
+        .filter(|&i| eigenvalue[i].1.is_finite())
+        .max_by(|&a, &b| {
+            let order = eigenvalue[a].1.total_cmp(&eigenvalue[b].1);
+            if highest {
+                order
+            } else {
+                order.reverse()
+            }
+        })
+        .unwrap_or(0)
 }
 
 /// Pearson correlation of two series (NaN when either is constant or holds NaN).
@@ -203,18 +231,7 @@ pub fn choose_states(
     period: f64,
 ) -> Vec<usize> {
     if let Some(times) = &settings.times {
-        let mut chosen: Vec<usize> = times
-            .iter()
-            .map(|&t| {
-                (0..states.len())
-                    .min_by(|&a, &b| {
-                        (states.times[a] - t)
-                            .abs()
-                            .total_cmp(&(states.times[b] - t).abs())
-                    })
-                    .unwrap_or(0)
-            })
-            .collect();
+        let mut chosen: Vec<usize> = times.iter().map(|&t| states.nearest(t)).collect();
         chosen.dedup();
         return chosen;
     }

@@ -1,14 +1,17 @@
 //! Modal sensors along a run (DESIGN.md §2b; the paper's fig. 6 right): for every real mode
 //! k of the basis, the modal coordinate eta_k(t) = phi_k^T M (q(t) - q_static) and its energy
 //! E_k = (etadot_k^2 + omega_k^2 eta_k^2) / 2 at every stored state; the modes that hold the
-//! most energy at a chosen time, their share and how much it oscillates over the last cycles.
+//! most energy before a chosen time, their share and how much it oscillates over the last
+//! cycles. The transient takes the samples as it runs (with every stored state): a restart
+//! may recompute a reduction basis rotated, which the stored states' coordinates are on, but
+//! not the modes' own coordinates.
 //! On a reduced model phi_k is the mode's exact reduced representation (the modes lie in the
 //! reduction's span) and M the reduced mass, so eta_k is the same number as on the full model.
 
 use serde::{Deserialize, Serialize};
 
-use super::states::{StatesError, StoredStates};
-use crate::la::{SparseMatrix, Vector};
+use super::states::nearest;
+use crate::la::{LaError, SparseMatrix, Vector};
 
 /// `[post.modal_energy]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -59,12 +62,39 @@ impl ModalEnergySettings {
 }
 
 /// The real modes as sensors, in the integrated unknowns: M x_k (x_k the mode's coordinates)
-/// and omega_k^2.
+/// and omega_k^2. The transient takes a sample at every stored state.
 pub struct ModalSensors<'a, 'p> {
     pub mass_shapes: &'a [Vector<'p>],
     pub omega2: &'a [f64],
     pub mass: &'a SparseMatrix<'p>,
     pub q_static: &'a Vector<'p>,
+}
+
+/// The modal coordinates and velocities of one state, and its kinetic energy v'Mv/2.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModalSample {
+    pub eta: Vec<f64>,
+    pub eta_dot: Vec<f64>,
+    pub kinetic: f64,
+}
+
+impl ModalSensors<'_, '_> {
+    /// eta_k = (M x_k)'(q - q_static), etadot_k = (M x_k)'v, and v'Mv/2.
+    ///
+    /// # Collective
+    pub fn sample(&self, q: &Vector, v: &Vector) -> Result<ModalSample, LaError> {
+        let shapes: Vec<&Vector> = self.mass_shapes.iter().collect();
+        let at_rest = self.q_static.mdot(&shapes)?;
+        let eta = q.mdot(&shapes)?;
+        let eta_dot = v.mdot(&shapes)?;
+        let mut mv = v.duplicate()?;
+        self.mass.mult(v, &mut mv)?;
+        Ok(ModalSample {
+            eta: eta.iter().zip(&at_rest).map(|(e, r)| e - r).collect(),
+            eta_dot,
+            kinetic: 0.5 * v.dot(&mv)?,
+        })
+    }
 }
 
 /// One ranked mode over the window before the ranking time.
@@ -103,40 +133,30 @@ impl ModalEnergy {
     }
 }
 
-/// The modal energies along the stored states; `period`: of the run's dominant vibration (s),
-/// for the oscillation window.
-///
-/// # Collective
+/// The modal energies from the samples taken at `times`; `period`: of the run's dominant
+/// vibration (s), for the oscillation window.
 pub fn modal_energy(
-    states: &StoredStates,
-    sensors: &ModalSensors,
+    times: &[f64],
+    samples: &[ModalSample],
+    omega2: &[f64],
     settings: &ModalEnergySettings,
     period: f64,
-) -> Result<ModalEnergy, StatesError> {
-    let shapes: Vec<&Vector> = sensors.mass_shapes.iter().collect();
-    let modes = shapes.len();
-    let eta_static = sensors.q_static.mdot(&shapes)?;
-    let mut q = sensors.q_static.duplicate()?;
-    let mut v = sensors.q_static.duplicate()?;
-    let mut mv = sensors.q_static.duplicate()?;
-    let n = states.len();
+) -> ModalEnergy {
+    let modes = omega2.len();
+    let n = samples.len();
     let mut energy = vec![Vec::with_capacity(n); modes];
     let (mut kinetic, mut kinetic_in_basis) = (Vec::with_capacity(n), Vec::with_capacity(n));
-    for i in 0..n {
-        states.read(i, &mut q, &mut v)?;
-        let eta = q.mdot(&shapes)?;
-        let eta_dot = v.mdot(&shapes)?;
+    for s in samples {
         let mut basis_kinetic = 0.0;
         for k in 0..modes {
-            let e = eta[k] - eta_static[k];
-            energy[k].push(0.5 * (eta_dot[k].powi(2) + sensors.omega2[k] * e * e));
-            basis_kinetic += 0.5 * eta_dot[k].powi(2);
+            let e = s.eta[k];
+            energy[k].push(0.5 * (s.eta_dot[k].powi(2) + omega2[k] * e * e));
+            basis_kinetic += 0.5 * s.eta_dot[k].powi(2);
         }
-        sensors.mass.mult(&v, &mut mv)?;
-        kinetic.push(0.5 * v.dot(&mv)?);
+        kinetic.push(s.kinetic);
         kinetic_in_basis.push(basis_kinetic);
     }
-    let times = states.times.clone();
+    let times = times[..n].to_vec();
     let last = times.last().copied().unwrap_or(0.0);
     let at_index = nearest(&times, settings.at.unwrap_or(last));
     let at = times.get(at_index).copied().unwrap_or(0.0);
@@ -166,7 +186,7 @@ pub fn modal_energy(
             oscillation: oscillation(&energy[k], &in_window),
         })
         .collect();
-    Ok(ModalEnergy {
+    ModalEnergy {
         times,
         energy,
         kinetic,
@@ -174,14 +194,7 @@ pub fn modal_energy(
         at,
         window,
         ranked,
-    })
-}
-
-/// Index of the value nearest to `t` (0 for an empty list).
-fn nearest(times: &[f64], t: f64) -> usize {
-    (0..times.len())
-        .min_by(|&a, &b| (times[a] - t).abs().total_cmp(&(times[b] - t).abs()))
-        .unwrap_or(0)
+    }
 }
 
 /// Half peak-to-peak over the mean of the values at `window` (NaN below 3 values).

@@ -72,11 +72,41 @@ impl StoredStates {
         self.times.is_empty()
     }
 
+    /// The stored state nearest to time `t` (0 when there is none).
+    pub fn nearest(&self, t: f64) -> usize {
+        nearest(&self.times, t)
+    }
+
     /// The stored states at times in [from, to].
     pub fn between(&self, from: f64, to: f64) -> Vec<usize> {
         (0..self.len())
             .filter(|&i| self.times[i] >= from && self.times[i] <= to)
             .collect()
+    }
+
+    /// The modal samples the transient took with the states (`modes` real modes).
+    pub fn modal_samples(
+        &self,
+        modes: usize,
+    ) -> Result<Vec<crate::post::modal_energy::ModalSample>, StatesError> {
+        let eta = self.file.read("states/modal_coordinate")?;
+        let eta_dot = self.file.read("states/modal_velocity")?;
+        let kinetic = self.file.read("states/kinetic_energy")?;
+        let rows = kinetic.len().min(self.len());
+        if eta.len() < rows * modes || eta_dot.len() < rows * modes {
+            return Err(StatesError::Layout {
+                path: self.path.clone(),
+                stored: eta.len() / rows.max(1),
+                model: modes,
+            });
+        }
+        Ok((0..rows)
+            .map(|i| crate::post::modal_energy::ModalSample {
+                eta: eta[i * modes..(i + 1) * modes].to_vec(),
+                eta_dot: eta_dot[i * modes..(i + 1) * modes].to_vec(),
+                kinetic: kinetic[i],
+            })
+            .collect())
     }
 
     /// State `k` into `q` and `v` (each rank reads its own part).
@@ -140,4 +170,11 @@ impl ContactAt<'_, '_> {
             }
         })
     }
+}
+
+/// Index of the time nearest to `t` (0 for an empty list).
+pub fn nearest(times: &[f64], t: f64) -> usize {
+    (0..times.len())
+        .min_by(|&a, &b| (times[a] - t).abs().total_cmp(&(times[b] - t).abs()))
+        .unwrap_or(0)
 }

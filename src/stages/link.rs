@@ -3,17 +3,17 @@
 
 use std::path::Path;
 
-use super::transient::{mass_shape, Trajectory};
+use super::transient::Trajectory;
 use super::{Analyses, RunError};
 use crate::eigen::complex_modes::{ComplexModeSettings, DampingSettings};
 use crate::eigen::stability::ProjectedStability;
-use crate::la::{Petsc, Vector};
+use crate::la::Petsc;
 use crate::post::contact_cycle::{contact_cycle, phase_states, ContactCycle, ContactCycleSettings};
 use crate::post::dynamic_stability::{
     choose_states, dynamic_stability, DynamicStability, DynamicStabilitySettings, Linearization,
 };
 use crate::post::limit_cycle::LimitCycle;
-use crate::post::modal_energy::{modal_energy, ModalEnergy, ModalEnergySettings, ModalSensors};
+use crate::post::modal_energy::{modal_energy, ModalEnergy, ModalEnergySettings};
 use crate::post::states::{ContactAt, Lift, StoredStates};
 
 /// The modal energies with the basis' frequencies.
@@ -22,9 +22,19 @@ pub struct ModalEnergyReport {
     pub frequencies_hz: Vec<f64>,
 }
 
+/// A tracked mode's shape on the full model (this rank's part): name, time, frequency and
+/// damping ratio, real and imaginary parts.
+pub struct TrackedShape {
+    pub label: String,
+    pub dataset: String,
+    pub parts: [Vec<f64>; 2],
+}
+
 /// Dynamic stability with what the summary says about its sampling.
 pub struct DynamicStabilityReport {
     pub stability: DynamicStability,
+    /// The headline modes' shapes where their frequency is highest and lowest (fig. 11).
+    pub shapes: Vec<TrackedShape>,
     pub period: f64,
     pub states_per_period: f64,
     pub wanted_per_period: usize,
@@ -50,25 +60,10 @@ pub fn modal_energies<'p>(
     cycle: &LimitCycle,
 ) -> Result<ModalEnergyReport, RunError> {
     let modes = super::need(a.modes.as_ref(), "post.modal_energy", "[real_modes]")?;
-    let preload = super::need(a.preload.as_ref(), "post.modal_energy", "[statics]")?;
-    let reduction = a.reduced.as_ref().map(|r| &r.model.reduction);
-    let (m, q_static) = match &a.reduced {
-        Some(r) => (&r.model.mass, &r.q_static),
-        None => (&a.ops.m, &preload.state.displacement),
-    };
-    let mass_shapes = modes
-        .shapes
-        .iter()
-        .map(|phi| mass_shape(petsc, phi, m, reduction))
-        .collect::<Result<Vec<Vector>, _>>()?;
     let states = StoredStates::open(petsc, stream, 2)?;
-    let sensors = ModalSensors {
-        mass_shapes: &mass_shapes,
-        omega2: &modes.eigenvalues,
-        mass: m,
-        q_static,
-    };
-    let energy = modal_energy(&states, &sensors, settings, period_of(cycle))?;
+    let samples = states.modal_samples(modes.eigenvalues.len())?;
+    let omega2 = &modes.eigenvalues;
+    let energy = modal_energy(&states.times, &samples, omega2, settings, period_of(cycle));
     Ok(ModalEnergyReport {
         energy,
         frequencies_hz: modes.frequencies_hz.clone(),
@@ -131,8 +126,10 @@ pub fn dynamic_stability_along<'p>(
         Some(_) => f64::NAN,
         None => indices.len() as f64 / settings.periods as f64,
     };
+    let shapes = tracked_shapes(&stability, modes, margin)?;
     Ok(DynamicStabilityReport {
         stability,
+        shapes,
         period,
         states_per_period: window,
         wanted_per_period: settings.per_period,
@@ -198,6 +195,37 @@ fn contact_at<'a, 'p>(
         full_template: &preload.state.displacement,
         state_template,
     }
+}
+
+/// The headline tracks' shapes at their highest and lowest frequency, expanded on the real
+/// modes of the full model.
+///
+/// # Collective
+fn tracked_shapes(
+    stability: &DynamicStability,
+    modes: &crate::eigen::real_modes::RealModes,
+    margin: f64,
+) -> Result<Vec<TrackedShape>, RunError> {
+    let mut out = Vec::new();
+    for t in stability.tracks.iter().filter(|t| t.headline(margin)) {
+        for (which, (i, y)) in ["highest", "lowest"].iter().zip(&t.extremes) {
+            if y.is_empty() || *i == 0 {
+                continue;
+            }
+            let (xr, xi) = crate::eigen::complex_modes::expand(&modes.shapes, y)?;
+            let (f, z) = (t.frequencies_hz()[*i], t.damping_ratios()[*i]);
+            let time = stability.times[*i - 1];
+            out.push(TrackedShape {
+                label: format!(
+                    "{} at its {which} frequency ({f:.1} Hz, zeta {z:.2e}, t = {time:.5e} s)",
+                    t.name
+                ),
+                dataset: format!("/post/dynamic_stability/modes/{}/shapes/{which}", t.name),
+                parts: [xr.local()?.to_vec(), xi.local()?.to_vec()],
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// What the link analyses produced (None: not asked for).

@@ -11,6 +11,7 @@ use crate::eigen::complex_modes::DampingSettings;
 use crate::eigen::real_modes::RealModes;
 use crate::la::{Petsc, SparseMatrix, Vector};
 use crate::mesh::Mesh;
+use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{Damping, ModalDamping, TimeError};
 use crate::time::transient::{
     Kick, Sensors, Start, Transient, TransientFiles, TransientInputs, TransientSettings,
@@ -141,6 +142,22 @@ pub fn transient<'p>(
     } else {
         None
     };
+    // The real modes' coordinates go with every stored state (modal sensors, DESIGN.md §2b).
+    let mass_shapes = if settings.state_interval > 0.0 {
+        modes
+            .shapes
+            .iter()
+            .map(|phi| mass_shape(petsc, phi, m, reduction))
+            .collect::<Result<Vec<Vector>, _>>()?
+    } else {
+        Vec::new()
+    };
+    let modal_sensors = ModalSensors {
+        mass_shapes: &mass_shapes,
+        omega2: &modes.eigenvalues,
+        mass: m,
+        q_static,
+    };
     let (signals, failure) = crate::time::transient::run(
         petsc,
         settings,
@@ -159,6 +176,7 @@ pub fn transient<'p>(
             sensors: sensors.as_ref(),
             modal_damping: modal.as_ref(),
             reduction,
+            modal_sensors: Some(&modal_sensors).filter(|s| !s.mass_shapes.is_empty()),
         },
         files,
     )?;

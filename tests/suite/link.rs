@@ -15,12 +15,10 @@
 
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
-use squeal::io::series::SeriesFile;
 use squeal::la::{Petsc, Vector};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
 use squeal::post::modal_energy::{modal_energy, ModalEnergySettings, ModalSensors};
-use squeal::post::states::StoredStates;
 
 use super::common::{say, solve_modes, steel, suite_dir};
 
@@ -75,27 +73,18 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     }
     let a: Vec<f64> = (0..n).map(|k| 1e-5 / (1.0 + k as f64)).collect();
     let p: Vec<f64> = (0..n).map(|k| 0.7 * k as f64).collect();
-    let dir = suite_dir().join("modal-energy");
-    if petsc.rank() == 0 {
-        std::fs::create_dir_all(&dir).map_err(|x| x.to_string())?;
-    }
-    squeal::parallel::barrier(petsc.world());
-    let path = dir.join("transient.h5");
-    let file = SeriesFile::create(petsc.world(), &path).map_err(|x| x.to_string())?;
-    let global = q_static.global_len();
-    for (name, width) in [
-        ("states/time", 1),
-        ("states/displacement", global),
-        ("states/velocity", global),
-    ] {
-        file.create_series(name, width, "-")
-            .map_err(|x| x.to_string())?;
-    }
     let times: Vec<f64> = (0..25).map(|i| 7.3e-4 * i as f64).collect();
     let shapes: Vec<&Vector> = modes.shapes.iter().collect();
     let mut q = q_static.duplicate().map_err(e)?;
     let mut v = q_static.duplicate().map_err(e)?;
-    for &t in &times {
+    let sensors = ModalSensors {
+        mass_shapes: &mass_shapes,
+        omega2: &modes.eigenvalues,
+        mass: m,
+        q_static: &q_static,
+    };
+    // The states at `times`, as the transient samples them.
+    let state_at = |t: f64, q: &mut Vector, v: &mut Vector| -> Result<(), String> {
         let c: Vec<f64> = (0..n).map(|k| a[k] * (omega[k] * t + p[k]).cos()).collect();
         let cd: Vec<f64> = (0..n)
             .map(|k| -a[k] * omega[k] * (omega[k] * t + p[k]).sin())
@@ -103,25 +92,15 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
         q.copy_from(&q_static).map_err(e)?;
         q.maxpy(&c, &shapes).map_err(e)?;
         v.set_all(0.0).map_err(e)?;
-        v.maxpy(&cd, &shapes).map_err(e)?;
-        file.append("states/time", &[t])
-            .map_err(|x| x.to_string())?;
-        for (name, x) in [("states/displacement", &q), ("states/velocity", &v)] {
-            let local = x.local().map_err(e)?.to_vec();
-            file.append_distributed(name, &local, x.ownership())
-                .map_err(|x| x.to_string())?;
-        }
-    }
-    drop(file);
-    let states = StoredStates::open(petsc, &path, 2).map_err(|x| x.to_string())?;
-    let sensors = ModalSensors {
-        mass_shapes: &mass_shapes,
-        omega2: &modes.eigenvalues,
-        mass: m,
-        q_static: &q_static,
+        v.maxpy(&cd, &shapes).map_err(e)
     };
+    let mut samples = Vec::new();
+    for &t in &times {
+        state_at(t, &mut q, &mut v)?;
+        samples.push(sensors.sample(&q, &v).map_err(e)?);
+    }
     let settings = ModalEnergySettings::default();
-    let out = modal_energy(&states, &sensors, &settings, 1e-3).map_err(|x| x.to_string())?;
+    let out = modal_energy(&times, &samples, &modes.eigenvalues, &settings, 1e-3);
     // The reference at every time: closed-form E_k, and the energy from the matrices.
     let (mut worst_mode, mut worst_total, mut worst_kinetic) = (0.0f64, 0.0f64, 0.0f64);
     let mut dq = q_static.duplicate().map_err(e)?;
@@ -137,14 +116,15 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
             let exact = 0.5 * (a[k] * omega[k]).powi(2);
             worst_mode = worst_mode.max((ek[i] - exact).abs() / exact_total);
         }
-        states.read(i, &mut q, &mut v).map_err(|x| x.to_string())?;
+        state_at(t, &mut q, &mut v)?;
         dq.copy_from(&q).map_err(e)?;
         dq.axpy(-1.0, &q_static).map_err(e)?;
         k.mult(&dq, &mut kdq).map_err(e)?;
         m.mult(&v, &mut mv).map_err(e)?;
         let energy = 0.5 * v.dot(&mv).map_err(e)? + 0.5 * dq.dot(&kdq).map_err(e)?;
         let terms = k_norm * dq.norm2().map_err(e)?.powi(2);
-        roundoff = roundoff.max(f64::EPSILON * (global as f64).sqrt() * terms / energy);
+        let unknowns = q.global_len() as f64;
+        roundoff = roundoff.max(f64::EPSILON * unknowns.sqrt() * terms / energy);
         worst_total = worst_total.max((out.total(i) - energy).abs() / energy);
         worst_kinetic =
             worst_kinetic.max((out.kinetic_in_basis[i] - out.kinetic[i]).abs() / exact_total);

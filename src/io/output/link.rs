@@ -14,8 +14,9 @@ use crate::post::contact_cycle::{ContactCycle, PadCycle};
 use crate::post::dynamic_stability::TrackedMode;
 use crate::stages::link::{ContactCycleReport, DynamicStabilityReport, Link, ModalEnergyReport};
 
-/// What the contact maps are drawn on.
+/// What the contact maps are drawn on (and the DOF map of the tracked shapes).
 pub struct MapContext<'a> {
+    pub dofs: &'a crate::fem::dofmap::DofMap,
     pub mesh: &'a Mesh,
     pub points: &'a [ContactPoint],
     pub gauss: usize,
@@ -47,6 +48,14 @@ pub fn write_link(
     }
     if let Some(r) = &link.dynamic_stability {
         write_dynamic_stability(file, r)?;
+        if let Some(maps) = maps {
+            for shape in &r.shapes {
+                for (part, values) in ["re", "im"].iter().zip(&shape.parts) {
+                    let name = format!("{}_{part}", shape.dataset);
+                    file.write_nodal(&name, maps.dofs, values, "m")?;
+                }
+            }
+        }
         if petsc.rank() == 0 {
             plot_stability_diagram(r, output)?;
             plot_stability_in_time(r, output)?;
@@ -200,7 +209,7 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
                 (a.min(x), b.max(x))
             })
     };
-    let (z0, z1) = range(&z);
+    let (z0, z1) = percentile_range(&z);
     let (f0, f1) = range(&f);
     let mut fig = Figure::new(
         1000,
@@ -208,7 +217,7 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
         padded(z0.min(0.0), z1.max(0.0), 0.08),
         padded(f0, f1, 0.08),
         &format!(
-            "dynamic stability: {} modes along {} states (colour: time)",
+            "dynamic stability: {} modes along {} states (colour: time; zeta 1st-99th pct)",
             tracks.len(),
             s.times.len()
         ),
@@ -250,7 +259,11 @@ fn plot_stability_in_time(r: &DynamicStabilityReport, output: &Path) -> Result<(
             "frequency (Hz)",
             0usize,
         ),
-        ("damping ratio (< 0: unstable)", "damping ratio (1)", 1),
+        (
+            "damping ratio (< 0: unstable; axis: 1st-99th percentile)",
+            "damping ratio (1)",
+            1,
+        ),
     ] {
         let values = |t: &TrackedMode| {
             let v = if pick == 0 {
@@ -260,13 +273,12 @@ fn plot_stability_in_time(r: &DynamicStabilityReport, output: &Path) -> Result<(
             };
             v[1..].to_vec()
         };
-        // Overdamped moments (zeta = 1: the pair became real) would hide the rest: off the axes.
-        let all: Vec<f64> = tracks
-            .iter()
-            .flat_map(|t| finite(values(t)))
-            .filter(|z| pick == 0 || z.abs() < 0.99)
-            .collect();
-        let (lo, hi) = span(&all);
+        let all: Vec<f64> = tracks.iter().flat_map(|t| finite(values(t))).collect();
+        let (lo, hi) = if pick == 0 {
+            span(&all)
+        } else {
+            percentile_range(&all)
+        };
         let mut fig = Figure::new(1200, 330, x, padded(lo, hi, 0.08), title, "time (s)", label);
         if pick == 1 {
             fig.hline(0.0, RED);
@@ -440,4 +452,32 @@ fn plot_contact_cycle(
     canvas
         .save(&path)
         .map_err(|source| WriteError::Io { path, source })
+}
+
+/// The XDMF fields of the tracked modes' shapes (real and imaginary parts).
+pub fn tracked_shape_fields(link: &Link) -> Vec<crate::io::xdmf::NodalField> {
+    let Some(r) = &link.dynamic_stability else {
+        return Vec::new();
+    };
+    r.shapes
+        .iter()
+        .flat_map(|s| {
+            ["re", "im"].map(|part| crate::io::xdmf::NodalField {
+                label: format!("{} {part}", s.label),
+                dataset: format!("{}_{part}", s.dataset),
+            })
+        })
+        .collect()
+}
+
+/// The 1st to 99th percentile of the damping ratios, widened to hold 0: the moments a mode is
+/// overdamped (zeta up to 1) would otherwise squeeze the rest against the stability boundary.
+fn percentile_range(values: &[f64]) -> (f64, f64) {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return (-1.0, 1.0);
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    (at(0.01).min(0.0), at(0.99).max(0.0))
 }

@@ -146,13 +146,14 @@ pub fn write_inp(output: &Path, model: &Model) -> Result<(), WriteError> {
         .map_err(|source| WriteError::Io { path, source })
 }
 
-/// results.xdmf (the mesh with the real mode shapes and the first route's complex shapes as
-/// real and imaginary parts) and model.png (rank 0 only).
+/// results.xdmf (the mesh with the real mode shapes, the first route's complex shapes as
+/// real and imaginary parts, and `more`) and model.png (rank 0 only).
 pub fn write_xdmf_and_preview(
     output: &Path,
     model: &Model,
     modes: Option<&RealModes>,
     complex: &[ComplexModes],
+    more: Vec<NodalField>,
 ) -> Result<(), WriteError> {
     let real = modes.iter().flat_map(|modes| {
         modes
@@ -183,7 +184,7 @@ pub fn write_xdmf_and_preview(
                 })
             })
     });
-    let fields: Vec<NodalField> = real.chain(complex).collect();
+    let fields: Vec<NodalField> = real.chain(complex).chain(more).collect();
     let path = output.join("results.xdmf");
     xdmf::write(&path, "results.h5", &model.mesh, &fields)
         .map_err(|source| WriteError::Io { path, source })?;

@@ -105,6 +105,8 @@ pub struct TransientInputs<'a, 'p> {
     /// checkpoint keeps the full-model state too, so a restart whose basis came out rotated
     /// (parallel MUMPS is not bitwise reproducible) re-projects it.
     pub reduction: Option<&'a crate::reduce::Reduction>,
+    /// The real modes whose coordinates go with every stored state (None: not taken).
+    pub modal_sensors: Option<&'a crate::post::modal_energy::ModalSensors<'a, 'p>>,
 }
 
 impl Transient {
@@ -395,20 +397,12 @@ fn open_record<'a, 'p>(
         if let (Some(note), 0) = (&checkpoint.note, petsc.rank()) {
             println!("  transient: restart: {note}");
         }
-        let r = Recorder::resume(
-            petsc,
-            files,
-            contact,
-            input.sensors,
-            interval,
-            out,
-            &checkpoint,
-        )?;
+        let r = Recorder::resume(petsc, files, input, interval, out, &checkpoint)?;
         *control = checkpoint.control;
         *state = checkpoint.state;
         Ok((r, checkpoint.jacobian_at))
     } else {
-        let r = Recorder::create(petsc, files, contact, input.sensors, interval, out, state)?;
+        let r = Recorder::create(petsc, files, input, interval, out, state)?;
         Ok((r, None))
     }
 }

@@ -3,15 +3,24 @@
 //! the states every `state_interval` of simulated time.
 
 use super::checkpoint::Checkpoint;
-use super::{io_error, Sensors, Transient, TransientFiles};
+use super::{io_error, Sensors, Transient, TransientFiles, TransientInputs};
 use crate::contact::{ContactModel, ContactState, InterfaceSummary};
 use crate::io::series::SeriesFile;
 use crate::la::{LaError, Petsc, Vector};
+use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{State, TimeError};
 
 /// Signal rows buffered before they are appended to the file.
 const FLUSH_ROWS: usize = 1000;
 const STATE_PATHS: [&str; 3] = ["states/time", "states/displacement", "states/velocity"];
+/// The real modes' coordinates at the stored states, taken as the run goes: the stored
+/// states are coordinates on a reduction basis that a restart may recompute rotated, the
+/// modal coordinates are not (their own real modes).
+const MODAL_PATHS: [&str; 3] = [
+    "states/modal_coordinate",
+    "states/modal_velocity",
+    "states/kinetic_energy",
+];
 
 /// The full-rate series of the stream.
 fn signal_paths(interfaces: &[String]) -> Vec<String> {
@@ -55,6 +64,7 @@ pub(super) struct Recorder<'a, 'p> {
     petsc: &'p Petsc<'p>,
     contact: &'a ContactModel<'p>,
     sensors: Option<&'a Sensors<'p>>,
+    modal: Option<&'a ModalSensors<'a, 'p>>,
     sensor_buffer: Option<Vector<'p>>,
     stream: SeriesFile,
     names: Vec<String>,
@@ -72,14 +82,13 @@ impl<'a, 'p> Recorder<'a, 'p> {
     pub fn create(
         petsc: &'p Petsc<'p>,
         files: &TransientFiles,
-        contact: &'a ContactModel<'p>,
-        sensors: Option<&'a Sensors<'p>>,
+        input: &TransientInputs<'a, 'p>,
         interval: f64,
         out: Transient,
         start: &State<'p>,
     ) -> Result<Self, TimeError> {
         let stream = SeriesFile::create(petsc.world(), &files.stream).map_err(io_error)?;
-        let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
+        let mut r = Self::new(petsc, input, interval, out, stream)?;
         for path in signal_paths(&r.names) {
             let units = match path.rsplit('/').next().unwrap_or("") {
                 "time" | "step_size" | "wall_seconds" => "s",
@@ -104,6 +113,19 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 .create_series(path, width, units)
                 .map_err(io_error)?;
         }
+        if let Some(modal) = r.modal {
+            let m = modal.mass_shapes.len();
+            for (path, width, units) in MODAL_PATHS
+                .iter()
+                .zip([m, m, 1])
+                .zip(["m kg^0.5", "m kg^0.5/s", "J"])
+                .map(|((p, w), u)| (p, w, u))
+            {
+                r.stream
+                    .create_series(path, width, units)
+                    .map_err(io_error)?;
+            }
+        }
         r.record(start, 0.0, 0, 0.0, None)?;
         if interval > 0.0 {
             r.write_state(start)?;
@@ -119,17 +141,17 @@ impl<'a, 'p> Recorder<'a, 'p> {
     pub fn resume(
         petsc: &'p Petsc<'p>,
         files: &TransientFiles,
-        contact: &'a ContactModel<'p>,
-        sensors: Option<&'a Sensors<'p>>,
+        input: &TransientInputs<'a, 'p>,
         interval: f64,
         out: Transient,
         checkpoint: &Checkpoint<'p>,
     ) -> Result<Self, TimeError> {
         let stream = SeriesFile::open(petsc.world(), &files.stream).map_err(io_error)?;
-        let mut r = Self::new(petsc, contact, sensors, interval, out, stream)?;
-        if !r.stream.has("wall_seconds") {
+        let mut r = Self::new(petsc, input, interval, out, stream)?;
+        let modal_missing = r.modal.is_some() && !r.stream.has(MODAL_PATHS[0]);
+        if !r.stream.has("wall_seconds") || modal_missing {
             return Err(TimeError::Output(format!(
-                "--restart: {} was written by an older squeal (it has no wall_seconds series); run without --restart to start afresh",
+                "--restart: {} was written by an older squeal (it has no wall_seconds or modal coordinate series); run without --restart to start afresh",
                 files.stream.display()
             )));
         }
@@ -138,7 +160,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
         for path in signal_paths(&r.names).iter().chain(&sensor_series) {
             r.stream.truncate(path, rows).map_err(io_error)?;
         }
-        for path in STATE_PATHS {
+        let modal_paths = if r.modal.is_some() {
+            &MODAL_PATHS[..]
+        } else {
+            &[]
+        };
+        for path in STATE_PATHS.iter().chain(modal_paths) {
             r.stream
                 .truncate(path, checkpoint.state_rows)
                 .map_err(io_error)?;
@@ -174,12 +201,12 @@ impl<'a, 'p> Recorder<'a, 'p> {
 
     fn new(
         petsc: &'p Petsc<'p>,
-        contact: &'a ContactModel<'p>,
-        sensors: Option<&'a Sensors<'p>>,
+        input: &TransientInputs<'a, 'p>,
         interval: f64,
         out: Transient,
         stream: SeriesFile,
     ) -> Result<Self, TimeError> {
+        let (contact, sensors) = (input.contact, input.sensors);
         let sensor_buffer = match sensors {
             Some(s) => Some(s.rows.new_point_vector()?),
             None => None,
@@ -188,6 +215,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             petsc,
             contact,
             sensors,
+            modal: input.modal_sensors.filter(|_| interval > 0.0),
             sensor_buffer,
             stream,
             names: contact.interfaces.iter().map(|i| i.name.clone()).collect(),
@@ -267,7 +295,18 @@ impl<'a, 'p> Recorder<'a, 'p> {
             .map_err(io_error)?;
         stream
             .append_distributed("states/velocity", &s.v.local()?, range)
-            .map_err(io_error)
+            .map_err(io_error)?;
+        if let Some(modal) = self.modal {
+            let sample = modal.sample(&s.q, &s.v)?;
+            for (path, values) in
+                MODAL_PATHS
+                    .iter()
+                    .zip([&sample.eta, &sample.eta_dot, &vec![sample.kinetic]])
+            {
+                stream.append(path, values).map_err(io_error)?;
+            }
+        }
+        Ok(())
     }
 
     /// Rows recorded but not yet in the stream.
