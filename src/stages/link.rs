@@ -402,9 +402,18 @@ pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Resul
             } else {
                 "stable"
             };
+            // Steps where the track's shape changed abruptly: its identity there is doubtful.
+            let jumps = t.mac[1..]
+                .iter()
+                .filter(|&&m| m.is_nan() || m < 0.5)
+                .count();
+            let jumps = match jumps {
+                0 => String::new(),
+                n => format!("; MAC < 0.5 with the previous state at {n} states"),
+            };
             writeln!(
                 f,
-                "    {:5} at rest {:.1} Hz, zeta {:.2e} ({rest}); along the run {:.1}..{:.1} Hz, zeta {:.2e}..{:.2e}, unstable {:.0} % of the time, mean zeta {:.2e}, correlation of zeta with the torque {:.2}",
+                "    {:5} at rest {:.1} Hz, zeta {:.2e} ({rest}); along the run {:.1}..{:.1} Hz, zeta {:.2e}..{:.2e}, unstable {:.0} % of the time, mean zeta {:.2e}, correlation of zeta with the torque {:.2}{jumps}",
                 t.name, fr[0], z[0], f0, f1, z0, z1,
                 100.0 * t.unstable_fraction,
                 t.mean_damping_ratio,

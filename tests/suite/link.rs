@@ -11,7 +11,8 @@
 //!   linearization at every stored state is the nominal one: each tracked mode equals the
 //!   nominal projected complex mode of the same name (the complex-modes stage) at every time,
 //!   to the drift of the state (< 1e-8 relative, see brake_transient_at_rest) times the
-//!   tangent's sensitivity: asserted 1e-7 relative on s.
+//!   tangent's sensitivity: asserted 1e-7 relative on s; and the 2-rank run's tracked
+//!   eigenvalues against the 1-rank run's (1e-9 of |s|).
 
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
@@ -224,6 +225,59 @@ fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "tracked modes move by {worst:e} at rest ({} unstable)",
             unstable.len()
+        ));
+    }
+    same_on_one_and_two_ranks(petsc, s)
+}
+
+/// The 1-rank run writes its tracked eigenvalues, the 2-rank run compares: the projection
+/// sums over the ranks' points and the contact is gathered, so a layout error would show.
+/// Bound 1e-9 of |s|: the real modes and the static state agree across rank counts to
+/// ~1e-12 of themselves (their last bits differ: parallel MUMPS).
+fn same_on_one_and_two_ranks(
+    petsc: &Petsc,
+    s: &squeal::post::dynamic_stability::DynamicStability,
+) -> Result<(), String> {
+    let file = suite_dir().join("link-rest-1-rank.txt");
+    let values: Vec<(f64, f64)> = s.tracks.iter().flat_map(|t| t.eigenvalue.clone()).collect();
+    if petsc.size() == 1 {
+        if petsc.rank() == 0 {
+            let text: Vec<String> = values.iter().map(|(a, b)| format!("{a:e} {b:e}")).collect();
+            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
+        }
+        return Ok(());
+    }
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
+    let one: Vec<(f64, f64)> = text
+        .lines()
+        .map(|l| {
+            let mut x = l.split(' ').map(|v| v.parse().unwrap_or(f64::NAN));
+            (x.next().unwrap_or(f64::NAN), x.next().unwrap_or(f64::NAN))
+        })
+        .collect();
+    if one.len() != values.len() {
+        return Err(format!(
+            "{} tracked eigenvalues on 1 rank, {} here",
+            one.len(),
+            values.len()
+        ));
+    }
+    let diff = one
+        .iter()
+        .zip(&values)
+        .map(|(a, b)| (a.0 - b.0).hypot(a.1 - b.1) / a.0.hypot(a.1))
+        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
+    say(
+        petsc,
+        &format!(
+            "tracked eigenvalues, {} ranks vs 1: {diff:.1e}",
+            petsc.size()
+        ),
+    );
+    if diff.is_nan() || diff > 1e-9 {
+        return Err(format!(
+            "tracked eigenvalues differ from 1 rank by {diff:e}"
         ));
     }
     Ok(())
