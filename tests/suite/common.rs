@@ -47,3 +47,35 @@ pub fn suite_dir() -> std::path::PathBuf {
         .map(std::path::PathBuf::from)
         .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
 }
+
+/// Values kept by the 1-rank run of the suite for the 2-rank run to compare against: on 1
+/// rank writes `values` under `name` in the suite folder and returns None; on more ranks
+/// returns the 1-rank values (an error if they are missing or of another length).
+pub fn one_rank_values(
+    petsc: &squeal::la::Petsc,
+    name: &str,
+    values: &[f64],
+) -> Result<Option<Vec<f64>>, String> {
+    let file = suite_dir().join(format!("{name}-1-rank.txt"));
+    if petsc.size() == 1 {
+        if petsc.rank() == 0 {
+            let text: Vec<String> = values.iter().map(|x| format!("{x:e}")).collect();
+            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
+        }
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&file)
+        .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
+    let one: Vec<f64> = text
+        .lines()
+        .map(|l| l.parse().unwrap_or(f64::NAN))
+        .collect();
+    if one.len() != values.len() {
+        return Err(format!(
+            "{name}: {} values on 1 rank, {} here",
+            one.len(),
+            values.len()
+        ));
+    }
+    Ok(Some(one))
+}

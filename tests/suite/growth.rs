@@ -70,27 +70,9 @@ fn growth_same_on_one_and_two_ranks(petsc: &Petsc, out: &std::path::Path) -> Res
         .and_then(|f| f.dataset("transient/braking_torque"))
         .and_then(|d| d.read_raw::<f64>())
         .map_err(|e| e.to_string())?;
-    let file = super::common::suite_dir().join("growth-torque-1-rank.txt");
-    if petsc.size() == 1 {
-        if petsc.rank() == 0 {
-            let text: Vec<String> = torque.iter().map(|x| format!("{x:e}")).collect();
-            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
-        }
+    let Some(one) = super::common::one_rank_values(petsc, "growth-torque", &torque)? else {
         return Ok(());
-    }
-    let text = std::fs::read_to_string(&file)
-        .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
-    let one: Vec<f64> = text
-        .lines()
-        .map(|l| l.parse().unwrap_or(f64::NAN))
-        .collect();
-    if one.len() != torque.len() {
-        return Err(format!(
-            "{} steps on 1 rank, {} here",
-            one.len(),
-            torque.len()
-        ));
-    }
+    };
     let scale = one.iter().map(|x| (x - one[0]).abs()).fold(0.0, f64::max);
     let diff = one
         .iter()

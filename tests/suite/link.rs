@@ -21,7 +21,7 @@ use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
 use squeal::post::modal_energy::{modal_energy, ModalEnergySettings, ModalSensors};
 
-use super::common::{say, solve_modes, steel, suite_dir};
+use super::common::{one_rank_values, say, solve_modes, steel, suite_dir};
 
 pub fn tests() -> Vec<super::NamedTest> {
     vec![
@@ -238,31 +238,16 @@ fn same_on_one_and_two_ranks(
     petsc: &Petsc,
     s: &squeal::post::dynamic_stability::DynamicStability,
 ) -> Result<(), String> {
-    let file = suite_dir().join("link-rest-1-rank.txt");
-    let values: Vec<(f64, f64)> = s.tracks.iter().flat_map(|t| t.eigenvalue.clone()).collect();
-    if petsc.size() == 1 {
-        if petsc.rank() == 0 {
-            let text: Vec<String> = values.iter().map(|(a, b)| format!("{a:e} {b:e}")).collect();
-            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
-        }
-        return Ok(());
-    }
-    let text = std::fs::read_to_string(&file)
-        .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
-    let one: Vec<(f64, f64)> = text
-        .lines()
-        .map(|l| {
-            let mut x = l.split(' ').map(|v| v.parse().unwrap_or(f64::NAN));
-            (x.next().unwrap_or(f64::NAN), x.next().unwrap_or(f64::NAN))
-        })
+    let values: Vec<f64> = s
+        .tracks
+        .iter()
+        .flat_map(|t| t.eigenvalue.iter().flat_map(|&(a, b)| [a, b]))
         .collect();
-    if one.len() != values.len() {
-        return Err(format!(
-            "{} tracked eigenvalues on 1 rank, {} here",
-            one.len(),
-            values.len()
-        ));
-    }
+    let Some(one) = one_rank_values(petsc, "link-rest", &values)? else {
+        return Ok(());
+    };
+    let pairs = |v: &[f64]| -> Vec<(f64, f64)> { v.chunks(2).map(|c| (c[0], c[1])).collect() };
+    let (one, values) = (pairs(&one), pairs(&values));
     let diff = one
         .iter()
         .zip(&values)
