@@ -133,6 +133,15 @@ pub fn run_with(
         ),
         None => Ok(stages::link::Link::default()),
     };
+    let pseudo = pseudo_trajectories(
+        petsc,
+        scene,
+        &a,
+        trajectory.as_ref(),
+        &limit_cycle,
+        output,
+        &mut timings,
+    );
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         let signals = &t.signals;
@@ -162,6 +171,9 @@ pub fn run_with(
             checked(written)?;
         }
     }
+    if let Ok(Some(p)) = &pseudo {
+        checked(output::pseudo::write_pseudo(petsc, &file, p, output))?;
+    }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         let shapes = link
             .as_ref()
@@ -176,6 +188,7 @@ pub fn run_with(
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.
     let link = link?;
+    let pseudo = pseudo?;
     let signals = match trajectory {
         Some(t) => match t.failure {
             Some(e) => return Err(RunError::Time(e)),
@@ -188,5 +201,60 @@ pub fn run_with(
     let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
     summary.limit_cycle = limit_cycle;
     summary.link = link;
+    summary.pseudo = pseudo;
     Ok(summary)
+}
+
+/// The pseudo trajectories when `[post.pseudo_trajectory]` asks, compared with the transient
+/// when the scene ran one that stored its states.
+///
+/// # Collective
+fn pseudo_trajectories<'p>(
+    petsc: &'p Petsc,
+    scene: &Scene,
+    a: &stages::Analyses<'p>,
+    trajectory: Option<&stages::transient::Trajectory>,
+    limit_cycle: &Option<stages::post::LimitCycleReport>,
+    output: &Path,
+    timings: &mut Timings,
+) -> Result<Option<stages::pseudo::PseudoReport>, RunError> {
+    let Some(settings) = scene
+        .post
+        .as_ref()
+        .and_then(|p| p.pseudo_trajectory.as_ref())
+    else {
+        return Ok(None);
+    };
+    let stream = TransientFiles::in_directory(output, false).stream;
+    let own;
+    let comparison = match (trajectory, &scene.transient) {
+        (Some(t), Some(ts)) if ts.state_interval > 0.0 => {
+            let cycle = match limit_cycle {
+                Some(r) => &r.cycle,
+                None => {
+                    own = stages::link::characterize(t, ts.step);
+                    &own
+                }
+            };
+            // The stepping's wall time summed over restarts (a restart of a finished run
+            // steps nothing).
+            let seconds = t.signals.wall_seconds.last().copied().unwrap_or(f64::NAN);
+            Some(stages::pseudo::Comparison {
+                stream: &stream,
+                cycle,
+                transient_seconds: seconds,
+            })
+        }
+        _ => None,
+    };
+    let margin = scene.complex_modes.as_ref().map_or(
+        crate::eigen::complex_modes::ComplexModeSettings::default().instability_margin,
+        |c| c.instability_margin,
+    );
+    let damping = scene.damping.unwrap_or_default();
+    timings
+        .stage("pseudo trajectories", || {
+            stages::pseudo::pseudo_trajectories(petsc, a, damping, settings, margin, comparison)
+        })
+        .map(Some)
 }

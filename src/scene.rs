@@ -66,6 +66,10 @@ pub struct PostSettings {
     /// Contact pressure and stiffness per point at phases of the last cycle, per pad.
     #[serde(default)]
     pub contact_cycle: Option<crate::post::contact_cycle::ContactCycleSettings>,
+    /// Pseudo complex-mode trajectories of the unstable modes: the predicted saturation
+    /// amplitude (needs no transient; compared with it when there is one).
+    #[serde(default)]
+    pub pseudo_trajectory: Option<crate::post::pseudo_trajectory::PseudoTrajectorySettings>,
 }
 
 impl PostSettings {
@@ -425,8 +429,15 @@ impl Scene {
             }
         }
         if let Some(post) = &self.post {
-            if self.transient.is_none() {
-                return Err("key 'post': the analyses of a trajectory need a [transient]".into());
+            let only_pseudo = post.limit_cycle.is_none() && !post.uses_states();
+            if self.transient.is_none() && !only_pseudo {
+                return Err("key 'post': the analyses of a trajectory need a [transient] (only pseudo_trajectory runs without one)".into());
+            }
+            if let Some(pt) = &post.pseudo_trajectory {
+                pt.validate()?;
+                if self.statics.is_none() || self.real_modes.is_none() {
+                    return Err("key 'post.pseudo_trajectory': linearizes the contact of the preloaded model on its real modes: it needs [statics] and [real_modes]".into());
+                }
             }
             if let Some(lc) = &post.limit_cycle {
                 lc.validate()?;

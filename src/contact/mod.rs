@@ -494,6 +494,48 @@ impl<'p> ContactModel<'p> {
         })
     }
 
+    /// The contact state at `base` moved by an observed increment per local point k:
+    /// `increment(k)` = ([gap, slip 1, slip 2, convection], tangential velocity), the
+    /// observation rows applied to a displacement and a velocity (the sliding speed gains the
+    /// velocity plus the disc speed times the convection on sliding interfaces, as in
+    /// [`Self::evaluate`]). No vector of size n: what the pseudo trajectories need at
+    /// thousands of states of one mode.
+    pub fn moved(
+        &self,
+        base: &ContactState,
+        increment: impl Fn(usize) -> ([f64; 4], f64),
+    ) -> ContactState {
+        let mut observed = Vec::with_capacity(self.local.len());
+        let mut response = Vec::with_capacity(self.local.len());
+        for (k, &id) in self.local.iter().enumerate() {
+            let itf = &self.interfaces[self.points[id].interface];
+            let ([g, s1, s2, conv], w) = increment(k);
+            let b = &base.observed[k];
+            let convected = if itf.friction.is_sliding() {
+                self.disc_speed * conv
+            } else {
+                0.0
+            };
+            let o = Observed {
+                gap: b.gap + g,
+                slip: [b.slip[0] + s1, b.slip[1] + s2],
+                speed: b.speed + w + convected,
+            };
+            response.push(kernel::respond(
+                &itf.normal,
+                &itf.friction,
+                base.friction_scale,
+                o,
+            ));
+            observed.push(o);
+        }
+        ContactState {
+            observed,
+            response,
+            friction_scale: base.friction_scale,
+        }
+    }
+
     /// The contact force f_N + f_T = C_NOR^T (w p) - C_TAN^T (w t1) - C_TAN2^T (w t2).
     ///
     /// # Collective

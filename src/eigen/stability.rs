@@ -52,6 +52,22 @@ impl ModalProjection {
         p
     }
 
+    /// The observation of the shape with modal coordinates y at this rank's points: per
+    /// channel (normal, tangent, second tangent, convection) one complex value per point.
+    pub fn observe(&self, y: &[(f64, f64)]) -> [Vec<(f64, f64)>; 4] {
+        let n = self.points;
+        self.channels.each_ref().map(|p| {
+            (0..n)
+                .map(|j| {
+                    y.iter().enumerate().fold((0.0, 0.0), |acc, (k, &(r, i))| {
+                        let c = p[k * n + j];
+                        (acc.0 + c * r, acc.1 + c * i)
+                    })
+                })
+                .collect()
+        })
+    }
+
     /// Sum over points of the terms, projected: m x m column-major, summed over ranks.
     ///
     /// # Collective

@@ -179,7 +179,7 @@ pub fn contact_over_cycle<'p>(
 
 /// The full model's contact at the stored states (recovered from the reduced unknowns when
 /// the transient ran reduced).
-fn contact_at<'a, 'p>(
+pub(crate) fn contact_at<'a, 'p>(
     petsc: &'p Petsc,
     a: &'a Analyses<'p>,
     preload: &'a super::statics::Preloaded<'p>,
@@ -259,15 +259,7 @@ pub fn link<'p>(
     let cycle = match limit_cycle {
         Some(c) => c,
         None => {
-            let tr = &trajectory.signals;
-            let settings = crate::post::limit_cycle::LimitCycleSettings::default();
-            let torque = tr.braking_torque();
-            own = crate::post::limit_cycle::characterize(
-                &tr.time,
-                &torque,
-                transient.step,
-                &settings,
-            );
+            own = characterize(trajectory, transient.step);
             &own
         }
     };
@@ -299,6 +291,14 @@ pub fn link<'p>(
         })?);
     }
     Ok(out)
+}
+
+/// The braking torque's characterization with the default settings (when the scene did not
+/// ask for `[post.limit_cycle]`, the analyses still need the run's period).
+pub fn characterize(trajectory: &Trajectory, step: f64) -> LimitCycle {
+    let tr = &trajectory.signals;
+    let settings = crate::post::limit_cycle::LimitCycleSettings::default();
+    crate::post::limit_cycle::characterize(&tr.time, &tr.braking_torque(), step, &settings)
 }
 
 /// The summary's lines of the link analyses.

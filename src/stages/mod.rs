@@ -15,6 +15,7 @@ pub mod model;
 pub mod modes;
 pub mod operators;
 pub mod post;
+pub mod pseudo;
 pub mod reduce;
 pub mod statics;
 pub mod summary;

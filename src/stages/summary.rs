@@ -46,6 +46,8 @@ pub struct RunSummary {
     pub limit_cycle: Option<super::post::LimitCycleReport>,
     /// Modal energies and dynamic stability along the run, when `[post]` asked for them.
     pub link: super::link::Link,
+    /// The pseudo trajectories, when `[post.pseudo_trajectory]` asked for them.
+    pub pseudo: Option<super::pseudo::PseudoReport>,
 }
 
 /// The superelement reduction, for the summary.
@@ -176,6 +178,7 @@ impl RunSummary {
             reduction: None,
             limit_cycle: None,
             link: Default::default(),
+            pseudo: None,
         }
     }
 }
@@ -350,6 +353,9 @@ impl fmt::Display for RunSummary {
         self.fmt_reduction_transient_sweep(f)?;
         self.fmt_limit_cycle(f)?;
         super::link::fmt_link(&self.link, f)?;
+        if let Some(p) = &self.pseudo {
+            super::pseudo::fmt_pseudo(p, f)?;
+        }
         self.fmt_timings(f)
     }
 }

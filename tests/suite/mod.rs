@@ -8,6 +8,7 @@ pub mod growth;
 pub mod link;
 pub mod mode_coupling;
 pub mod parallel_and_solvers;
+pub mod pseudo_trajectory;
 pub mod real_modes_verification;
 pub mod reduction;
 pub mod stages;
@@ -35,5 +36,6 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(mode_coupling::tests());
     v.extend(growth::tests());
     v.extend(link::tests());
+    v.extend(pseudo_trajectory::tests());
     v
 }

@@ -52,32 +52,32 @@ pub fn tests() -> Vec<super::NamedTest> {
     )]
 }
 
-const K_S: [[f64; 2]; 2] = [[2.0, -0.2], [-0.2, 1.0]];
-const C: f64 = 0.1;
-const MU: f64 = 0.5;
-const V: f64 = 100.0;
+pub(super) const K_S: [[f64; 2]; 2] = [[2.0, -0.2], [-0.2, 1.0]];
+pub(super) const C: f64 = 0.1;
+pub(super) const MU: f64 = 0.5;
+pub(super) const V: f64 = 100.0;
 const N0: f64 = 1.0;
 const LAMBDA: f64 = 1.0;
-const NORMAL: NormalLaw = NormalLaw::Exponential {
+pub(super) const NORMAL: NormalLaw = NormalLaw::Exponential {
     p0: N0,
     lambda: LAMBDA,
     linear_below_gap: None,
 };
-const FRICTION: FrictionLaw = FrictionLaw::Coulomb {
+pub(super) const FRICTION: FrictionLaw = FrictionLaw::Coulomb {
     mu: MU,
     slip_speed: 1e-3,
 };
 
-fn static_x() -> f64 {
+pub(super) fn static_x() -> f64 {
     MU * NORMAL.eval(0.0).pressure / K_S[0][0]
 }
 
-fn preload() -> f64 {
+pub(super) fn preload() -> f64 {
     NORMAL.eval(0.0).pressure - K_S[1][0] * static_x()
 }
 
 /// The flutter eigenvalue s (Re, Im) of the linearization at the static state.
-fn closed_form_eigenvalue() -> (f64, f64) {
+pub(super) fn closed_form_eigenvalue() -> (f64, f64) {
     let kc = NORMAL.eval(0.0).stiffness;
     let kt = [
         [K_S[0][0], K_S[0][1] + MU * kc],
@@ -106,10 +106,10 @@ fn complex_sqrt(a: f64, b: f64) -> (f64, f64) {
 
 /// What one run recorded at every step.
 #[derive(Default)]
-struct Record {
-    t: Vec<f64>,
-    q: Vec<[f64; 2]>,
-    v: Vec<[f64; 2]>,
+pub(super) struct Record {
+    pub(super) t: Vec<f64>,
+    pub(super) q: Vec<[f64; 2]>,
+    pub(super) v: Vec<[f64; 2]>,
     control: StepControl,
 }
 
@@ -300,7 +300,7 @@ fn energy(q: [f64; 2], v: [f64; 2]) -> f64 {
 }
 
 /// Indices of the local maxima of component `c` of q.
-fn maxima_at(r: &Record, c: usize) -> Vec<usize> {
+pub(super) fn maxima_at(r: &Record, c: usize) -> Vec<usize> {
     (1..r.q.len() - 1)
         .filter(|&i| r.q[i][c] > r.q[i - 1][c] && r.q[i][c] >= r.q[i + 1][c])
         .collect()
@@ -362,7 +362,7 @@ fn tangent(ns: &NewmarkSettings, q: [f64; 2], v: [f64; 2]) -> [[f64; 2]; 2] {
     ]
 }
 
-fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Record, String> {
+pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Record, String> {
     let e = |e: LaError| e.to_string();
     let m = dense(petsc, [[1.0, 0.0], [0.0, 1.0]]).map_err(e)?;
     let k = dense(petsc, K_S).map_err(e)?;

@@ -211,11 +211,12 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
     };
     let (z0, z1) = percentile_range(&z);
     let (f0, f1) = range(&f);
+    let frequencies = padded(f0, f1, 0.08);
     let mut fig = Figure::new(
         1000,
         700,
         padded(z0.min(0.0), z1.max(0.0), 0.08),
-        padded(f0, f1, 0.08),
+        frequencies,
         &format!(
             "dynamic stability: {} modes along {} states (colour: time; zeta 1st-99th pct)",
             tracks.len(),
@@ -233,8 +234,8 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
         fig.marker(zr[0], fr[0], BLACK, 4);
         fig.label(zr[0], fr[0], &t.name, BLACK, k % 2 == 1);
     }
-    // The stability boundary.
-    fig.line(&[(0.0, f0 - (f1 - f0)), (0.0, f1 + (f1 - f0))], RED);
+    // The stability boundary (a segment must end inside the axes to be drawn).
+    fig.line(&[(0.0, frequencies.0), (0.0, frequencies.1)], RED);
     save(&fig, output, "dynamic_stability.png")
 }
 

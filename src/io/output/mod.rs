@@ -4,6 +4,7 @@
 pub mod link;
 pub mod modes;
 pub mod post;
+pub mod pseudo;
 pub mod reduction;
 pub mod statics;
 pub mod sweep;

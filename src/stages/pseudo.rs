@@ -1,0 +1,295 @@
+//! Stage 10: pseudo complex-mode trajectories of the static state's unstable modes
+//! (DESIGN.md §2b), and, when the scene also ran the transient, the same modes' amplitude in
+//! its last cycles next to the predicted alpha_sat.
+
+use std::path::Path;
+
+use super::{Analyses, RunError};
+use crate::eigen::complex_modes::{damping_ratio, projected_coordinates, DampingSettings};
+use crate::eigen::stability::ProjectedStability;
+use crate::la::Petsc;
+use crate::post::limit_cycle::LimitCycle;
+use crate::post::pseudo_contact::ContactPseudoSystem;
+use crate::post::pseudo_trajectory::{
+    parse_mode, pseudo_trajectory, OrbitFit, PseudoTrajectory, PseudoTrajectorySettings,
+};
+use crate::post::states::StoredStates;
+
+/// A mode's amplitude in the transient (alpha's units: the largest relative displacement at
+/// a contact point, m) over a window of its last cycles.
+#[derive(Debug, Clone)]
+pub struct TransientAmplitude {
+    pub mean: f64,
+    pub min: f64,
+    pub max: f64,
+    pub window: (f64, f64),
+    pub states: usize,
+    /// The mean share of the contact motion's squared norm the fitted mode motion holds.
+    pub share: f64,
+    /// The largest relative displacement at a contact point over the window (about the
+    /// centre): the motion's own amplitude in alpha's units, whatever its shape.
+    pub largest: f64,
+}
+
+/// One mode's study, with the transient's amplitude of the mode when there is a transient.
+pub struct PseudoStudy {
+    pub trajectory: PseudoTrajectory,
+    pub transient: Option<TransientAmplitude>,
+}
+
+pub struct PseudoReport {
+    pub studies: Vec<PseudoStudy>,
+    /// The static state's gap scale (m) and the swept range.
+    pub gap_scale: f64,
+    pub margin: f64,
+    /// The transient's time, for the cost comparison (None without one).
+    pub transient_seconds: Option<f64>,
+}
+
+/// What the comparison with a transient needs: its stored states, its cycle and its cost.
+pub struct Comparison<'a> {
+    pub stream: &'a Path,
+    pub cycle: &'a LimitCycle,
+    pub transient_seconds: f64,
+}
+
+/// Periods of the run's cycle over which a mode's amplitude in the transient is averaged.
+const CYCLES: f64 = 3.0;
+
+/// The pseudo trajectories of the modes the scene names (default: those unstable at the
+/// static state).
+///
+/// # Collective
+pub fn pseudo_trajectories<'p>(
+    petsc: &'p Petsc,
+    a: &Analyses<'p>,
+    damping: DampingSettings,
+    settings: &PseudoTrajectorySettings,
+    margin: f64,
+    comparison: Option<Comparison>,
+) -> Result<PseudoReport, RunError> {
+    let key = "post.pseudo_trajectory";
+    let modes = super::need(a.modes.as_ref(), key, "[real_modes]")?;
+    let preload = super::need(a.preload.as_ref(), key, "[statics]")?;
+    let (contact, nominal) = (&preload.contact, &preload.state.contact);
+    let comm = petsc.world();
+    let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
+    let (kp, cp) = stability.operators_at(comm, contact, nominal);
+    let size = stability.projection.size;
+    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::Invalid)?;
+    let chosen: Vec<usize> = match &settings.modes {
+        Some(names) => names
+            .iter()
+            .map(|n| {
+                parse_mode(n).filter(|&k| k < pairs.len()).ok_or_else(|| {
+                    RunError::scene(
+                        "post.pseudo_trajectory.modes",
+                        format!(
+                            "'{n}': the projected complex modes are C1 to C{}",
+                            pairs.len()
+                        ),
+                    )
+                })
+            })
+            .collect::<Result<_, _>>()?,
+        None => (0..pairs.len())
+            .filter(|&k| damping_ratio(pairs[k].0) < -margin)
+            .collect(),
+    };
+    let system = ContactPseudoSystem::new(comm, contact, nominal, &stability);
+    // The contact zone's relative motion over the transient's last cycles, read once.
+    let motion = match &comparison {
+        Some(c) => Some(observed_motion(petsc, a, preload, c)?),
+        None => None,
+    };
+    let sum = |x: &mut [f64]| crate::parallel::sum_in_place(comm, x);
+    let mut studies = Vec::new();
+    for k in chosen {
+        let name = format!("C{}", k + 1);
+        let trajectory = pseudo_trajectory(&system, &name, &pairs, k, settings, margin)
+            .map_err(|e| RunError::scene(key, format!("{name}: {e}")))?;
+        let transient = match &motion {
+            Some(m) if !m.states.is_empty() => {
+                let channels = stability.projection.observe(&trajectory.psi);
+                let psi: Vec<_> = (0..channels[0].len())
+                    .flat_map(|j| [channels[0][j], channels[1][j], channels[2][j]])
+                    .collect();
+                let fit = OrbitFit::new(&psi, sum)
+                    .map_err(|e| RunError::scene(key, format!("{name}: {e}")))?;
+                let fitted: Vec<_> = m.states.iter().map(|x| fit.fit(x, sum)).collect();
+                let values: Vec<f64> = fitted.iter().map(|f| f.alpha).collect();
+                let share = fitted.iter().map(|f| f.share).sum::<f64>() / fitted.len() as f64;
+                let (min, max) = values
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    });
+                Some(TransientAmplitude {
+                    mean: values.iter().sum::<f64>() / values.len() as f64,
+                    min,
+                    max,
+                    window: m.window,
+                    states: values.len(),
+                    share,
+                    largest: m.largest,
+                })
+            }
+            _ => None,
+        };
+        studies.push(PseudoStudy {
+            trajectory,
+            transient,
+        });
+    }
+    use crate::post::pseudo_trajectory::PseudoSystem;
+    Ok(PseudoReport {
+        studies,
+        gap_scale: system.gap_scale(),
+        margin,
+        transient_seconds: comparison.map(|c| c.transient_seconds),
+    })
+}
+
+/// The relative displacement (gap, slip 1, slip 2 per local point) at the stored states of
+/// the transient's last `CYCLES` periods (ending at the last cycle start found, else at the
+/// last state), minus its mean over them.
+struct ObservedMotion {
+    states: Vec<Vec<f64>>,
+    window: (f64, f64),
+    largest: f64,
+}
+
+/// # Collective
+fn observed_motion<'p>(
+    petsc: &'p Petsc,
+    a: &Analyses<'p>,
+    preload: &super::statics::Preloaded<'p>,
+    c: &Comparison,
+) -> Result<ObservedMotion, RunError> {
+    let states = StoredStates::open(petsc, c.stream, 2)?;
+    let last = states.times.last().copied().unwrap_or(0.0);
+    let end = c
+        .cycle
+        .cycle_starts
+        .iter()
+        .rev()
+        .copied()
+        .find(|&t| t <= last)
+        .unwrap_or(last);
+    let from = end - CYCLES * super::link::period_of(c.cycle);
+    let at = super::link::contact_at(petsc, a, preload);
+    let mut out = Vec::new();
+    for i in states.between(from, end) {
+        let state = at.state(&states, i)?;
+        out.push(
+            state
+                .observed
+                .iter()
+                .flat_map(|o| [o.gap, o.slip[0], o.slip[1]])
+                .collect::<Vec<f64>>(),
+        );
+    }
+    if let Some(first) = out.first() {
+        let mut mean = vec![0.0; first.len()];
+        for x in &out {
+            for (m, v) in mean.iter_mut().zip(x) {
+                *m += v / out.len() as f64;
+            }
+        }
+        for x in &mut out {
+            for (v, m) in x.iter_mut().zip(&mean) {
+                *v -= m;
+            }
+        }
+    }
+    let mut largest = [out
+        .iter()
+        .flat_map(|x| {
+            x.chunks(3)
+                .map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt())
+        })
+        .fold(0.0f64, f64::max)];
+    crate::parallel::max_in_place(petsc.world(), &mut largest);
+    Ok(ObservedMotion {
+        states: out,
+        window: (from, end),
+        largest: largest[0],
+    })
+}
+
+/// The summary's lines.
+pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+    use crate::post::pseudo_trajectory::Found;
+    let Some(first) = r.studies.first() else {
+        return writeln!(
+            f,
+            "pseudo trajectories: no complex mode is unstable at the static state (margin {:.1e})",
+            r.margin
+        );
+    };
+    let t = &first.trajectory;
+    let (a0, a1) = (t.sweep[0].alpha, t.sweep[t.sweep.len() - 1].alpha);
+    writeln!(
+        f,
+        "pseudo trajectories (alpha: the largest relative displacement at a contact point; swept {:.2e}..{:.2e} m, {} amplitudes x {} phases; static gap scale {:.3e} m):",
+        a0,
+        a1,
+        t.sweep.len(),
+        t.diagram.eigenvalue.len(),
+        r.gap_scale
+    )?;
+    let show = |x: &Found| match x {
+        Found::At { alpha, .. } => format!("{alpha:.3e} m"),
+        Found::BelowRange => format!("below {a0:.2e} m"),
+        Found::AboveRange => format!("above {a1:.2e} m (not reached)"),
+    };
+    for s in &r.studies {
+        let t = &s.trajectory;
+        let f_hz = crate::eigen::complex_modes::frequency_hz(t.nominal);
+        let fr = t.diagram.frequencies_hz();
+        let span = fr
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        write!(
+            f,
+            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s",
+            t.name,
+            f_hz,
+            damping_ratio(t.nominal),
+            show(&t.alpha_crit),
+            show(&t.alpha_sat),
+            span.0,
+            span.1,
+            t.linearizations,
+            t.seconds
+        )?;
+        if t.alpha_stable.alpha() != t.alpha_sat.alpha() {
+            let above = match &t.alpha_stable {
+                Found::AboveRange => format!("unstable on average again at {a1:.2e} m"),
+                x => format!("stable on average for every alpha from {}", show(x)),
+            };
+            write!(
+                f,
+                "; the mean damping changes sign {} times on the grid: {above}",
+                t.sign_changes
+            )?;
+        }
+        if let (Some(tr), Some(total)) = (&s.transient, r.transient_seconds) {
+            let ratio = t.alpha_sat.alpha().map_or(f64::NAN, |a| a / tr.mean);
+            write!(
+                f,
+                "; in the transient's last {CYCLES} periods (largest relative displacement {:.3e} m): the mode's fit {:.3e} m ({:.2e}..{:.2e}), holding {:.0} % of the contact motion, alpha_sat / that {ratio:.3}; {:.2} % of the transient's time",
+                tr.largest,
+                tr.mean,
+                tr.min,
+                tr.max,
+                100.0 * tr.share,
+                100.0 * t.seconds / total
+            )?;
+        }
+        writeln!(f)?;
+    }
+    Ok(())
+}
