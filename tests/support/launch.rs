@@ -30,7 +30,11 @@ pub fn squeal_run(
         c.args(["-n", &ranks.to_string()]).arg(squeal);
         c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
             .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_rmaps_base_oversubscribe", "1");
+            .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+            // Tests run two of these at once on two cores: a rank waiting in a collective
+            // call yields its core instead of spinning, so the rank it waits for is not starved
+            // (a suspect for the rare "alone" verdict of a collective failure, see faults.rs).
+            .env("OMPI_MCA_mpi_yield_when_idle", "1");
         c
     } else {
         Command::new(squeal)
