@@ -65,8 +65,11 @@ fn growth_matches_complex_mode(petsc: &Petsc) -> Result<(), String> {
 /// the ranks). The run ends in the linear growth, far below the saturation, so the ratio
 /// alpha_sat / amplitude is large; what is asserted is what the issue asks of the brake:
 /// finite and positive, a share of the contact motion in (0, 1], and the same on 1 and 2
-/// ranks (the fitted amplitude to the torque's 1e-3, alpha_sat and alpha_crit to 1e-6: the
-/// brake's pseudo-trajectory test measured 2.3e-11 between rank counts).
+/// ranks: the fitted amplitude to the torque's 1e-3; alpha_crit and the mean damping ratio
+/// at every swept amplitude to 1e-6 (of the largest |mean damping|; measured ~1e-15). Not
+/// alpha_sat itself: C35's mean damping hovers within ~4e-4 of zero above its first
+/// crossing, so where it first crosses is ill-conditioned (measured: 4.56e-6 m on 1 rank,
+/// 1.58e-5 m on 2 in one suite run, 1e-15 apart in another); it is printed.
 fn pseudo_trajectory_against_the_growth(
     petsc: &Petsc,
     run: &squeal::pipeline::RunSummary,
@@ -99,23 +102,29 @@ fn pseudo_trajectory_against_the_growth(
             tr.mean, tr.share
         ));
     }
-    let values = [tr.mean, sat, crit];
+    let mut values = vec![tr.mean, crit];
+    values.extend(t.sweep.iter().map(|p| p.mean_damping_ratio));
     let Some(one) = super::common::one_rank_values(petsc, "growth-pseudo", &values)? else {
         return Ok(());
     };
-    let d = |k: usize| (one[k] - values[k]).abs() / one[k].abs();
+    let rel = |k: usize| (one[k] - values[k]).abs() / one[k].abs();
+    let scale = one[2..].iter().fold(0.0f64, |m, z| m.max(z.abs()));
+    let zeta = one[2..]
+        .iter()
+        .zip(&values[2..])
+        .map(|(a, b)| (a - b).abs() / scale)
+        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
     say(
         petsc,
         &format!(
-            "{} ranks vs 1: fitted amplitude {:.1e}, alpha_sat {:.1e}, alpha_crit {:.1e}",
+            "{} ranks vs 1: fitted amplitude {:.1e}, alpha_crit {:.1e}, mean damping ratios {zeta:.1e}",
             petsc.size(),
-            d(0),
-            d(1),
-            d(2)
+            rel(0),
+            rel(1)
         ),
     );
-    if d(0).is_nan() || d(0) > 1e-3 || d(1).is_nan() || d(1) > 1e-6 || d(2).is_nan() || d(2) > 1e-6
-    {
+    let bad = |d: f64, bound: f64| d.is_nan() || d > bound;
+    if one.len() != values.len() || bad(rel(0), 1e-3) || bad(rel(1), 1e-6) || bad(zeta, 1e-6) {
         return Err(format!("2 ranks vs 1: {one:?} vs {values:?}"));
     }
     Ok(())

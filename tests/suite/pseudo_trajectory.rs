@@ -277,8 +277,11 @@ fn run_brake(
 /// (measured 9.9e-13). Then a coarse sweep (9 amplitudes, 16 phases): alpha_crit
 /// and alpha_sat found, finite, alpha_crit <= alpha_sat, and the 2-rank run's against the
 /// 1-rank run's (the projection sums over the ranks' points, the sample point and the
-/// status fractions are reduced over ranks): bisection end points agree to 1e-6 relative (a
-/// bracket decision flips only if a mean damping ratio sits within round-off of zero).
+/// status fractions are reduced over ranks): alpha_crit to 1e-6 relative and the mean
+/// damping ratio at every swept amplitude to 1e-6 of the largest (measured 2.3e-11). Not
+/// alpha_sat: C35's mean damping hovers near zero above its first crossing, which makes
+/// that crossing ill-conditioned (4.56e-6 vs 1.58e-5 m between rank counts in one run of the
+/// growth test).
 fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     let tiny = run_brake(
         petsc,
@@ -326,20 +329,27 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     if !(crit > 0.0 && crit <= sat && sat.is_finite()) {
         return Err(format!("alpha_crit {crit} and alpha_sat {sat}"));
     }
-    let mut values = vec![crit, sat];
+    let mut values = vec![crit];
     values.extend(t.sweep.iter().map(|p| p.mean_damping_ratio));
     let Some(one) = super::common::one_rank_values(petsc, "pseudo-brake", &values)? else {
         return Ok(());
     };
-    let diff = one
+    let scale = one[1..].iter().fold(0.0f64, |m, z| m.max(z.abs()));
+    let zeta = one[1..]
         .iter()
-        .zip(&values)
-        .map(|(a, b)| (a - b).abs() / a.abs().max(1e-300))
+        .zip(&values[1..])
+        .map(|(a, b)| (a - b).abs() / scale)
         .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
+    let diff = ((one[0] - values[0]).abs() / one[0]).max(zeta);
+    let diff = if zeta.is_nan() || one.len() != values.len() {
+        f64::NAN
+    } else {
+        diff
+    };
     say(
         petsc,
         &format!(
-            "alpha_crit, alpha_sat and the mean damping ratios, {} ranks vs 1: {diff:.1e}",
+            "alpha_crit and the mean damping ratios, {} ranks vs 1: {diff:.1e}",
             petsc.size()
         ),
     );
