@@ -39,7 +39,8 @@ pub struct PseudoStudy {
 
 pub struct PseudoReport {
     pub studies: Vec<PseudoStudy>,
-    /// The static state's gap scale (m) and the swept range.
+    /// The static state's gap scale (m: the default alpha range is 1e-3 to 10 times it) and
+    /// the instability margin of the damping ratio.
     pub gap_scale: f64,
     pub margin: f64,
     /// The transient's time, for the cost comparison (None without one).
