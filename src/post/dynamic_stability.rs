@@ -235,13 +235,7 @@ pub fn choose_states(
         chosen.dedup();
         return chosen;
     }
-    let last = states.times.last().copied().unwrap_or(0.0);
-    let end = cycle_starts
-        .iter()
-        .rev()
-        .copied()
-        .find(|&t| t <= last)
-        .unwrap_or(last);
+    let end = states.window_end(cycle_starts);
     let from = end - settings.periods as f64 * period;
     // Half-open window [from, end): exactly `periods` periods, each phase once.
     states

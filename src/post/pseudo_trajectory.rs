@@ -488,11 +488,6 @@ impl OrbitFit {
             },
         }
     }
-
-    /// The mode's amplitude alone.
-    pub fn amplitude(&self, x: &[f64], sum: impl Fn(&mut [f64])) -> f64 {
-        self.fit(x, sum).alpha
-    }
 }
 
 #[cfg(test)]
@@ -531,7 +526,7 @@ mod tests {
         for (alpha, phase) in [(1e-6, 0.3), (2.5, 2.0), (0.7, -1.2)] {
             let c = (alpha * f64::cos(phase), alpha * f64::sin(phase));
             let motion: Vec<f64> = psi.iter().map(|&p| cmul(c, p).0).collect();
-            let got = fit.amplitude(&motion, |_| {});
+            let got = fit.fit(&motion, |_| {}).alpha;
             assert!((got - alpha).abs() < 1e-12 * alpha, "{got} vs {alpha}");
             assert!((fit.fit(&motion, |_| {}).share - 1.0).abs() < 1e-12);
             let mixed: Vec<f64> = (0..4).map(|k| motion[k] + 3.0 * orthogonal[k]).collect();

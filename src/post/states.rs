@@ -77,6 +77,18 @@ impl StoredStates {
         nearest(&self.times, t)
     }
 
+    /// The end of the analysed window: the last cycle start at or before the last stored
+    /// state, else the last stored state.
+    pub fn window_end(&self, cycle_starts: &[f64]) -> f64 {
+        let last = self.times.last().copied().unwrap_or(0.0);
+        cycle_starts
+            .iter()
+            .rev()
+            .copied()
+            .find(|&t| t <= last)
+            .unwrap_or(last)
+    }
+
     /// The stored states at times in [from, to].
     pub fn between(&self, from: f64, to: f64) -> Vec<usize> {
         (0..self.len())

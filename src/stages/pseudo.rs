@@ -168,15 +168,7 @@ fn observed_motion<'p>(
     c: &Comparison,
 ) -> Result<ObservedMotion, RunError> {
     let states = StoredStates::open(petsc, c.stream, 2)?;
-    let last = states.times.last().copied().unwrap_or(0.0);
-    let end = c
-        .cycle
-        .cycle_starts
-        .iter()
-        .rev()
-        .copied()
-        .find(|&t| t <= last)
-        .unwrap_or(last);
+    let end = states.window_end(&c.cycle.cycle_starts);
     let from = end - CYCLES * super::link::period_of(c.cycle);
     let at = super::link::contact_at(petsc, a, preload);
     let mut out = Vec::new();

@@ -41,6 +41,19 @@ pub fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
+/// The largest |a - b| over the pairs, relative to the largest |a| (NaN if any is NaN or
+/// the lengths differ): how far a series from another rank count is from the 1-rank one.
+pub fn max_scaled_difference(one: &[f64], other: &[f64]) -> f64 {
+    if one.len() != other.len() {
+        return f64::NAN;
+    }
+    let scale = one.iter().fold(0.0f64, |m, z| m.max(z.abs()));
+    one.iter()
+        .zip(other)
+        .map(|(a, b)| (a - b).abs() / scale)
+        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) })
+}
+
 /// Where the 1-rank run of the suite leaves results for the 2-rank run to compare against.
 pub fn suite_dir() -> std::path::PathBuf {
     std::env::var_os("SQUEAL_SUITE_DIR")

@@ -108,12 +108,7 @@ fn pseudo_trajectory_against_the_growth(
         return Ok(());
     };
     let rel = |k: usize| (one[k] - values[k]).abs() / one[k].abs();
-    let scale = one[2..].iter().fold(0.0f64, |m, z| m.max(z.abs()));
-    let zeta = one[2..]
-        .iter()
-        .zip(&values[2..])
-        .map(|(a, b)| (a - b).abs() / scale)
-        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
+    let zeta = super::common::max_scaled_difference(&one[2..], &values[2..]);
     say(
         petsc,
         &format!(

@@ -334,18 +334,9 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     let Some(one) = super::common::one_rank_values(petsc, "pseudo-brake", &values)? else {
         return Ok(());
     };
-    let scale = one[1..].iter().fold(0.0f64, |m, z| m.max(z.abs()));
-    let zeta = one[1..]
-        .iter()
-        .zip(&values[1..])
-        .map(|(a, b)| (a - b).abs() / scale)
-        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
+    let zeta = super::common::max_scaled_difference(&one[1..], &values[1..]);
     let diff = ((one[0] - values[0]).abs() / one[0]).max(zeta);
-    let diff = if zeta.is_nan() || one.len() != values.len() {
-        f64::NAN
-    } else {
-        diff
-    };
+    let diff = if zeta.is_nan() { f64::NAN } else { diff };
     say(
         petsc,
         &format!(
