@@ -202,6 +202,11 @@ pub fn run_with(
     summary.limit_cycle = limit_cycle;
     summary.link = link;
     summary.pseudo = pseudo;
+    if petsc.rank() == 0 {
+        let path = output.join("report.html");
+        let written = crate::io::report::write_report(&summary, scene_text, output);
+        checked(written.map_err(|source| RunError::Io { path, source }))?;
+    }
     Ok(summary)
 }
 

@@ -601,7 +601,7 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named() {
-        let text = DEFAULT_SCENE.replace("count = 50", "count = 50\nmodes = 4");
+        let text = DEFAULT_SCENE.replace("count = 60", "count = 60\nmodes = 4");
         let e = Scene::parse(&text, "x.toml").unwrap_err().to_string();
         assert!(e.contains("x.toml") && e.contains("modes"), "{e}");
     }

@@ -52,7 +52,7 @@ fn disc_ring_scene() -> String {
 }
 
 #[test]
-fn default_scene_runs_end_to_end_on_two_ranks() {
+fn default_scene_runs_end_to_end_on_two_ranks_with_its_report_and_labelled_figures() {
     let dir = scratch("default");
     let out = mpirun(2, &["run"], &dir);
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -61,16 +61,35 @@ fn default_scene_runs_end_to_end_on_two_ranks() {
         "stdout:\n{stdout}\nstderr:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(stdout.contains("real modes"), "{stdout}");
-    assert!(stdout.contains("timings"), "{stdout}");
-    // Only rank 0 prints: the header appears once.
+    // Only rank 0 prints: the header appears once; the summary leads with the answer.
     assert_eq!(stdout.matches("squeal 0.").count(), 1, "{stdout}");
-    assert!(stdout.contains("mesh quality"), "{stdout}");
-    assert!(stdout.contains("rigid-body mode"), "{stdout}");
+    let answer = stdout.split("answer:").nth(1).expect("an answer block");
+    let answer: Vec<&str> = answer
+        .lines()
+        .skip(1)
+        .take_while(|l| l.starts_with("    "))
+        .collect();
+    assert!(answer[0].contains("unstable complex mode"), "{answer:?}");
+    assert!(
+        answer.iter().any(|l| l.contains("transient:")),
+        "{answer:?}"
+    );
+    assert!(answer.iter().any(|l| l.contains("alpha_sat")), "{answer:?}");
+    assert!(answer.last().unwrap().contains("report.html"), "{answer:?}");
+    for needle in [
+        "real modes",
+        "complex modes",
+        "limit cycle",
+        "timings",
+        "mesh quality",
+    ] {
+        assert!(stdout.contains(needle), "{needle} missing:\n{stdout}");
+    }
     for f in [
         "results/results.h5",
         "results/results.xdmf",
         "results/model.png",
+        "results/report.html",
     ] {
         let p = dir.join(f);
         assert!(
@@ -81,11 +100,161 @@ fn default_scene_runs_end_to_end_on_two_ranks() {
     }
     let xdmf = std::fs::read_to_string(dir.join("results/results.xdmf")).unwrap();
     assert!(
-        xdmf.contains("Hexahedron")
-            && xdmf.contains("mode 001")
-            && xdmf.contains("disc_friction_outer"),
+        xdmf.contains("Hexahedron") && xdmf.contains("mode 001"),
         "{xdmf}"
     );
+    let results = dir.join("results");
+    check_report(&results, &default_scene());
+    // Contact maps (4), stability diagram, torque, spectrogram, limit cycle, modal energy,
+    // contact cycle (2), dynamic stability (2), pseudo trajectory (2).
+    check_figures(&results, 15);
+}
+
+#[test]
+fn real_modes_scene_reports_only_its_stages() {
+    let dir = scratch("real-modes");
+    let scene = scene_file("brake-real-modes.toml").replace("count = 50", "count = 12");
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    let out = mpirun(2, &["run", "scene.toml"], &dir);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("rigid-body mode"), "{stdout}");
+    let results = dir.join("results-real-modes");
+    check_report(&results, &scene);
+    check_figures(&results, 0);
+}
+
+/// The report's sections, in order: one per stage the scene asked for, no other.
+fn expected_sections(scene: &str) -> Vec<&'static str> {
+    let v: toml::Value = toml::from_str(scene).unwrap();
+    let has = |key: &str| v.get(key).is_some();
+    let post = |key: &str| v.get("post").and_then(|p| p.get(key)).is_some() && has("transient");
+    let mut out = vec!["answer", "model"];
+    for (asked, id) in [
+        (has("statics"), "static-state"),
+        (has("real_modes"), "real-modes"),
+        (has("complex_modes"), "complex-modes"),
+        (has("sweep"), "sweep"),
+        (has("reduction"), "reduction"),
+        (has("transient"), "transient"),
+        (post("modal_energy"), "modal-energy"),
+        (post("contact_cycle"), "contact-cycle"),
+        (post("dynamic_stability"), "dynamic-stability"),
+        (
+            v.get("post")
+                .and_then(|p| p.get("pseudo_trajectory"))
+                .is_some(),
+            "pseudo-trajectories",
+        ),
+    ] {
+        if asked {
+            out.push(id);
+        }
+    }
+    out.extend(["run", "scene"]);
+    out
+}
+
+/// report.html is one file that references nothing outside itself, every embedded figure
+/// decodes as a PNG, and its sections are those of the stages the scene ran.
+fn check_report(results: &Path, scene: &str) {
+    let html = std::fs::read_to_string(results.join("report.html")).unwrap();
+    let sections: Vec<&str> = html
+        .split("<section id=\"")
+        .skip(1)
+        .map(|s| &s[..s.find('"').unwrap()])
+        .collect();
+    assert_eq!(sections, expected_sections(scene));
+    for outside in ["http://", "https://", "url(", "<link", "<script", "file:"] {
+        assert!(!html.contains(outside), "the report references {outside}");
+    }
+    for href in html.split("href=\"").skip(1) {
+        assert!(
+            href.starts_with('#'),
+            "a link outside the report: {}",
+            &href[..40.min(href.len())]
+        );
+    }
+    let mut figures = 0;
+    for src in html.split("src=\"").skip(1) {
+        let data = src
+            .strip_prefix("data:image/png;base64,")
+            .unwrap_or_else(|| panic!("an image outside the report: {}", &src[..40]));
+        let data = &data[..data.find('"').unwrap()];
+        use base64::Engine as _;
+        let bytes = base64::engine::general_purpose::STANDARD
+            .decode(data)
+            .unwrap();
+        let mut reader = png::Decoder::new(&bytes[..]).read_info().unwrap();
+        let mut pixels = vec![0; reader.output_buffer_size()];
+        let frame = reader.next_frame(&mut pixels).unwrap();
+        assert!(frame.width >= 300 && frame.height >= 200);
+        figures += 1;
+    }
+    assert!(figures >= 1, "no figure in the report");
+}
+
+/// The texts of an SVG written by plotters: (attributes, content) per <text> element.
+fn svg_texts(svg: &str) -> Vec<(String, String)> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let (attributes, rest) = t.split_once('>')?;
+            let content = rest.split("</text>").next()?.trim();
+            Some((attributes.to_string(), content.to_string()))
+        })
+        .collect()
+}
+
+fn font_size(attributes: &str) -> f64 {
+    attributes
+        .split("font-size=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0.0)
+}
+
+/// Every plot the run wrote (PNG) has an SVG twin with a title (its largest text), a
+/// horizontal and a vertical axis label with units in parentheses, and tick values. The
+/// exception is model.png, a picture of the model, not a plot.
+fn check_figures(results: &Path, at_least: usize) {
+    let mut plots = 0;
+    for entry in std::fs::read_dir(results).unwrap() {
+        let png = entry.unwrap().path();
+        let name = png.file_name().unwrap().to_string_lossy().to_string();
+        if !name.ends_with(".png") || name == "model.png" {
+            continue;
+        }
+        let svg = std::fs::read_to_string(png.with_extension("svg"))
+            .unwrap_or_else(|e| panic!("{name}: no SVG twin ({e})"));
+        let texts = svg_texts(&svg);
+        let largest = texts.iter().map(|t| font_size(&t.0)).fold(0.0, f64::max);
+        let title: Vec<&str> = texts
+            .iter()
+            .filter(|t| font_size(&t.0) == largest && !t.1.is_empty())
+            .map(|t| t.1.as_str())
+            .collect();
+        assert!(!title.is_empty(), "{name}: no title");
+        let label = |rotated: bool| {
+            texts.iter().any(|(a, c)| {
+                a.contains("rotate(") == rotated
+                    && font_size(a) < largest
+                    && c.contains('(')
+                    && c.ends_with(')')
+            })
+        };
+        assert!(label(false), "{name}: no x-axis label with units");
+        assert!(label(true), "{name}: no y-axis label with units");
+        let ticks = texts.iter().filter(|t| t.1.parse::<f64>().is_ok()).count();
+        assert!(ticks >= 4, "{name}: {ticks} tick values");
+        plots += 1;
+    }
+    assert!(plots >= at_least, "{plots} plots in {}", results.display());
 }
 
 #[test]
@@ -122,7 +291,7 @@ fn negative_thickness_names_the_key() {
 fn unknown_key_names_the_key() {
     expect_failure(
         "unknown",
-        &default_scene().replace("count = 50", "count = 50\nnumber = 3"),
+        &default_scene().replace("count = 60", "count = 60\nnumber = 3"),
         &["scene.toml", "number"],
     );
 }

@@ -34,7 +34,7 @@ impl SweepParameter {
 
     pub fn label(self) -> &'static str {
         match self {
-            SweepParameter::Mu => "friction coefficient mu",
+            SweepParameter::Mu => "friction coefficient mu (1)",
             SweepParameter::PressureBar => "brake pressure (bar)",
             SweepParameter::DiscSpeed => "disc speed (rad/s)",
             SweepParameter::P0 => "p0 (Pa)",

@@ -1,84 +1,118 @@
-//! Contact maps: a per-point field of one interface drawn in the disc plane as a PNG, each
-//! master face split into the parametric cells of its Gauss points and filled with the
-//! point's value (colour bar on the right, range in the file's text chunk).
+//! Contact maps: a per-point field of one interface drawn in the disc plane (mm, centred on
+//! the rotation axis, seen from the axis' tip), each master face split into the parametric
+//! cells of its Gauss points and filled with the point's value; the pad's outline, a colour
+//! bar with values and units, and an arrow for the disc's direction of motion.
 
+use std::collections::HashMap;
 use std::path::Path;
 
 use crate::contact::pairing::{Axis, ContactPoint};
 use crate::contact::surface::{cross, dot, sub, Face};
 use crate::fem::quadrature::gauss_legendre;
+use crate::io::figure::{Figure, BLACK, RED};
 use crate::mesh::Mesh;
 
-/// A rendered map: RGB pixels (row-major) with the colour bar on the right, and the value
-/// range of the bar (bottom, top).
-pub struct MapImage {
-    pub width: usize,
-    pub height: usize,
-    pub rgb: Vec<u8>,
-    pub range: (f64, f64),
+/// Where the points of one interface are: the mesh, the points, their quadrature and the disc.
+#[derive(Clone, Copy)]
+pub struct MapContext<'a> {
+    pub mesh: &'a Mesh,
+    pub points: &'a [ContactPoint],
+    pub gauss: usize,
+    pub axis: Axis,
+    /// rad/s, sign by the right-hand rule about the axis.
+    pub disc_speed: f64,
 }
 
-/// Width of the colour bar at the right of a map (pixels, with its margin).
-pub const BAR: usize = 60;
+/// One interface in the disc plane (mm): a polygon per point, the boundary edges of its
+/// faces, and the disc's direction of motion at the centroid (unit vector).
+pub struct PlaneMap {
+    pub cells: Vec<(Vec<(f64, f64)>, usize)>,
+    pub outline: Vec<[(f64, f64); 2]>,
+    pub centroid: (f64, f64),
+    pub motion: (f64, f64),
+    pub x: (f64, f64),
+    pub y: (f64, f64),
+}
 
-/// Draws `values` (one per point, point-id order) of the points of `interface` into a PNG,
-/// its title and range in the file's text chunks.
-#[allow(clippy::too_many_arguments)]
+/// Writes the map of `values` (one per point, point-id order) on `interface` as PNG and SVG,
+/// titled `title`, colour bar labelled `label` (with units); nothing when the interface has
+/// no point.
 pub fn write_map(
     path: &Path,
-    mesh: &Mesh,
-    points: &[ContactPoint],
+    context: MapContext,
     values: &[f64],
     interface: usize,
-    gauss: usize,
-    axis: Axis,
+    title: &str,
     label: &str,
 ) -> std::io::Result<()> {
-    let Some(map) = render_map(
-        mesh,
-        points,
-        values,
-        interface,
-        gauss,
-        axis,
-        None,
-        (900, 700),
-    ) else {
+    let Some(map) = plane_map(context, interface) else {
         return Ok(());
     };
-    let (width, height, rgb, (lo_v, hi_v)) = (map.width, map.height, map.rgb, map.range);
-    let file = std::io::BufWriter::new(std::fs::File::create(path)?);
-    let mut encoder = png::Encoder::new(file, width as u32, height as u32);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder
-        .add_text_chunk("Title".into(), label.into())
-        .map_err(std::io::Error::other)?;
-    encoder
-        .add_text_chunk(
-            "Range".into(),
-            format!("{lo_v:.6e} (bottom of bar) .. {hi_v:.6e} (top)"),
-        )
-        .map_err(std::io::Error::other)?;
-    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
-    writer.write_image_data(&rgb).map_err(std::io::Error::other)
+    let range = value_range(&map, values);
+    map_figure(&map, values, (900, 640), title, label, range).save(path)
 }
 
-/// Renders `values` of the points of `interface` in the disc plane (`range`: of the colour
-/// bar; None: the values' own), or None when the interface has no point.
-#[allow(clippy::too_many_arguments)] // the field, where it lives and how to draw it
-pub fn render_map(
-    mesh: &Mesh,
-    points: &[ContactPoint],
+/// The finite values' range over the map's points.
+pub fn value_range(map: &PlaneMap, values: &[f64]) -> (f64, f64) {
+    map.cells
+        .iter()
+        .map(|&(_, i)| values[i])
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(v), h.max(v))
+        })
+}
+
+/// The map drawn as a figure of `size` pixels with its colour bar over `range`.
+pub fn map_figure(
+    map: &PlaneMap,
     values: &[f64],
-    interface: usize,
-    gauss: usize,
-    axis: Axis,
-    range: Option<(f64, f64)>,
-    (width, height): (usize, usize),
-) -> Option<MapImage> {
-    let bar = BAR;
-    // In-plane frame: e1 = any direction normal to the axis, e2 = axis x e1.
+    size: (usize, usize),
+    title: &str,
+    label: &str,
+    range: (f64, f64),
+) -> Figure {
+    let pad = 0.06 * (map.x.1 - map.x.0).max(map.y.1 - map.y.0);
+    let mut fig = Figure::new(
+        size.0,
+        size.1,
+        (map.x.0 - pad, map.x.1 + pad),
+        (map.y.0 - pad, map.y.1 + pad),
+        title,
+        "x in the disc plane (mm)",
+        "y in the disc plane (mm)",
+    )
+    .equal_aspect()
+    .colour_bar(label, range);
+    fig.polygons(
+        map.cells
+            .iter()
+            .map(|(p, i)| (p.clone(), values[*i]))
+            .collect(),
+    );
+    fig.segments(map.outline.clone(), BLACK);
+    let length = 0.25 * (map.x.1 - map.x.0).max(map.y.1 - map.y.0);
+    let (c, m) = (map.centroid, map.motion);
+    fig.arrow(
+        (c.0 - 0.5 * length * m.0, c.1 - 0.5 * length * m.1),
+        (c.0 + 0.5 * length * m.0, c.1 + 0.5 * length * m.1),
+        RED,
+        "disc motion",
+    );
+    fig
+}
+
+/// The polygons of the points of `interface` in the disc plane, or None without points.
+pub fn plane_map(context: MapContext, interface: usize) -> Option<PlaneMap> {
+    let MapContext {
+        mesh,
+        points,
+        gauss,
+        axis,
+        disc_speed,
+    } = context;
+    // In-plane frame: e1 = any direction normal to the axis, e2 = axis x e1 (seen from the
+    // axis' tip, positive rotation is counter-clockwise).
     let a = axis.direction;
     let seed = if a[0].abs() < 0.9 {
         [1.0, 0.0, 0.0]
@@ -90,31 +124,31 @@ pub fn render_map(
         crate::contact::surface::normalize(t)
     };
     let e2 = cross(a, e1);
-    let plane = |x: [f64; 3]| [dot(x, e1), dot(x, e2)];
+    let plane = |x: [f64; 3]| {
+        let d = sub(x, axis.center);
+        (1e3 * dot(d, e1), 1e3 * dot(d, e2))
+    };
     let mine: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].interface == interface)
         .collect();
     if mine.is_empty() {
         return None;
     }
-    let (lo_v, hi_v) = range.unwrap_or_else(|| {
-        mine.iter()
-            .filter(|&&i| values[i].is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &i| {
-                (l.min(values[i]), h.max(values[i]))
-            })
-    });
-    // Polygons (in the plane) with their values.
     let (gp, _) = gauss_legendre(gauss.clamp(1, 4));
     let mut bounds = vec![-1.0];
     bounds.extend(gp.windows(2).map(|w| 0.5 * (w[0] + w[1])));
     bounds.push(1.0);
     let cell = |x: f64| gp.iter().position(|&g| (g - x).abs() < 1e-9);
-    let mut polys: Vec<(Vec<[f64; 2]>, f64)> = Vec::new();
+    let mut cells = Vec::new();
+    // Face edges by their end nodes: an edge of one face only is on the outline.
+    type Edge = ((f64, f64), (f64, f64), usize); // ends in the plane, faces using it
+    let mut edges: HashMap<(usize, usize), Edge> = HashMap::new();
+    let mut seen = std::collections::HashSet::new();
     for &i in &mine {
         let p = &points[i];
         let face = Face::new(mesh, p.master_face.0, p.master_face.1);
-        let corners: Vec<[f64; 2]> = match (
+        let corners = if face.shape.is_triangle() { 3 } else { 4 };
+        let polygon: Vec<(f64, f64)> = match (
             face.shape.is_triangle(),
             cell(p.master_xi[0]),
             cell(p.master_xi[1]),
@@ -132,127 +166,48 @@ pub fn render_map(
             _ => face
                 .coords
                 .iter()
-                .take(if face.shape.is_triangle() { 3 } else { 4 })
+                .take(corners)
                 .map(|&x| plane(x))
                 .collect(),
         };
-        polys.push((corners, values[i]));
-    }
-    let (mut min, mut max) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for (c, _) in &polys {
-        for q in c {
-            for d in 0..2 {
-                min[d] = min[d].min(q[d]);
-                max[d] = max[d].max(q[d]);
+        cells.push((polygon, i));
+        if seen.insert(p.master_face) {
+            for k in 0..corners {
+                let (u, v) = (face.nodes[k], face.nodes[(k + 1) % corners]);
+                let key = (u.min(v), u.max(v));
+                let ends = (plane(face.coords[k]), plane(face.coords[(k + 1) % corners]));
+                edges.entry(key).or_insert((ends.0, ends.1, 0)).2 += 1;
             }
         }
     }
-    let span = (max[0] - min[0]).max(max[1] - min[1]).max(1e-300);
-    let draw_w = (width - bar - 30) as f64;
-    let draw_h = (height - 20) as f64;
-    let s = (draw_w / (max[0] - min[0]).max(1e-300 * span))
-        .min(draw_h / (max[1] - min[1]).max(1e-300 * span));
-    let to_px = |q: [f64; 2]| {
-        [
-            10.0 + (q[0] - min[0]) * s,
-            height as f64 - 10.0 - (q[1] - min[1]) * s,
-        ]
-    };
-    let mut rgb = vec![255u8; width * height * 3];
-    let colour = |v: f64| -> [u8; 3] {
-        let t = if hi_v > lo_v {
-            ((v - lo_v) / (hi_v - lo_v)).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        ramp(t)
-    };
-    for (c, v) in &polys {
-        let px: Vec<[f64; 2]> = c.iter().map(|&q| to_px(q)).collect();
-        let col = colour(*v);
-        for t in 1..px.len() - 1 {
-            fill_triangle(&mut rgb, width, height, [px[0], px[t], px[t + 1]], col);
+    let outline = edges
+        .values()
+        .filter(|e| e.2 == 1)
+        .map(|e| [e.0, e.1])
+        .collect();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    let mut sum = (0.0, 0.0);
+    for (polygon, _) in &cells {
+        for q in polygon {
+            lo = [lo[0].min(q.0), lo[1].min(q.1)];
+            hi = [hi[0].max(q.0), hi[1].max(q.1)];
         }
+        let n = polygon.len() as f64;
+        sum.0 += polygon.iter().map(|q| q.0).sum::<f64>() / n;
+        sum.1 += polygon.iter().map(|q| q.1).sum::<f64>() / n;
     }
-    // Colour bar: bottom = minimum, top = maximum.
-    for y in 10..height - 10 {
-        let t = 1.0 - (y - 10) as f64 / (height - 21) as f64;
-        let c = ramp(t);
-        for x in width - bar..width - 20 {
-            rgb[3 * (y * width + x)..3 * (y * width + x) + 3].copy_from_slice(&c);
-        }
-    }
-    Some(MapImage {
-        width,
-        height,
-        rgb,
-        range: (lo_v, hi_v),
+    let centroid = (sum.0 / cells.len() as f64, sum.1 / cells.len() as f64);
+    // The disc's surface velocity omega a x r is, in the plane, r turned by +90 degrees.
+    let r = (centroid.0 * centroid.0 + centroid.1 * centroid.1)
+        .sqrt()
+        .max(1e-300);
+    let sign = if disc_speed < 0.0 { -1.0 } else { 1.0 };
+    Some(PlaneMap {
+        cells,
+        outline,
+        centroid,
+        motion: (-sign * centroid.1 / r, sign * centroid.0 / r),
+        x: (lo[0], hi[0]),
+        y: (lo[1], hi[1]),
     })
-}
-
-/// Blue - cyan - green - yellow - red.
-fn ramp(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 5] = [
-        [0.10, 0.15, 0.60],
-        [0.10, 0.65, 0.85],
-        [0.20, 0.75, 0.30],
-        [0.95, 0.85, 0.15],
-        [0.80, 0.10, 0.10],
-    ];
-    let x = t * 4.0;
-    let i = (x.floor() as usize).min(3);
-    let f = x - i as f64;
-    let mut c = [0u8; 3];
-    for k in 0..3 {
-        c[k] = (255.0 * (STOPS[i][k] * (1.0 - f) + STOPS[i + 1][k] * f)) as u8;
-    }
-    c
-}
-
-fn fill_triangle(rgb: &mut [u8], w: usize, h: usize, p: [[f64; 2]; 3], c: [u8; 3]) {
-    let xmin = p
-        .iter()
-        .map(|q| q[0])
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0) as usize;
-    let xmax = p
-        .iter()
-        .map(|q| q[0])
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(w as f64 - 1.0);
-    let ymin = p
-        .iter()
-        .map(|q| q[1])
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0) as usize;
-    let ymax = p
-        .iter()
-        .map(|q| q[1])
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(h as f64 - 1.0);
-    if xmax < 0.0 || ymax < 0.0 {
-        return;
-    }
-    let edge = |a: [f64; 2], b: [f64; 2], x: f64, y: f64| {
-        (b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-    };
-    let area = edge(p[0], p[1], p[2][0], p[2][1]);
-    if area.abs() < 1e-12 {
-        return;
-    }
-    for y in ymin..=ymax as usize {
-        for x in xmin..=xmax as usize {
-            let (fx, fy) = (x as f64 + 0.5, y as f64 + 0.5);
-            let w0 = edge(p[1], p[2], fx, fy) / area;
-            let w1 = edge(p[2], p[0], fx, fy) / area;
-            let w2 = edge(p[0], p[1], fx, fy) / area;
-            if w0 >= -1e-9 && w1 >= -1e-9 && w2 >= -1e-9 {
-                rgb[3 * (y * w + x)..3 * (y * w + x) + 3].copy_from_slice(&c);
-            }
-        }
-    }
 }

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::plot::{padded, Figure, BLACK, BLUE, PALETTE, RED};
+use super::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::eigen::complex_modes::ComplexMode;
 use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
 use crate::eigen::tracking::Tracks;
@@ -21,7 +21,7 @@ pub fn write_diagram(path: &Path, modes: &[ComplexMode], title: &str) -> std::io
         padded(z_min, z_max.max(1e-4), 0.08),
         title,
         "frequency (Hz)",
-        "damping ratio",
+        "damping ratio (1)",
     );
     fig.hline(0.0, BLACK);
     for m in modes.iter().filter(|m| !m.unstable) {

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::spectrum::{fft, resample};
+use super::spectrum::{power_spectrum, resample};
 
 /// The `[post.limit_cycle]` table of a scene.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize)]
@@ -232,26 +232,24 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     out
 }
 
-/// The spectral peak (Hann window, the largest power of two inside, parabolic interpolation
-/// of the log power), 0 when the signal is constant.
+/// The spectral peak (Hann window over the whole signal, parabolic interpolation of the log
+/// power), 0 when the signal is constant.
 pub fn dominant_frequency(u: &[f64], dt: f64) -> f64 {
-    let n = if u.len() < 8 {
+    let n = u.len();
+    if n < 8 {
         return 0.0;
-    } else {
-        1usize << (usize::BITS - 1 - u.len().leading_zeros())
-    };
+    }
     let seg = &u[u.len() - n..];
     let mean = seg.iter().sum::<f64>() / n as f64;
-    let mut re: Vec<f64> = seg
+    let windowed: Vec<f64> = seg
         .iter()
         .enumerate()
         .map(|(i, v)| {
             (v - mean) * (0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / n as f64).cos())
         })
         .collect();
-    let mut im = vec![0.0; n];
-    fft(&mut re, &mut im);
-    let power: Vec<f64> = (0..n / 2).map(|k| re[k] * re[k] + im[k] * im[k]).collect();
+    let mut power = power_spectrum(&windowed);
+    power.truncate(n / 2);
     let (k, p) = power
         .iter()
         .enumerate()

@@ -301,8 +301,8 @@ pub fn characterize(trajectory: &Trajectory, step: f64) -> LimitCycle {
     crate::post::limit_cycle::characterize(&tr.time, &tr.braking_torque(), step, &settings)
 }
 
-/// The summary's lines of the link analyses.
-pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+/// The modal energies' summary lines (nothing when not asked for).
+pub fn fmt_modal_energy(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
     if let Some(r) = &link.modal_energy {
         let e = &r.energy;
         let i = e
@@ -330,6 +330,11 @@ pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Resul
             )?;
         }
     }
+    Ok(())
+}
+
+/// The contact cycle's summary lines (nothing when not asked for).
+pub fn fmt_contact_cycle(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
     if let Some(r) = &link.contact_cycle {
         let c = &r.cycle;
         writeln!(
@@ -355,6 +360,11 @@ pub fn fmt_link(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Resul
             )?;
         }
     }
+    Ok(())
+}
+
+/// The dynamic stability's summary lines (nothing when not asked for).
+pub fn fmt_dynamic_stability(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
     if let Some(r) = &link.dynamic_stability {
         let s = &r.stability;
         let sampling = if r.states_per_period.is_nan() {

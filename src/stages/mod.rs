@@ -9,6 +9,7 @@
 //! driver of a whole run; writers of each stage's output live in `crate::io::output`; the
 //! run's summary is [`summary::RunSummary`].
 
+pub mod answer;
 pub mod complex;
 pub mod link;
 pub mod model;

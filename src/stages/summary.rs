@@ -347,16 +347,81 @@ impl ComplexSummary {
 impl fmt::Display for RunSummary {
     /// The one-screen summary of a run, section by section.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.fmt_model(f)?;
-        self.fmt_statics(f)?;
-        self.fmt_modes(f)?;
-        self.fmt_reduction_transient_sweep(f)?;
-        self.fmt_limit_cycle(f)?;
-        super::link::fmt_link(&self.link, f)?;
-        if let Some(p) = &self.pseudo {
-            super::pseudo::fmt_pseudo(p, f)?;
+        writeln!(f, "answer:")?;
+        for line in super::answer::answer_lines(self) {
+            writeln!(f, "    {line}")?;
         }
-        self.fmt_timings(f)
+        for part in Part::ALL {
+            write!(f, "{}", self.part(part))?;
+        }
+        Ok(())
+    }
+}
+
+/// The summary's parts, in order (the report shows each in its section).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    Model,
+    Statics,
+    Modes,
+    Reduction,
+    Transient,
+    Sweep,
+    LimitCycle,
+    ModalEnergy,
+    ContactCycle,
+    DynamicStability,
+    Pseudo,
+    Timings,
+}
+
+impl Part {
+    pub const ALL: [Part; 12] = [
+        Part::Model,
+        Part::Statics,
+        Part::Modes,
+        Part::Reduction,
+        Part::Transient,
+        Part::Sweep,
+        Part::LimitCycle,
+        Part::ModalEnergy,
+        Part::ContactCycle,
+        Part::DynamicStability,
+        Part::Pseudo,
+        Part::Timings,
+    ];
+}
+
+/// One part of a summary, displayed.
+pub struct SummaryPart<'a>(&'a RunSummary, Part);
+
+impl fmt::Display for SummaryPart<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = self.0;
+        match self.1 {
+            Part::Model => s.fmt_model(f),
+            Part::Statics => s.fmt_statics(f),
+            Part::Modes => s.fmt_modes(f),
+            Part::Reduction => s.fmt_reduction(f),
+            Part::Transient => s.fmt_transient(f),
+            Part::Sweep => s.fmt_sweep(f),
+            Part::LimitCycle => s.fmt_limit_cycle(f),
+            Part::ModalEnergy => super::link::fmt_modal_energy(&s.link, f),
+            Part::ContactCycle => super::link::fmt_contact_cycle(&s.link, f),
+            Part::DynamicStability => super::link::fmt_dynamic_stability(&s.link, f),
+            Part::Pseudo => s
+                .pseudo
+                .as_ref()
+                .map_or(Ok(()), |p| super::pseudo::fmt_pseudo(p, f)),
+            Part::Timings => s.fmt_timings(f),
+        }
+    }
+}
+
+impl RunSummary {
+    /// One part of the summary, to display.
+    pub fn part(&self, part: Part) -> SummaryPart<'_> {
+        SummaryPart(self, part)
     }
 }
 
@@ -485,10 +550,8 @@ impl RunSummary {
         Ok(())
     }
 
-    /// Reduction, transient, sweep.
-    fn fmt_reduction_transient_sweep(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = self;
-        if let Some(r) = &s.reduction {
+    fn fmt_reduction(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(r) = &self.reduction {
             writeln!(f,
                 "reduction: {} -> {} DOF ({} kept in the contact zone + {} modal coordinates of {} offered, {} dropped), {:.2} s; reduced real modes vs full: max relative error {:.1e} over {}; static state represented to {:.1e}; basis M-orthonormal to {:.1e}; reduced unknowns per rank {:?}",
                 r.full_dofs,
@@ -505,7 +568,11 @@ impl RunSummary {
                 r.rows_per_rank
             )?;
         }
-        if let Some(t) = &s.transient {
+        Ok(())
+    }
+
+    fn fmt_transient(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(t) = &self.transient {
             writeln!(f,
                 "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
@@ -528,7 +595,11 @@ impl RunSummary {
                 1e3 * t.seconds_products_per_step
             )?;
         }
-        if let Some(sw) = &s.sweep {
+        Ok(())
+    }
+
+    fn fmt_sweep(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(sw) = &self.sweep {
             let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
             writeln!(f,
                 "sweep over {}: {} points, {} tracked modes; per point {:.3} s static re-solve, {:.4} s re-projection + complex modes",
@@ -628,7 +699,7 @@ impl RunSummary {
         )?;
         writeln!(
             f,
-            "results: {}/results.h5 (+ results.xdmf, model.png)",
+            "results: {0}/results.h5 (+ results.xdmf for ParaView, figures as PNG and SVG), report: {0}/report.html",
             s.output.display()
         )?;
         Ok(())

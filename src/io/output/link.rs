@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::WriteError;
 use crate::contact::pairing::{Axis, ContactPoint};
-use crate::io::contact_map::{render_map, BAR};
-use crate::io::plot::{colormap, padded, Figure, BLACK, BLUE, GREY, PALETTE, RED};
+use crate::io::contact_map::{map_figure, plane_map};
+use crate::io::figure::{padded, Figure, BLACK, BLUE, GREY, PALETTE, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
 use crate::mesh::Mesh;
@@ -142,8 +142,9 @@ fn plot_modal_energy(r: &ModalEnergyReport, output: &Path) -> Result<(), WriteEr
             e.at
         ),
         "time (s)",
-        "log10 modal energy (J)",
-    );
+        "modal energy (J)",
+    )
+    .log_y();
     for (k, m) in e.ranked.iter().enumerate() {
         let c = PALETTE[k % PALETTE.len()];
         let points: Vec<(f64, f64)> = e
@@ -153,14 +154,13 @@ fn plot_modal_energy(r: &ModalEnergyReport, output: &Path) -> Result<(), WriteEr
             .filter(|(_, &v)| v > 0.0)
             .map(|(&t, &v)| (t, log(v).max(lo)))
             .collect();
-        fig.line(&points, c);
         let label = format!(
             "R{} {:.0} Hz: {:.1} %",
             m.mode + 1,
             r.frequencies_hz[m.mode],
             100.0 * m.share
         );
-        fig.legend(k, &label, c);
+        fig.series(&points, c, &label);
     }
     save(&fig, output, "modal_energy.png")
 }
@@ -218,24 +218,30 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
         padded(z0.min(0.0), z1.max(0.0), 0.08),
         frequencies,
         &format!(
-            "dynamic stability: {} modes along {} states (colour: time; zeta 1st-99th pct)",
+            "dynamic stability: {} modes along {} states (damping axis: 1st-99th percentile)",
             tracks.len(),
             s.times.len()
         ),
-        "damping ratio (1); < 0: unstable",
+        "damping ratio, unstable below 0 (1)",
         "frequency (Hz)",
+    )
+    .colour_bar(
+        "time (s)",
+        (s.times[0], *s.times.last().unwrap_or(&s.times[0])),
     );
-    let n = s.times.len().max(2) as f64;
+    fig.vline(0.0, RED, Some("stability boundary"));
     for (k, t) in tracks.iter().enumerate() {
         let (fr, zr) = (t.frequencies_hz(), t.damping_ratios());
-        for i in 1..fr.len() {
-            fig.marker(zr[i], fr[i], colormap((i - 1) as f64 / (n - 1.0)), 2);
-        }
-        fig.marker(zr[0], fr[0], BLACK, 4);
+        let points: Vec<(f64, f64)> = zr[1..]
+            .iter()
+            .copied()
+            .zip(fr[1..].iter().copied())
+            .collect();
+        fig.valued(points, s.times.clone(), 3);
+        fig.marker(zr[0], fr[0], BLACK, 5);
         fig.label(zr[0], fr[0], &t.name, BLACK, k % 2 == 1);
     }
-    // The stability boundary (a segment must end inside the axes to be drawn).
-    fig.line(&[(0.0, frequencies.0), (0.0, frequencies.1)], RED);
+    fig.legend(0, "nominal mode at the static state", BLACK);
     save(&fig, output, "dynamic_stability.png")
 }
 
@@ -287,11 +293,8 @@ fn plot_stability_in_time(r: &DynamicStabilityReport, output: &Path) -> Result<(
         for (k, t) in tracks.iter().enumerate() {
             let c = PALETTE[k % PALETTE.len()];
             let points: Vec<(f64, f64)> = s.times.iter().copied().zip(values(t)).collect();
-            fig.line(&points, c);
-            for &(ti, v) in &points {
-                fig.marker(ti, v, c, 1);
-            }
-            fig.legend(k, &t.name, c);
+            fig.series(&points, c, &t.name);
+            fig.markers(points, c, 2);
         }
         panels.push(fig);
     }
@@ -312,9 +315,7 @@ fn plot_stability_in_time(r: &DynamicStabilityReport, output: &Path) -> Result<(
         .zip(s.torque.iter().copied())
         .collect();
     torque.line(&points, BLUE);
-    for &(ti, v) in &points {
-        torque.marker(ti, v, GREY, 1);
-    }
+    torque.markers(points, GREY, 2);
     panels.push(torque);
     let path = output.join("dynamic_stability_time.png");
     Figure::save_column(&panels.iter().collect::<Vec<_>>(), &path)
@@ -387,71 +388,50 @@ fn plot_contact_cycle(
     let c = &r.cycle;
     let (hi, lo) = pad.extreme_phases;
     let [_, max, variation] = ContactCycle::spread(&c.stiffness);
-    let mine: Vec<usize> = (0..maps.points.len())
-        .filter(|&j| maps.points[j].interface == pad.interface)
-        .collect();
-    let top = mine.iter().map(|&j| max[j]).fold(0.0, f64::max);
-    let (map_w, map_h, label_w) = (470usize, 420usize, 110usize);
-    let panel_w = map_w + label_w;
-    let mut canvas = Figure::canvas(3 * panel_w, map_h + 90);
-    let title = format!(
-        "{}: contact stiffness over one period of {:.4e} s ({} phases); largest varies by {:.0} %",
-        pad.name,
-        c.period,
-        c.times.len(),
-        100.0 * pad.variation
-    );
-    canvas.text(10.0, 8.0, &title, BLACK, 2);
-    // (title, values, colour range, units) per panel.
-    type Panel<'v> = (&'v str, &'v [f64], Option<(f64, f64)>, &'v str);
-    let panels: [Panel; 3] = [
-        ("stiffest phase", &c.stiffness[hi], Some((0.0, top)), "Pa/m"),
-        ("softest phase", &c.stiffness[lo], Some((0.0, top)), "Pa/m"),
-        ("variation (max-min)/max", &variation, Some((0.0, 1.0)), "1"),
-    ];
-    for (k, (name, values, range, units)) in panels.into_iter().enumerate() {
-        let x = k * panel_w;
-        let label = match k {
-            0 => format!("{name}, t = {:.5e} s", c.times[hi]),
-            1 => format!("{name}, t = {:.5e} s", c.times[lo]),
-            _ => name.to_string(),
-        };
-        canvas.text(x as f64 + 10.0, 40.0, &label, BLACK, 1);
-        let image = render_map(
-            maps.mesh,
-            maps.points,
-            values,
-            pad.interface,
-            maps.gauss,
-            maps.axis,
-            range,
-            (map_w, map_h),
-        );
-        let Some(image) = image else { continue };
-        canvas.blit(x, 55, image.width, &image.rgb);
-        let bar_x = (x + map_w - BAR + 44) as f64;
-        canvas.text(
-            bar_x,
-            58.0,
-            &format!("{:.2e} {units}", image.range.1),
-            BLACK,
-            1,
-        );
-        let bottom = (55 + map_h - 18) as f64;
-        canvas.text(bar_x, bottom, &format!("{:.2e}", image.range.0), BLACK, 1);
-    }
-    let turning = if maps.disc_speed >= 0.0 {
-        "counter-clockwise"
-    } else {
-        "clockwise"
+    let context = crate::io::contact_map::MapContext {
+        mesh: maps.mesh,
+        points: maps.points,
+        gauss: maps.gauss,
+        axis: maps.axis,
+        disc_speed: maps.disc_speed,
     };
-    let caption = format!(
-        "in the disc plane, seen from the tip of the rotation axis: the disc turns {turning}; colour bars: bottom to top"
-    );
-    canvas.text(10.0, (map_h + 65) as f64, &caption, BLACK, 1);
+    let Some(map) = plane_map(context, pad.interface) else {
+        return Ok(());
+    };
+    let top = map.cells.iter().map(|&(_, j)| max[j]).fold(0.0, f64::max);
+    let stiffness = "contact stiffness (Pa/m)";
+    let panels = [
+        map_figure(
+            &map,
+            &c.stiffness[hi],
+            (620, 560),
+            &format!("{}: stiffest phase, t = {:.5} s", pad.name, c.times[hi]),
+            stiffness,
+            (0.0, top),
+        ),
+        map_figure(
+            &map,
+            &c.stiffness[lo],
+            (620, 560),
+            &format!("softest phase, t = {:.5} s", c.times[lo]),
+            stiffness,
+            (0.0, top),
+        ),
+        map_figure(
+            &map,
+            &variation,
+            (620, 560),
+            &format!(
+                "variation over the {:.3} ms period (largest: {:.0} %)",
+                1e3 * c.period,
+                100.0 * pad.variation
+            ),
+            "(max - min) / max (1)",
+            (0.0, 1.0),
+        ),
+    ];
     let path = output.join(format!("contact_cycle_{}.png", pad.name));
-    canvas
-        .save(&path)
+    Figure::save_row(&panels.iter().collect::<Vec<_>>(), &path)
         .map_err(|source| WriteError::Io { path, source })
 }
 

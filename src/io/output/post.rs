@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use super::WriteError;
-use crate::io::plot::{padded, Figure, BLUE, GREY, RED};
+use crate::io::figure::{padded, Figure, BLUE, GREY, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
 use crate::stages::post::LimitCycleReport;
@@ -119,7 +119,7 @@ fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Resul
         .copied()
         .zip(torque.iter().copied())
         .collect();
-    fig.line(&points, BLUE);
+    fig.series(&points, BLUE, "braking torque");
     let mean = torque.iter().sum::<f64>() / torque.len().max(1) as f64;
     for sign in [1.0, -1.0] {
         let env: Vec<(f64, f64)> = c
@@ -127,11 +127,16 @@ fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Resul
             .iter()
             .map(|&(t, a)| (t, mean + sign * a))
             .collect();
-        fig.line(&env, RED);
+        if sign > 0.0 {
+            fig.series(&env, RED, "envelope: mean +- half peak-to-peak");
+        } else {
+            fig.line(&env, RED);
+        }
     }
     let tick = lo + 0.02 * (hi - lo);
-    for &t in &c.cycle_starts {
-        fig.marker(t, tick, GREY, 2);
+    fig.markers(c.cycle_starts.iter().map(|&t| (t, tick)).collect(), GREY, 3);
+    if !c.cycle_starts.is_empty() {
+        fig.legend(0, "start of a detected cycle", GREY);
     }
     let path = output.join("limit_cycle.png");
     fig.save(&path)

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use super::WriteError;
-use crate::io::plot::{colormap, padded, Figure, BLACK, BLUE, PALETTE, RED};
+use crate::io::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
 use crate::post::pseudo_trajectory::{Found, Period};
@@ -112,15 +112,9 @@ fn padded_pair((a, b): (f64, f64)) -> (f64, f64) {
     padded(a, b, 0.08)
 }
 
-/// A vertical line at data abscissa x over the y range, labelled.
-fn mark(fig: &mut Figure, x: f64, (y0, y1): (f64, f64), label: &str, c: [u8; 3], below: bool) {
-    fig.line(&[(x, y0), (x, y1)], c);
-    let y = if below {
-        y0 + 0.15 * (y1 - y0)
-    } else {
-        y1 - 0.1 * (y1 - y0)
-    };
-    fig.label(x, y, label, c, below);
+/// A vertical line at data abscissa x, in the legend as `label`.
+fn mark(fig: &mut Figure, x: f64, label: &str, c: [u8; 3]) {
+    fig.vline(x, c, Some(label));
 }
 
 /// Mean damping ratio, unstable fraction, frequency span and the sample point's contact
@@ -129,25 +123,25 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
     let t = &s.trajectory;
     let log: Vec<f64> = t.sweep.iter().map(|p| p.alpha.log10()).collect();
     let x = padded(log[0], log[log.len() - 1], 0.02);
-    let marks = |fig: &mut Figure, y: (f64, f64)| {
+    let marks = |fig: &mut Figure| {
         if let Some(a) = t.alpha_crit.alpha() {
-            mark(fig, a.log10(), y, "alpha_crit", PALETTE[1], true);
+            mark(fig, a.log10(), "alpha_crit", PALETTE[1]);
         }
         if let Some(a) = t.alpha_sat.alpha() {
-            mark(fig, a.log10(), y, "alpha_sat", RED, false);
+            mark(fig, a.log10(), "alpha_sat", RED);
         }
         if let Some(a) = t
             .alpha_stable
             .alpha()
             .filter(|_| t.alpha_stable.alpha() != t.alpha_sat.alpha())
         {
-            mark(fig, a.log10(), y, "stable above", PALETTE[4], false);
+            mark(fig, a.log10(), "stable above", PALETTE[4]);
         }
         if let Some(tr) = &s.transient {
-            mark(fig, tr.mean.log10(), y, "transient", PALETTE[2], true);
+            mark(fig, tr.mean.log10(), "transient", PALETTE[2]);
         }
     };
-    let xl = "log10 alpha (m): largest relative displacement at a contact point";
+    let xl = "amplitude alpha: largest relative displacement at a contact point (m)";
     let f = |a: f64| format!("{a:.1}");
     let title = format!(
         "{} ({} Hz): pseudo trajectories, {} phases per period",
@@ -161,14 +155,14 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         range(zeta.iter().copied()).1.max(0.0),
         0.08,
     );
-    let mut damping = Figure::new(1200, 300, x, yz, &title, xl, "mean damping ratio");
+    let mut damping = Figure::new(1200, 320, x, yz, &title, xl, "mean damping ratio (1)").log_x();
     damping.hline(0.0, BLACK);
     let points: Vec<(f64, f64)> = log.iter().copied().zip(zeta).collect();
     damping.line(&points, BLUE);
     for &(a, z) in &points {
         damping.marker(a, z, BLUE, 2);
     }
-    marks(&mut damping, yz);
+    marks(&mut damping);
 
     let mut fraction = Figure::new(
         1200,
@@ -178,14 +172,15 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         "fraction of the period the mode is unstable",
         xl,
         "fraction (1)",
-    );
+    )
+    .log_x();
     let points: Vec<(f64, f64)> = log
         .iter()
         .copied()
         .zip(t.sweep.iter().map(|p| p.unstable_fraction))
         .collect();
     fraction.line(&points, BLUE);
-    marks(&mut fraction, (-0.05, 1.05));
+    marks(&mut fraction);
 
     let lo: Vec<f64> = t
         .sweep
@@ -210,12 +205,13 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         "frequency over the period: lowest and highest",
         xl,
         "frequency (Hz)",
-    );
+    )
+    .log_x();
     for (series, c) in [(&lo, PALETTE[0]), (&hi, PALETTE[3])] {
         let points: Vec<(f64, f64)> = log.iter().copied().zip(series.iter().copied()).collect();
         frequency.line(&points, c);
     }
-    marks(&mut frequency, yf);
+    marks(&mut frequency);
 
     let phases = t.diagram.eigenvalue.len();
     let mut status = Figure::new(
@@ -223,23 +219,23 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         260,
         x,
         (0.0, 1.0),
-        "contact at the sample point: dark open, teal stick, yellow slide",
+        "contact state at the sample point over the period",
         xl,
-        "phase / 2 pi",
-    );
+        "phase / 2 pi (1)",
+    )
+    .log_x()
+    .colour_bar("0 open, 1 stick, 2 slide", (0.0, 2.0));
     let values: Vec<f64> = t
         .sweep
         .iter()
         .flat_map(|p| p.sample.iter().map(|&v| f64::from(v)))
         .collect();
     let half = 0.5 * (log[1] - log[0]);
-    status.heatmap(
-        t.sweep.len(),
-        phases,
-        &values,
+    status.cells(
+        (t.sweep.len(), phases),
+        values,
         (log[0] - half, log[log.len() - 1] + half),
         (0.0, 1.0),
-        (0.0, 2.0),
     );
     let path = output.join(format!("pseudo_amplitude_{}.png", t.name));
     let panels = [&damping, &fraction, &frequency, &status];
@@ -263,17 +259,20 @@ fn plot_stability(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         700,
         padded(z0, z1, 0.08),
         (f0, f1),
-        &format!("{} at alpha = {:.3e} m (colour: phase)", t.name, d.alpha),
-        "damping ratio (1); < 0: unstable",
+        &format!(
+            "{}: pseudo dynamic stability at alpha = {:.3e} m",
+            t.name, d.alpha
+        ),
+        "damping ratio, unstable below 0 (1)",
         "frequency (Hz)",
-    );
-    fig.line(&[(0.0, f0), (0.0, f1)], RED);
-    let n = fr.len().max(2) as f64;
-    for i in 0..fr.len() {
-        fig.marker(zr[i], fr[i], colormap(i as f64 / (n - 1.0)), 3);
-    }
-    fig.marker(nominal.0, nominal.1, BLACK, 5);
-    fig.label(nominal.0, nominal.1, "static state", BLACK, false);
+    )
+    .colour_bar("phase / 2 pi (1)", (0.0, 1.0));
+    fig.vline(0.0, RED, Some("stability boundary"));
+    let n = fr.len().max(1) as f64;
+    let points: Vec<(f64, f64)> = zr.iter().copied().zip(fr.iter().copied()).collect();
+    fig.valued(points, (0..fr.len()).map(|i| i as f64 / n).collect(), 4);
+    fig.marker(nominal.0, nominal.1, BLACK, 6);
+    fig.legend(0, "static state", BLACK);
     let path = output.join(format!("pseudo_stability_{}.png", t.name));
     fig.save(&path)
         .map_err(|source| WriteError::Io { path, source })

@@ -57,15 +57,21 @@ pub fn write_static<'p>(
                     continue;
                 }
                 let path = output.join(format!("contact_{name}_{}.png", itf.name));
+                let context = crate::io::contact_map::MapContext {
+                    mesh: &model.mesh,
+                    points: &contact.points,
+                    gauss: settings.gauss_points,
+                    axis: settings.axis(),
+                    disc_speed: settings.disc_speed,
+                };
+                let what = name.replace('_', " ");
                 crate::io::contact_map::write_map(
                     &path,
-                    &model.mesh,
-                    &contact.points,
+                    context,
                     &all,
                     i,
-                    settings.gauss_points,
-                    settings.axis(),
-                    &format!("{name} ({units}) on {}", itf.name),
+                    &format!("static state: {what} on {}", itf.name),
+                    &format!("{what} ({units})"),
                 )
                 .map_err(|source| WriteError::Io { path, source })?;
             }

@@ -51,7 +51,7 @@ pub fn write_transient(
 
 /// torque.png: the braking torque against time.
 fn write_torque_plot(tr: &Transient, output: &Path) -> Result<(), WriteError> {
-    use crate::io::plot::{padded, Figure, BLUE};
+    use crate::io::figure::{padded, Figure, BLUE};
     let torque = tr.braking_torque();
     let (lo, hi) = torque
         .iter()
@@ -93,22 +93,22 @@ fn write_spectrogram(
     let dt = s.column_width;
     let x = (s.first_time - 0.5 * dt, s.last_time + 0.5 * dt);
     let y = (0.0, s.rows as f64 * s.bin_hz);
-    let mut fig = crate::io::plot::Figure::new(
+    let mut fig = crate::io::figure::Figure::new(
         1000,
         500,
         x,
         y,
-        &format!("spectrogram: {what} (dB)"),
+        &format!("spectrogram: {what}"),
         "time (s)",
         "frequency (Hz)",
-    );
-    fig.heatmap(
-        s.columns,
-        s.rows,
-        &s.db,
+    )
+    .colour_bar("power spectral density (dB re largest)", (-80.0, 0.0));
+    let relative: Vec<f64> = s.db.iter().map(|v| (v - s.top_db).max(-80.0)).collect();
+    fig.cells(
+        (s.columns, s.rows),
+        relative,
         x,
         (y.0 - 0.5 * s.bin_hz, y.1 - 0.5 * s.bin_hz),
-        (s.top_db - 80.0, s.top_db),
     );
     let path = output.join("spectrogram.png");
     fig.save(&path)

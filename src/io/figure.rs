@@ -1,0 +1,755 @@
+//! Figures: a plot described as data (title, axes with units, layers, legend, colour bar) and
+//! drawn by `plotters` twice, into `<name>.png` and `<name>.svg`. Text uses the bundled DejaVu
+//! Sans (through ab_glyph), so a figure looks the same on every machine and needs no system
+//! font. The SVG keeps every text as text: the report's tests read titles and axis labels
+//! there.
+
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+pub type Rgb = [u8; 3];
+pub const BLACK: Rgb = [0, 0, 0];
+pub const GREY: Rgb = [170, 170, 170];
+pub const BLUE: Rgb = [31, 119, 180];
+pub const RED: Rgb = [214, 39, 40];
+/// A cycle of distinguishable colours for series.
+pub const PALETTE: [Rgb; 10] = [
+    [31, 119, 180],
+    [255, 127, 14],
+    [44, 160, 44],
+    [214, 39, 40],
+    [148, 103, 189],
+    [140, 86, 75],
+    [227, 119, 194],
+    [127, 127, 127],
+    [188, 189, 34],
+    [23, 190, 207],
+];
+
+/// The family name the bundled font is registered under.
+const FONT: &str = "sans-serif";
+/// Heat maps are drawn with at most this many cells per direction (largest value of the cells
+/// merged): a spectrogram of 10^5 cells would make a 10 MB SVG and no visible difference.
+const MAX_CELLS: (usize, usize) = (320, 200);
+
+/// Dark blue -> teal -> yellow for s in [0, 1] (perceptually ordered, like viridis).
+pub fn colormap(s: f64) -> Rgb {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = if s.is_finite() {
+        s.clamp(0.0, 1.0)
+    } else {
+        0.0
+    } * (STOPS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = x - i as f64;
+    let mut c = [0u8; 3];
+    for k in 0..3 {
+        c[k] = (STOPS[i][k] + f * (STOPS[i + 1][k] - STOPS[i][k])).round() as u8;
+    }
+    c
+}
+
+/// Widens a degenerate or reversed range and adds a margin of `pad` of its width.
+pub fn padded(min: f64, max: f64, pad: f64) -> (f64, f64) {
+    if !(min.is_finite() && max.is_finite()) {
+        return (0.0, 1.0);
+    }
+    if max <= min {
+        let d = if min == 0.0 { 1.0 } else { 0.1 * min.abs() };
+        return (min - d, max + d);
+    }
+    let d = pad * (max - min);
+    (min - d, max + d)
+}
+
+/// A tick value with the digits it needs: 2500, 0.25, 1.5e-6.
+pub fn tick(v: f64) -> String {
+    let a = v.abs();
+    if a < 1e-300 {
+        return "0".into();
+    }
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.2e}").replace(".00e", "e").replace("0e", "e");
+    }
+    let s = format!("{v:.6}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+enum Layer {
+    Line(Vec<(f64, f64)>, Rgb, Option<String>),
+    Markers(Vec<(f64, f64)>, Rgb, u32),
+    /// Markers coloured by value on the colour bar.
+    Valued(Vec<(f64, f64)>, Vec<f64>, u32),
+    HLine(f64, Rgb),
+    VLine(f64, Rgb, Option<String>),
+    Text((f64, f64), String, Rgb, bool),
+    /// A grid of values (column-major), `columns` across x0..x1 and `rows` across y0..y1.
+    Cells {
+        columns: usize,
+        rows: usize,
+        values: Vec<f64>,
+        x: (f64, f64),
+        y: (f64, f64),
+    },
+    Polygons(Vec<(Vec<(f64, f64)>, f64)>),
+    Segments(Vec<[(f64, f64); 2]>, Rgb),
+    Arrow((f64, f64), (f64, f64), Rgb, String),
+    Legend(String, Rgb),
+}
+
+/// One set of axes with its title, axis labels (with units) and what is drawn on them.
+pub struct Figure {
+    size: (u32, u32),
+    title: String,
+    x_label: String,
+    y_label: String,
+    x: (f64, f64),
+    y: (f64, f64),
+    log_x: bool,
+    log_y: bool,
+    equal_aspect: bool,
+    colour_bar: Option<(String, (f64, f64))>,
+    layers: Vec<Layer>,
+}
+
+impl Figure {
+    /// A figure `width` x `height` pixels with axes over `x` and `y`.
+    pub fn new(
+        width: usize,
+        height: usize,
+        x: (f64, f64),
+        y: (f64, f64),
+        title: &str,
+        x_label: &str,
+        y_label: &str,
+    ) -> Figure {
+        Figure {
+            size: (width as u32, height as u32),
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            x,
+            y,
+            log_x: false,
+            log_y: false,
+            equal_aspect: false,
+            colour_bar: None,
+            layers: Vec::new(),
+        }
+    }
+
+    /// The x values given are log10 of the quantity; ticks show the quantity.
+    pub fn log_x(mut self) -> Figure {
+        self.log_x = true;
+        self
+    }
+
+    /// The y values given are log10 of the quantity; ticks show the quantity (1e-6, ...).
+    pub fn log_y(mut self) -> Figure {
+        self.log_y = true;
+        self
+    }
+
+    /// One unit of x is as long as one unit of y (maps in a plane).
+    pub fn equal_aspect(mut self) -> Figure {
+        self.equal_aspect = true;
+        self
+    }
+
+    /// A colour bar over `range` labelled `label` (with units), for `valued`, `cells` and
+    /// `polygons`.
+    pub fn colour_bar(mut self, label: &str, range: (f64, f64)) -> Figure {
+        let range = if range.0.is_finite() && range.1.is_finite() && range.1 > range.0 {
+            range
+        } else {
+            padded(range.0, range.1, 0.0)
+        };
+        self.colour_bar = Some((label.into(), range));
+        self
+    }
+
+    pub fn title(&self) -> &str {
+        &self.title
+    }
+
+    pub fn marker(&mut self, x: f64, y: f64, c: Rgb, size: u32) {
+        self.markers(vec![(x, y)], c, size);
+    }
+
+    pub fn markers(&mut self, points: Vec<(f64, f64)>, c: Rgb, size: u32) {
+        self.layers.push(Layer::Markers(points, c, size.max(1)));
+    }
+
+    pub fn valued(&mut self, points: Vec<(f64, f64)>, values: Vec<f64>, size: u32) {
+        self.layers.push(Layer::Valued(points, values, size.max(1)));
+    }
+
+    pub fn line(&mut self, points: &[(f64, f64)], c: Rgb) {
+        self.layers.push(Layer::Line(points.to_vec(), c, None));
+    }
+
+    /// A line with a legend entry.
+    pub fn series(&mut self, points: &[(f64, f64)], c: Rgb, label: &str) {
+        self.layers
+            .push(Layer::Line(points.to_vec(), c, Some(label.into())));
+    }
+
+    pub fn hline(&mut self, y: f64, c: Rgb) {
+        self.layers.push(Layer::HLine(y, c));
+    }
+
+    /// A vertical line, with a legend entry when `label` is given.
+    pub fn vline(&mut self, x: f64, c: Rgb, label: Option<&str>) {
+        self.layers.push(Layer::VLine(x, c, label.map(Into::into)));
+    }
+
+    /// Text next to a data point (right of it, above or below).
+    pub fn label(&mut self, x: f64, y: f64, s: &str, c: Rgb, below: bool) {
+        self.layers.push(Layer::Text((x, y), s.into(), c, below));
+    }
+
+    /// A legend entry (the `index` of the old API is the order of the calls).
+    pub fn legend(&mut self, _index: usize, s: &str, c: Rgb) {
+        self.layers.push(Layer::Legend(s.into(), c));
+    }
+
+    /// A heat map of `values` (column-major) coloured on the colour bar.
+    pub fn cells(
+        &mut self,
+        (columns, rows): (usize, usize),
+        values: Vec<f64>,
+        x: (f64, f64),
+        y: (f64, f64),
+    ) {
+        self.layers.push(Layer::Cells {
+            columns,
+            rows,
+            values,
+            x,
+            y,
+        });
+    }
+
+    /// Filled polygons coloured by their value on the colour bar.
+    pub fn polygons(&mut self, polygons: Vec<(Vec<(f64, f64)>, f64)>) {
+        self.layers.push(Layer::Polygons(polygons));
+    }
+
+    pub fn segments(&mut self, segments: Vec<[(f64, f64); 2]>, c: Rgb) {
+        self.layers.push(Layer::Segments(segments, c));
+    }
+
+    /// An arrow from `a` to `b` with a legend entry.
+    pub fn arrow(&mut self, a: (f64, f64), b: (f64, f64), c: Rgb, label: &str) {
+        self.layers.push(Layer::Arrow(a, b, c, label.into()));
+    }
+
+    /// Writes `path` (a .png) and the same figure as SVG beside it.
+    pub fn save(&self, path: &Path) -> std::io::Result<()> {
+        save_panels(&[self], path, Layout::Column)
+    }
+
+    /// Figures of one width stacked top to bottom (panels sharing a time axis).
+    pub fn save_column(figures: &[&Figure], path: &Path) -> std::io::Result<()> {
+        save_panels(figures, path, Layout::Column)
+    }
+
+    /// Figures of one height side by side.
+    pub fn save_row(figures: &[&Figure], path: &Path) -> std::io::Result<()> {
+        save_panels(figures, path, Layout::Row)
+    }
+
+    fn fraction(&self, v: f64) -> f64 {
+        let (lo, hi) = self.colour_bar.as_ref().map_or((0.0, 1.0), |c| c.1);
+        (v - lo) / (hi - lo)
+    }
+
+    /// The axes' ranges, widened along one direction for an equal aspect in `pixels` of plot
+    /// area.
+    fn ranges(&self, pixels: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+        let (mut x, mut y) = (self.x, self.y);
+        if self.equal_aspect && pixels.0 > 0.0 && pixels.1 > 0.0 {
+            let scale = ((x.1 - x.0) / pixels.0).max((y.1 - y.0) / pixels.1);
+            let widen = |r: (f64, f64), span: f64| {
+                let c = 0.5 * (r.0 + r.1);
+                (c - 0.5 * span, c + 0.5 * span)
+            };
+            x = widen(x, scale * pixels.0);
+            y = widen(y, scale * pixels.1);
+        }
+        (x, y)
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Layout {
+    Column,
+    Row,
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("font/DejaVuSans.ttf");
+        // The bundled file is a valid TrueType font; a failure here is a build defect.
+        plotters::style::register_font(FONT, FontStyle::Normal, bytes)
+            .unwrap_or_else(|_| panic!("the bundled DejaVu Sans does not load"));
+    });
+}
+
+fn save_panels(figures: &[&Figure], png: &Path, layout: Layout) -> std::io::Result<()> {
+    register_font();
+    let sizes = figures.iter().map(|f| f.size);
+    let size = match layout {
+        Layout::Column => sizes.fold((0, 0), |(w, h), (fw, fh)| (w.max(fw), h + fh)),
+        Layout::Row => sizes.fold((0, 0), |(w, h), (fw, fh)| (w + fw, h.max(fh))),
+    };
+    let svg: PathBuf = png.with_extension("svg");
+    {
+        let root = BitMapBackend::new(png, size).into_drawing_area();
+        draw_panels(&root, figures, layout).map_err(std::io::Error::other)?;
+        root.present()
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+    }
+    let root = SVGBackend::new(&svg, size).into_drawing_area();
+    draw_panels(&root, figures, layout).map_err(std::io::Error::other)?;
+    root.present()
+        .map_err(|e| std::io::Error::other(e.to_string()))
+}
+
+fn text_error<E: std::fmt::Display>(e: E) -> String {
+    e.to_string()
+}
+
+fn draw_panels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    figures: &[&Figure],
+    layout: Layout,
+) -> Result<(), String> {
+    root.fill(&WHITE).map_err(text_error)?;
+    let mut rest = root.clone();
+    for f in figures {
+        let (here, next) = match layout {
+            Layout::Column => rest.split_vertically(f.size.1),
+            Layout::Row => rest.split_horizontally(f.size.0),
+        };
+        draw(f, &here)?;
+        rest = next;
+    }
+    Ok(())
+}
+
+fn rgb(c: Rgb) -> RGBColor {
+    RGBColor(c[0], c[1], c[2])
+}
+
+/// Pixel sizes of the chart's furniture.
+const MARGIN: u32 = 12;
+const X_AREA: u32 = 48;
+const Y_AREA: u32 = 78;
+const CAPTION: u32 = 34;
+const BAR: u32 = 140;
+
+fn draw<DB: DrawingBackend>(f: &Figure, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
+    let (w, h) = area.dim_in_pixel();
+    let (main, bar) = if f.colour_bar.is_some() {
+        let (m, b) = area.split_horizontally(w.saturating_sub(BAR));
+        (m, Some(b))
+    } else {
+        (area.clone(), None)
+    };
+    let plot_w = main.dim_in_pixel().0 as f64 - (Y_AREA + 2 * MARGIN) as f64;
+    let plot_h = h as f64 - (X_AREA + CAPTION + 2 * MARGIN) as f64;
+    let (x, y) = f.ranges((plot_w, plot_h));
+    let mut chart = ChartBuilder::on(&main)
+        .caption(&f.title, (FONT, 19))
+        .margin(MARGIN)
+        .x_label_area_size(X_AREA)
+        .y_label_area_size(Y_AREA)
+        .build_cartesian_2d(x.0..x.1, y.0..y.1)
+        .map_err(text_error)?;
+    let format = |log: bool, span: f64| {
+        move |v: &f64| {
+            if log {
+                // Decades only: the grid lines between them carry no label.
+                let decade = v.round();
+                if (v - decade).abs() < 1e-6 {
+                    tick(10f64.powf(decade))
+                } else {
+                    String::new()
+                }
+            } else if v.abs() < 1e-9 * span {
+                "0".into() // round-off of a tick at zero
+            } else {
+                tick(*v)
+            }
+        }
+    };
+    let (x_format, y_format) = (format(f.log_x, x.1 - x.0), format(f.log_y, y.1 - y.0));
+    chart
+        .configure_mesh()
+        .x_desc(f.x_label.as_str())
+        .y_desc(f.y_label.as_str())
+        .x_label_formatter(&x_format)
+        .y_label_formatter(&y_format)
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .light_line_style(RGBColor(235, 235, 235))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .draw()
+        .map_err(text_error)?;
+    let mut legend = false;
+    for layer in &f.layers {
+        legend |= draw_layer(f, &mut chart, layer, (x, y))?;
+    }
+    if legend {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(0, 0, 0))
+            .label_font((FONT, 13))
+            .draw()
+            .map_err(text_error)?;
+    }
+    if let (Some(bar), Some((label, range))) = (bar, &f.colour_bar) {
+        draw_colour_bar(&bar, label, *range)?;
+    }
+    Ok(())
+}
+
+type Chart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// Draws one layer; true when it added a legend entry.
+fn draw_layer<DB: DrawingBackend>(
+    f: &Figure,
+    chart: &mut Chart<'_, DB>,
+    layer: &Layer,
+    (x, y): ((f64, f64), (f64, f64)),
+) -> Result<bool, String> {
+    let inside = |p: &(f64, f64)| {
+        p.0.is_finite()
+            && p.1.is_finite()
+            && (x.0..=x.1).contains(&p.0)
+            && (y.0..=y.1).contains(&p.1)
+    };
+    let fill = |v: f64| rgb(colormap(f.fraction(v))).filled();
+    match layer {
+        Layer::Line(points, c, label) => {
+            // A NaN breaks the line; points outside the axes are clipped by plotters.
+            let colour = rgb(*c);
+            for run in points.split(|p| !(p.0.is_finite() && p.1.is_finite())) {
+                let run = decimated(run);
+                let s = chart
+                    .draw_series(LineSeries::new(run.iter().copied(), colour.stroke_width(2)))
+                    .map_err(text_error)?;
+                if let (Some(label), false) = (label, run.is_empty()) {
+                    s.label(label.as_str()).legend(move |(px, py)| {
+                        PathElement::new(vec![(px, py), (px + 18, py)], colour.stroke_width(2))
+                    });
+                    return Ok(true);
+                }
+            }
+            Ok(false)
+        }
+        Layer::Markers(points, c, size) => {
+            let style = rgb(*c).filled();
+            chart
+                .draw_series(
+                    points
+                        .iter()
+                        .filter(|p| inside(p))
+                        .map(|&p| Circle::new(p, *size, style)),
+                )
+                .map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::Valued(points, values, size) => {
+            let shapes = points
+                .iter()
+                .zip(values)
+                .filter(|(p, v)| inside(p) && v.is_finite())
+                .map(|(&p, &v)| Circle::new(p, *size, fill(v)));
+            chart.draw_series(shapes).map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::HLine(v, c) => {
+            let line = LineSeries::new([(x.0, *v), (x.1, *v)], rgb(*c).stroke_width(1));
+            chart.draw_series(line).map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::VLine(v, c, label) => {
+            let colour = rgb(*c);
+            let s = chart
+                .draw_series(LineSeries::new(
+                    [(*v, y.0), (*v, y.1)],
+                    colour.stroke_width(2),
+                ))
+                .map_err(text_error)?;
+            if let Some(label) = label {
+                s.label(label.as_str()).legend(move |(px, py)| {
+                    PathElement::new(vec![(px, py), (px + 18, py)], colour.stroke_width(2))
+                });
+            }
+            Ok(label.is_some())
+        }
+        Layer::Text(at, s, c, below) => {
+            if inside(at) {
+                let colour = rgb(*c);
+                let style = TextStyle::from((FONT, 13).into_font()).color(&colour);
+                let dy = if *below { 4 } else { -16 };
+                let text =
+                    EmptyElement::at(*at) + plotters::element::Text::new(s.clone(), (6, dy), style);
+                chart
+                    .draw_series(std::iter::once(text))
+                    .map_err(text_error)?;
+            }
+            Ok(false)
+        }
+        Layer::Cells {
+            columns,
+            rows,
+            values,
+            x: cx,
+            y: cy,
+        } => {
+            let (nx, ny) = ((*columns).min(MAX_CELLS.0), (*rows).min(MAX_CELLS.1));
+            let merged = merge_cells((*columns, *rows), values, (nx, ny));
+            let (dx, dy) = ((cx.1 - cx.0) / nx as f64, (cy.1 - cy.0) / ny as f64);
+            let shapes = (0..nx * ny).filter_map(|k| {
+                let (i, j) = (k / ny, k % ny);
+                let v = merged[k];
+                let a = (cx.0 + i as f64 * dx, cy.0 + j as f64 * dy);
+                v.is_finite()
+                    .then(|| Rectangle::new([a, (a.0 + dx, a.1 + dy)], fill(v)))
+            });
+            chart.draw_series(shapes).map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::Polygons(polygons) => {
+            let shapes = polygons
+                .iter()
+                .filter(|(_, v)| v.is_finite())
+                .map(|(p, v)| Polygon::new(p.clone(), fill(*v)));
+            chart.draw_series(shapes).map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::Segments(segments, c) => {
+            let style = rgb(*c).stroke_width(2);
+            let paths = segments.iter().map(|s| PathElement::new(s.to_vec(), style));
+            chart.draw_series(paths).map_err(text_error)?;
+            Ok(false)
+        }
+        Layer::Arrow(a, b, c, label) => {
+            let colour = rgb(*c);
+            let (ux, uy) = (b.0 - a.0, b.1 - a.1);
+            let head = |sign: f64| {
+                let (cs, sn) = (0.93f64, sign * 0.36);
+                (
+                    b.0 - 0.3 * (cs * ux - sn * uy),
+                    b.1 - 0.3 * (sn * ux + cs * uy),
+                )
+            };
+            let path = vec![*a, *b, head(1.0), *b, head(-1.0)];
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    path,
+                    colour.stroke_width(3),
+                )))
+                .map_err(text_error)?
+                .label(label.as_str())
+                .legend(move |(px, py)| {
+                    PathElement::new(vec![(px, py), (px + 18, py)], colour.stroke_width(3))
+                });
+            Ok(true)
+        }
+        Layer::Legend(s, c) => {
+            let colour = rgb(*c);
+            chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), u32>>())
+                .map_err(text_error)?
+                .label(s.as_str())
+                .legend(move |(px, py)| Circle::new((px + 9, py), 5, colour.filled()));
+            Ok(true)
+        }
+    }
+}
+
+/// Lines of more points than this are drawn through the lowest and highest point of each of
+/// `LINE_BUCKETS / 2` equal runs of points: a signal of 10^5 steps keeps its envelope exactly
+/// and draws as a solid band instead of overlapping strokes (and a small SVG).
+const LINE_BUCKETS: usize = 2400;
+
+fn decimated(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    if points.len() <= 2 * LINE_BUCKETS {
+        return points.to_vec();
+    }
+    let buckets = LINE_BUCKETS / 2;
+    let mut out = Vec::with_capacity(2 * buckets);
+    for b in 0..buckets {
+        let run = &points[b * points.len() / buckets..(b + 1) * points.len() / buckets];
+        let lowest = run
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1 .1.total_cmp(&b.1 .1));
+        let highest = run
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1));
+        if let (Some((i, &low)), Some((j, &high))) = (lowest, highest) {
+            out.extend(if i <= j { [low, high] } else { [high, low] });
+        }
+    }
+    out
+}
+
+/// The largest value of the source cells each of `(nx, ny)` merged cells covers.
+fn merge_cells(
+    (columns, rows): (usize, usize),
+    values: &[f64],
+    (nx, ny): (usize, usize),
+) -> Vec<f64> {
+    let mut out = vec![f64::NEG_INFINITY; nx * ny];
+    for i in 0..columns {
+        for j in 0..rows {
+            let v = values[i * rows + j];
+            let k = (i * nx / columns) * ny + j * ny / rows;
+            if v.is_finite() {
+                out[k] = out[k].max(v);
+            }
+        }
+    }
+    out.iter()
+        .map(|&v| if v == f64::NEG_INFINITY { f64::NAN } else { v })
+        .collect()
+}
+
+fn draw_colour_bar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    label: &str,
+    (lo, hi): (f64, f64),
+) -> Result<(), String> {
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(MARGIN + CAPTION)
+        .margin_bottom(MARGIN + X_AREA)
+        .margin_left(8)
+        .margin_right(16)
+        .set_label_area_size(LabelAreaPosition::Right, 80)
+        .build_cartesian_2d(0.0..1.0, lo..hi)
+        .map_err(text_error)?;
+    chart
+        .configure_mesh()
+        .disable_x_axis()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .y_desc(label)
+        .y_label_formatter(&|v| tick(*v))
+        .label_style((FONT, 13))
+        .axis_desc_style((FONT, 15))
+        .draw()
+        .map_err(text_error)?;
+    let n = 128;
+    let step = (hi - lo) / n as f64;
+    let bands = (0..n).map(|k| {
+        let a = lo + k as f64 * step;
+        let c = colormap((k as f64 + 0.5) / n as f64);
+        Rectangle::new([(0.0, a), (1.0, a + step)], rgb(c).filled())
+    });
+    chart.draw_series(bands).map_err(text_error)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_print_the_digits_they_need() {
+        assert_eq!(tick(2500.0), "2500");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(0.0), "0");
+        assert_eq!(tick(1.5e-6), "1.5e-6");
+        assert_eq!(tick(2.0e7), "2e7");
+    }
+
+    #[test]
+    fn a_figure_writes_a_png_and_an_svg_with_its_title_and_axis_labels() {
+        let dir = std::env::temp_dir().join(format!("squeal-figure-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut f = Figure::new(
+            500,
+            300,
+            (0.0, 1.0),
+            (-1.0, 1.0),
+            "a sine",
+            "time (s)",
+            "y (m)",
+        )
+        .colour_bar("value (Pa)", (0.0, 2.0));
+        let points: Vec<(f64, f64)> = (0..50)
+            .map(|i| (i as f64 / 49.0, (6.0 * i as f64 / 49.0).sin()))
+            .collect();
+        f.series(&points, BLUE, "sin 6t");
+        f.valued(
+            points.clone(),
+            points.iter().map(|p| p.1 + 1.0).collect(),
+            3,
+        );
+        let png = dir.join("sine.png");
+        f.save(&png).unwrap();
+        let svg = std::fs::read_to_string(dir.join("sine.svg")).unwrap();
+        for text in ["a sine", "time (s)", "y (m)", "value (Pa)", "sin 6t"] {
+            assert!(svg.contains(text), "{text} missing from the SVG");
+        }
+        let decoder = png::Decoder::new(std::fs::File::open(&png).unwrap());
+        let info = decoder.read_info().unwrap().info().clone();
+        assert_eq!((info.width, info.height), (500, 300));
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn a_decimated_line_keeps_every_extreme_in_order() {
+        let n = 100_000;
+        let points: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                (
+                    i as f64,
+                    (i as f64 * 0.0123).sin() * (1.0 + i as f64 / n as f64),
+                )
+            })
+            .collect();
+        let d = decimated(&points);
+        assert_eq!(d.len(), LINE_BUCKETS);
+        let extreme = |v: &[(f64, f64)], max: bool| {
+            v.iter()
+                .map(|p| if max { p.1 } else { -p.1 })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        assert_eq!(extreme(&d, true), extreme(&points, true));
+        assert_eq!(extreme(&d, false), extreme(&points, false));
+        assert!(d.windows(2).all(|w| w[0].0 <= w[1].0), "time order");
+    }
+
+    #[test]
+    fn merged_cells_keep_the_largest_value() {
+        let values: Vec<f64> = (0..16).map(f64::from).collect();
+        assert_eq!(
+            merge_cells((4, 4), &values, (2, 2)),
+            vec![5.0, 7.0, 13.0, 15.0]
+        );
+    }
+}

@@ -1,0 +1,375 @@
+//! report.html: the run in one self-contained page a brake engineer reads top to bottom (the
+//! answer, the model, the static state, real and complex modes, the transient and its link
+//! with the complex modes, and every stage's time against its accuracy figure). Figures are
+//! the run's PNGs embedded as data URIs, the style is inline: the file opens anywhere, offline,
+//! and can be mailed on its own. A section appears only when its stage ran.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use base64::Engine as _;
+
+use crate::stages::answer::answer_lines;
+use crate::stages::summary::{Part, RunSummary};
+
+/// One section of the report: its anchor, heading and HTML body.
+pub struct Section {
+    pub id: &'static str,
+    pub title: String,
+    pub body: String,
+}
+
+/// The report's section anchors, in order (tests compare them with the stages that ran).
+pub const SECTION_IDS: [&str; 14] = [
+    "answer",
+    "model",
+    "static-state",
+    "real-modes",
+    "complex-modes",
+    "sweep",
+    "reduction",
+    "transient",
+    "modal-energy",
+    "contact-cycle",
+    "dynamic-stability",
+    "pseudo-trajectories",
+    "run",
+    "scene",
+];
+
+const STYLE: &str = "body{font-family:sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4}\
+h1{border-bottom:3px solid #c0392b}h2{border-bottom:1px solid #ccc;margin-top:2em}\
+nav a{margin-right:1em}figure{margin:1em 0}img{max-width:100%;border:1px solid #ddd}\
+figcaption{font-size:90%;color:#555}pre{background:#f6f6f6;padding:.7em;overflow-x:auto;font-size:85%}\
+table{border-collapse:collapse;font-size:90%;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}\
+th{background:#eee}td:first-child,th:first-child{text-align:left}.answer li{margin:.3em 0}\
+.unstable{color:#c0392b;font-weight:bold}details{margin:.5em 0}summary{cursor:pointer}\
+.maps figure{display:inline-block;width:49%;vertical-align:top;margin:.3em 0}\
+#model img{max-width:760px}";
+
+/// Writes `output/report.html` for the run `summary` describes; returns its path.
+pub fn write_report(
+    summary: &RunSummary,
+    scene_text: &str,
+    output: &Path,
+) -> std::io::Result<PathBuf> {
+    let sections = sections(summary, scene_text, output)?;
+    let mut html = String::new();
+    html.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
+    let _ = write!(
+        html,
+        "<title>squeal report: {}</title><style>{STYLE}</style></head><body>",
+        escape(&output.display().to_string())
+    );
+    let _ = write!(
+        html,
+        "<h1>squeal: friction-induced instability analysis</h1><p>{} DOF; results in <code>{}</code> (results.h5 with results.xdmf for ParaView).</p><nav>",
+        summary.dofs,
+        escape(&output.display().to_string())
+    );
+    for s in &sections {
+        let _ = write!(html, "<a href=\"#{}\">{}</a>", s.id, escape(&s.title));
+    }
+    html.push_str("</nav>");
+    for s in &sections {
+        let _ = writeln!(
+            html,
+            "<section id=\"{}\"><h2>{}</h2>{}</section>",
+            s.id,
+            escape(&s.title),
+            s.body
+        );
+    }
+    html.push_str("</body></html>\n");
+    let path = output.join("report.html");
+    std::fs::write(&path, html)?;
+    Ok(path)
+}
+
+/// The sections of the stages that ran, in [`SECTION_IDS`] order.
+pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Result<Vec<Section>> {
+    let mut out = Vec::new();
+    let mut add = |id: &'static str, title: &str, body: String| {
+        out.push(Section {
+            id,
+            title: title.into(),
+            body,
+        })
+    };
+    let items: String = answer_lines(s)
+        .iter()
+        .map(|l| format!("<li>{}</li>", escape(l)))
+        .collect();
+    add(
+        "answer",
+        "The answer",
+        format!("<ul class=\"answer\">{items}</ul>"),
+    );
+
+    let mut body = figure(output, "model.png", "The model (components coloured).")?;
+    body += &text(s, Part::Model);
+    add("model", "Model", body);
+
+    if let Some(st) = &s.statics {
+        let mut body = text(s, Part::Statics) + "<div class=\"maps\">";
+        for (name, _) in &st.interfaces {
+            for (field, what) in [
+                ("pressure", "contact pressure"),
+                ("contact_stiffness", "contact stiffness"),
+            ] {
+                let file = format!("contact_{field}_{name}.png");
+                body += &figure(output, &file, &format!("Static {what} on {name}."))?;
+            }
+        }
+        body += "</div>";
+        add(
+            "static-state",
+            "Static state: preload, contact, torque",
+            body,
+        );
+    }
+    if !s.frequencies_hz.is_empty() {
+        add("real-modes", "Real modes", real_modes_table(s));
+    }
+    if !s.complex.is_empty() {
+        let mut body = String::new();
+        for c in &s.complex {
+            let file = format!("stability_{}.png", c.route);
+            let caption = format!(
+                "Stability diagram, {} route: unstable modes in red.",
+                c.route
+            );
+            body += &figure(output, &file, &caption)?;
+            body += &complex_table(c);
+        }
+        add(
+            "complex-modes",
+            "Complex modes: stability at the static state",
+            body,
+        );
+    }
+    if s.sweep.is_some() {
+        let mut body = figure(
+            output,
+            "sweep_frequency.png",
+            "Frequencies along the sweep.",
+        )?;
+        body += &figure(output, "sweep_real_part.png", "Real parts along the sweep.")?;
+        body += &text(s, Part::Sweep);
+        add("sweep", "Parameter sweep", body);
+    }
+    if s.reduction.is_some() {
+        add("reduction", "Reduction", text(s, Part::Reduction));
+    }
+    if s.transient.is_some() {
+        let mut body = figure(output, "torque.png", "Braking torque.")?;
+        body += &figure(
+            output,
+            "spectrogram.png",
+            "Spectrogram of the signal that moves most.",
+        )?;
+        if s.limit_cycle.is_some() {
+            let caption = "The torque, its envelope and the detected cycles.";
+            body += &figure(output, "limit_cycle.png", caption)?;
+        }
+        body += &text(s, Part::Transient);
+        body += &text(s, Part::LimitCycle);
+        add("transient", "Transient: growth and limit cycle", body);
+    }
+    if s.link.modal_energy.is_some() {
+        let mut body = figure(output, "modal_energy.png", "The largest modal energies.")?;
+        body += &text(s, Part::ModalEnergy);
+        add("modal-energy", "Modal energies along the run", body);
+    }
+    if let Some(r) = &s.link.contact_cycle {
+        let mut body = String::new();
+        for pad in &r.cycle.pads {
+            let file = format!("contact_cycle_{}.png", pad.name);
+            let caption = format!("Contact stiffness over the cycle on {}.", pad.name);
+            body += &figure(output, &file, &caption)?;
+        }
+        body += &text(s, Part::ContactCycle);
+        add("contact-cycle", "Contact state over the cycle", body);
+    }
+    if s.link.dynamic_stability.is_some() {
+        let mut body = figure(
+            output,
+            "dynamic_stability.png",
+            "Complex modes of the tangent along the cycle.",
+        )?;
+        let caption = "Frequency and damping of the tracked modes against time, torque below.";
+        body += &figure(output, "dynamic_stability_time.png", caption)?;
+        body += &text(s, Part::DynamicStability);
+        add(
+            "dynamic-stability",
+            "Dynamic stability along the cycle",
+            body,
+        );
+    }
+    if let Some(p) = &s.pseudo {
+        let mut body = String::new();
+        for study in &p.studies {
+            let name = &study.trajectory.name;
+            let caption = format!("{name}: mean damping and contact state against the amplitude.");
+            body += &figure(output, &format!("pseudo_amplitude_{name}.png"), &caption)?;
+            let caption = format!("{name}: pseudo dynamic stability over one period.");
+            body += &figure(output, &format!("pseudo_stability_{name}.png"), &caption)?;
+        }
+        body += &text(s, Part::Pseudo);
+        add(
+            "pseudo-trajectories",
+            "Pseudo trajectories: predicted saturation",
+            body,
+        );
+    }
+    add("run", "Speed against accuracy", run_table(s));
+    add(
+        "scene",
+        "Scene",
+        format!("<pre>{}</pre>", escape(scene_text)),
+    );
+    Ok(out)
+}
+
+/// A figure of the results folder embedded as a data URI, or nothing when the run did not
+/// draw it (e.g. a spectrogram of a run too short for one).
+fn figure(output: &Path, file: &str, caption: &str) -> std::io::Result<String> {
+    let path = output.join(file);
+    let bytes = match std::fs::read(&path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(String::new()),
+        Err(e) => return Err(e),
+    };
+    let data = base64::engine::general_purpose::STANDARD.encode(bytes);
+    Ok(format!(
+        "<figure><img alt=\"{}\" src=\"data:image/png;base64,{data}\"><figcaption>{} ({})</figcaption></figure>",
+        escape(caption),
+        escape(caption),
+        escape(file)
+    ))
+}
+
+fn text(s: &RunSummary, part: Part) -> String {
+    let t = s.part(part).to_string();
+    if t.trim().is_empty() {
+        String::new()
+    } else {
+        format!("<pre>{}</pre>", escape(&t))
+    }
+}
+
+pub fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn real_modes_table(s: &RunSummary) -> String {
+    let f = &s.frequencies_hz;
+    let mut t = format!(
+        "<details><summary>{} real modes from {:.1} to {:.1} Hz, largest backward error {:.1e}</summary><table><tr><th>mode</th><th>frequency (Hz)</th><th>||K phi - w^2 M phi||</th><th>backward error</th><th></th></tr>",
+        f.len(),
+        f[0],
+        f[f.len() - 1],
+        s.backward_errors.iter().copied().fold(0.0f64, f64::max)
+    );
+    for (i, hz) in s.frequencies_hz.iter().enumerate() {
+        let _ = write!(
+            t,
+            "<tr><td>R{}</td><td>{hz:.3}</td><td>{:.2e}</td><td>{:.2e}</td><td>{}</td></tr>",
+            i + 1,
+            s.residual_norms[i],
+            s.backward_errors[i],
+            if s.rigid[i] { "rigid-body mode" } else { "" }
+        );
+    }
+    t + "</table></details>"
+}
+
+fn complex_table(c: &crate::stages::summary::ComplexSummary) -> String {
+    let row = |m: &crate::eigen::complex_modes::ComplexMode| {
+        format!(
+            "<tr{}><td>{}</td><td>{:.2}</td><td>{:.3e}</td><td>{:.3e}</td><td>{}</td><td>{:.2e}</td></tr>",
+            if m.unstable { " class=\"unstable\"" } else { "" },
+            m.name,
+            m.frequency_hz,
+            m.damping_ratio,
+            m.eigenvalue.0,
+            m.dominant_real_mode.map_or(String::new(), |k| format!("R{}", k + 1)),
+            m.backward_error
+        )
+    };
+    let head = "<table><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio</th><th>Re(s) (1/s)</th><th>dominant real mode</th><th>backward error</th></tr>";
+    let unstable: String = c.modes.iter().filter(|m| m.unstable).map(row).collect();
+    let all: String = c.modes.iter().map(row).collect();
+    let count = c.modes.iter().filter(|m| m.unstable).count();
+    let basis = if c.basis > 0 {
+        format!(", projected on {} real modes", c.basis)
+    } else {
+        String::new()
+    };
+    format!(
+        "<p>{} route{basis}: {count} unstable of {} modes.</p>{head}{unstable}</table><details><summary>all {} modes</summary>{head}{all}</table></details>",
+        c.route,
+        c.modes.len(),
+        c.modes.len()
+    )
+}
+
+/// Every stage's time with the accuracy figure that goes with it.
+fn run_table(s: &RunSummary) -> String {
+    let accuracy = |stage: &str| -> String {
+        let max = |v: &[f64]| v.iter().copied().fold(0.0f64, f64::max);
+        match stage {
+            "static preload" => s.statics.as_ref().map_or(String::new(), |st| {
+                format!(
+                    "residual {:.2e} N after {} Newton iterations",
+                    st.final_residual, st.newton_iterations
+                )
+            }),
+            "real modes" => format!(
+                "largest backward error {:.1e} over {} modes",
+                max(&s.backward_errors),
+                s.backward_errors.len()
+            ),
+            "reduction" => s.reduction.as_ref().map_or(String::new(), |r| {
+                format!(
+                    "reduced vs full real modes {:.1e}, static state {:.1e}",
+                    r.mode_error, r.static_error
+                )
+            }),
+            "transient" => s.transient.as_ref().map_or(String::new(), |t| {
+                format!(
+                    "{} steps, {:.2} iterations per step, {} step cuts, every step converged",
+                    t.steps, t.mean_iterations, t.cuts
+                )
+            }),
+            other if other.starts_with("complex modes (") => s
+                .complex
+                .iter()
+                .find(|c| other.contains(c.route))
+                .map_or(String::new(), |c| {
+                    let b: Vec<f64> = c.modes.iter().map(|m| m.backward_error).collect();
+                    format!("largest backward error {:.1e}", max(&b))
+                }),
+            _ => String::new(),
+        }
+    };
+    let mut t = String::from("<table><tr><th>stage</th><th>time (s)</th><th>accuracy</th></tr>");
+    for (name, secs) in &s.timings.stages {
+        let _ = write!(
+            t,
+            "<tr><td>{}</td><td>{secs:.3}</td><td>{}</td></tr>",
+            escape(name),
+            escape(&accuracy(name))
+        );
+    }
+    let total: f64 = s.timings.stages.iter().map(|(_, x)| x).sum();
+    let _ = write!(
+        t,
+        "<tr><th>all stages</th><th>{total:.3}</th><th>peak memory per rank {:.1} MiB</th></tr></table>",
+        s.peak_memory_per_rank / (1024.0 * 1024.0)
+    );
+    t
+}
