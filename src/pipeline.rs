@@ -202,12 +202,23 @@ pub fn run_with(
     summary.limit_cycle = limit_cycle;
     summary.link = link;
     summary.pseudo = pseudo;
+    write_report(petsc, &summary, scene_text, output)?;
+    Ok(summary)
+}
+
+/// report.html, written by rank 0 when everything else is.
+fn write_report(
+    petsc: &Petsc,
+    summary: &RunSummary,
+    scene_text: &str,
+    output: &Path,
+) -> Result<(), RunError> {
     if petsc.rank() == 0 {
         let path = output.join("report.html");
-        let written = crate::io::report::write_report(&summary, scene_text, output);
+        let written = crate::io::report::write_report(summary, scene_text, output);
         checked(written.map_err(|source| RunError::Io { path, source }))?;
     }
-    Ok(summary)
+    Ok(())
 }
 
 /// The pseudo trajectories when `[post.pseudo_trajectory]` asks, compared with the transient
