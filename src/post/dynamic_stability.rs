@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 
 use super::states::{ContactAt, StatesError, StoredStates};
 use crate::contact::ContactState;
-use crate::eigen::complex_modes::{damping_ratio, frequency_hz, projected_coordinates, Complex};
+use crate::eigen::complex_modes::{
+    damping_ratio, frequency_hz, projected_coordinates, Complex, DenseEigenpair,
+};
 use crate::eigen::stability::ProjectedStability;
 use crate::eigen::tracking::track;
 use crate::la::LaError;
@@ -146,14 +148,34 @@ pub fn dynamic_stability(
         points.push(projected_coordinates(size, &kp, &cp).map_err(LaError::Invalid)?);
     }
     let seconds_per_point = start.elapsed().as_secs_f64() / indices.len().max(1) as f64;
-    let tracked = track(&points);
+    let (tracks, followed, lost) = tracked_modes(&points, &torque, lin.margin);
+    Ok(DynamicStability {
+        times: indices.iter().map(|&i| states.times[i]).collect(),
+        torque,
+        tracks,
+        followed,
+        lost,
+        seconds_per_point,
+    })
+}
+
+/// The nominal modes (`points[0]`: the static state's projected complex modes) tracked by MAC
+/// through the later points (the tangents along the run), those unstable at the static state
+/// or at any point kept, with their statistics over the later points; and how many tracks
+/// were followed and lost. `torque`: at the later points.
+pub fn tracked_modes(
+    points: &[Vec<DenseEigenpair>],
+    torque: &[f64],
+    margin: f64,
+) -> (Vec<TrackedMode>, usize, usize) {
+    let tracked = track(points);
     let followed = tracked.tracks.len();
     let lost = tracked
         .tracks
         .iter()
         .filter(|t| t.iter().any(Option::is_none))
         .count();
-    let unstable = |s: (f64, f64)| damping_ratio(s) < -lin.margin;
+    let unstable = |s: (f64, f64)| damping_ratio(s) < -margin;
     let mut tracks = Vec::new();
     for (k, t) in tracked.tracks.iter().enumerate() {
         let nan = (f64::NAN, f64::NAN);
@@ -177,19 +199,12 @@ pub fn dynamic_stability(
             unstable_fraction: along.iter().filter(|&&s| unstable(s)).count() as f64
                 / along.len().max(1) as f64,
             mean_damping_ratio: zeta.iter().sum::<f64>() / zeta.len().max(1) as f64,
-            torque_correlation: correlation(&zeta, &torque),
+            torque_correlation: correlation(&zeta, torque),
             extremes,
             eigenvalue,
         });
     }
-    Ok(DynamicStability {
-        times: indices.iter().map(|&i| states.times[i]).collect(),
-        torque,
-        tracks,
-        followed,
-        lost,
-        seconds_per_point,
-    })
+    (tracks, followed, lost)
 }
 
 /// The point (after the static state, 0 when there is none) where the frequency is highest

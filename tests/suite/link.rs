@@ -13,6 +13,21 @@
 //!   to the drift of the state (< 1e-8 relative, see brake_transient_at_rest) times the
 //!   tangent's sensitivity: asserted 1e-7 relative on s; and the 2-rank run's tracked
 //!   eigenvalues against the 1-rank run's (1e-9 of |s|).
+//! - Dynamic stability along a prescribed cycle of the 2-DOF mode-coupling model (Hoffmann et
+//!   al. 2002, `mode_coupling.rs`; its tangent through squeal's contact point kernel as in
+//!   `pseudo_trajectory.rs`): q = (x_s + a cos t, b sin t), v = q' w, two periods at 64 phases,
+//!   b = 6 so that the mass leaves the belt (N = e^-y < 1 % of N0 for y > 4.6) on part of the
+//!   cycle and presses into it (N up to e^6) on another. The belt's speed V = 100 saturates the
+//!   friction's tanh (|x'| <= a w = 0.7), so its speed derivative is 0 in double precision and
+//!   the frozen system is s^2 + c s + K_t(t) with K_t = K_s + [[0, mu k_c], [0, k_c]],
+//!   k_c = e^-y: s = -c/2 +- sqrt(c^2/4 - kappa), kappa = tr/2 +- sqrt(tr^2/4 - det) of K_t
+//!   (closed form, K_t from the state alone). Asserted: at every phase the linearization's two
+//!   eigenvalues (Im > 0) are the closed form's to 1e-10 relative (dgeev on a 4 x 4 companion, entries O(e^6):
+//!   backward error O(100 eps) relative to them); the flutter mode unstable at rest is
+//!   followed through all 128 phases without a loss, is stable wherever the contact is open
+//!   (the separated point adds no stiffness: K_t -> K_s, whose modes are damped by c/2), so
+//!   its unstable fraction lies strictly between 0 and 1, and its mean damping ratio is the
+//!   mean over the phases of its (closed-form, as above) damping ratios, to round-off.
 
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
@@ -33,7 +48,128 @@ pub fn tests() -> Vec<super::NamedTest> {
             "dynamic_stability_at_rest_is_the_nominal_projected_complex_modes",
             dynamic_stability_at_rest,
         ),
+        (
+            "hoffmann_dynamic_stability_along_a_separating_cycle_is_the_frozen_closed_form",
+            hoffmann_frozen_closed_form,
+        ),
     ]
+}
+
+type Cx = (f64, f64);
+
+fn csqrt((a, b): Cx) -> Cx {
+    let r = (a * a + b * b).sqrt();
+    let re = (0.5 * (r + a)).max(0.0).sqrt();
+    let im = (0.5 * (r - a)).max(0.0).sqrt();
+    (re, if b < 0.0 { -im } else { im })
+}
+
+/// The roots s (Im > 0) of det(s^2 I + s c I + K) = 0 for a 2 x 2 K (column-major).
+fn frozen_roots(k: &[f64], c: f64) -> Vec<Cx> {
+    let (tr, det) = (k[0] + k[3], k[0] * k[3] - k[1] * k[2]);
+    let d = csqrt((tr * tr / 4.0 - det, 0.0));
+    let mut roots = Vec::new();
+    for kappa in [(tr / 2.0 + d.0, d.1), (tr / 2.0 - d.0, -d.1)] {
+        let r = csqrt((c * c / 4.0 - kappa.0, -kappa.1));
+        for s in [(-c / 2.0 + r.0, r.1), (-c / 2.0 - r.0, -r.1)] {
+            if s.1 > 0.0 {
+                roots.push(s);
+            }
+        }
+    }
+    roots.sort_by(|a, b| a.1.total_cmp(&b.1));
+    roots
+}
+
+fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
+    use super::mode_coupling::{static_x, C, K_S, MU};
+    use super::pseudo_trajectory::Hoffmann;
+    use squeal::eigen::complex_modes::{damping_ratio, projected_coordinates};
+    use squeal::post::dynamic_stability::tracked_modes;
+    let (a, b, w, phases) = (0.5, 6.0, 1.4, 64);
+    let mut states = vec![([static_x(), 0.0], [0.0, 0.0])];
+    for k in 0..2 * phases {
+        let t = 2.0 * std::f64::consts::PI * k as f64 / phases as f64;
+        let q = [static_x() + a * t.cos(), b * t.sin()];
+        states.push((q, [-a * w * t.sin(), b * w * t.cos()]));
+    }
+    let (mut points, mut closed, mut open) = (Vec::new(), Vec::new(), Vec::new());
+    for (q, v) in &states {
+        let lin = Hoffmann.tangent(*q, *v);
+        if lin.cp[0] != C || lin.cp[1] != 0.0 || lin.cp[2] != 0.0 || lin.cp[3] != C {
+            return Err(format!("the damping is not c I: {:?}", lin.cp));
+        }
+        let pairs = projected_coordinates(2, &lin.kp, &lin.cp)?;
+        // The frozen tangent from the state alone: k_c = lambda N0 e^(-lambda y) = e^-y.
+        let kc = (-q[1]).exp();
+        let frozen = [K_S[0][0], K_S[1][0], K_S[0][1] + MU * kc, K_S[1][1] + kc];
+        let exact = frozen_roots(&frozen, C);
+        let found: Vec<Cx> = pairs.iter().map(|p| p.0).filter(|s| s.1 > 0.0).collect();
+        let scale = exact.iter().map(|s| s.0.hypot(s.1)).fold(0.0, f64::max);
+        // As sets: a flutter pair shares its imaginary part.
+        let nearest = |x: &Cx, to: &[Cx]| {
+            to.iter()
+                .map(|e| (x.0 - e.0).hypot(x.1 - e.1) / scale)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let error = found
+            .iter()
+            .map(|f| nearest(f, &exact))
+            .chain(exact.iter().map(|e| nearest(e, &found)))
+            .fold(0.0, f64::max);
+        if found.len() != 2 || exact.len() != 2 || error.is_nan() || error > 1e-10 {
+            return Err(format!(
+                "at q = {q:?}: linearization {found:?} vs closed form {exact:?} ({error:.1e})"
+            ));
+        }
+        points.push(pairs);
+        closed.push(exact);
+        open.push(lin.fractions[0] == 1.0);
+    }
+    let gap: Vec<f64> = states[1..].iter().map(|(q, _)| q[1]).collect();
+    let (tracks, _, lost) = tracked_modes(&points, &gap, 1e-9);
+    let flutter = tracks
+        .iter()
+        .find(|t| damping_ratio(t.eigenvalue[0]) < -1e-9)
+        .ok_or("no mode unstable at rest")?;
+    let along = &flutter.eigenvalue[1..];
+    if lost > 0 || along.iter().any(|s| !s.0.is_finite()) {
+        return Err(format!("{lost} tracks lost"));
+    }
+    let open_phases = open[1..].iter().filter(|&&o| o).count();
+    let unstable_when_open = along
+        .iter()
+        .zip(&open[1..])
+        .filter(|(s, &o)| o && damping_ratio(**s) <= 0.0)
+        .count();
+    let mean: f64 = along.iter().map(|&s| damping_ratio(s)).sum::<f64>() / along.len() as f64;
+    say(
+        petsc,
+        &format!(
+            "2-DOF along a separating cycle: open at {open_phases} of {} phases; {} unstable {:.0} % of them, mean damping ratio {:.3e}",
+            along.len(),
+            flutter.name,
+            100.0 * flutter.unstable_fraction,
+            flutter.mean_damping_ratio
+        ),
+    );
+    if open_phases == 0 || unstable_when_open > 0 {
+        return Err(format!(
+            "open at {open_phases} phases, unstable at {unstable_when_open} of them"
+        ));
+    }
+    let fraction = flutter.unstable_fraction;
+    if fraction.is_nan() || fraction <= 0.0 || fraction >= 1.0 {
+        return Err(format!("unstable fraction {fraction}"));
+    }
+    let difference = (flutter.mean_damping_ratio - mean).abs();
+    if difference.is_nan() || difference > 1e-12 {
+        return Err(format!(
+            "mean damping {} vs {mean}",
+            flutter.mean_damping_ratio
+        ));
+    }
+    Ok(())
 }
 
 fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {

@@ -55,10 +55,11 @@ pub fn tests() -> Vec<super::NamedTest> {
     ]
 }
 
-struct Hoffmann;
+pub(super) struct Hoffmann;
 
 impl Hoffmann {
-    fn tangent(&self, q: [f64; 2], v: [f64; 2]) -> Linearized {
+    /// The tangent at the state (q, v), through squeal's contact point kernel.
+    pub(super) fn tangent(&self, q: [f64; 2], v: [f64; 2]) -> Linearized {
         let o = Observed {
             gap: q[1],
             slip: [q[0], 0.0],
