@@ -7,7 +7,7 @@ use std::time::Instant;
 /// A person is watching: stdout is a terminal, TERM names one, and neither CI nor
 /// SQUEAL_PROGRESS=0 says otherwise (mpirun gives ranks a pseudo-terminal even when its own
 /// output goes to a file, so the terminal test alone is not enough).
-fn interactive() -> bool {
+pub fn interactive() -> bool {
     let term_ok = std::env::var("TERM").is_ok_and(|t| !t.is_empty() && t != "dumb");
     std::io::stdout().is_terminal()
         && term_ok

@@ -45,7 +45,7 @@ table{border-collapse:collapse;font-size:90%;margin:.5em 0}td,th{border:1px soli
 th{background:#eee}td:first-child,th:first-child{text-align:left}.answer li{margin:.3em 0}\
 .unstable{color:#c0392b;font-weight:bold}details{margin:.5em 0}summary{cursor:pointer}\
 .maps figure{display:inline-block;width:49%;vertical-align:top;margin:.3em 0}\
-#model img{max-width:760px}";
+#model img{max-width:760px}.run td:nth-child(3){text-align:left}";
 
 /// Writes `output/report.html` for the run `summary` describes; returns its path.
 pub fn write_report(
@@ -356,7 +356,9 @@ fn run_table(s: &RunSummary) -> String {
             _ => String::new(),
         }
     };
-    let mut t = String::from("<table><tr><th>stage</th><th>time (s)</th><th>accuracy</th></tr>");
+    let mut t = String::from(
+        "<table class=\"run\"><tr><th>stage</th><th>time (s)</th><th>accuracy</th></tr>",
+    );
     for (name, secs) in &s.timings.stages {
         let _ = write!(
             t,

@@ -59,6 +59,9 @@ pub struct LimitCycle {
     /// against time), and the time window of the fit.
     pub growth_rate: Option<f64>,
     pub growth_window: Option<(f64, f64)>,
+    /// Spectral peak over that window (Hz): the growing mode's frequency, which the
+    /// large-amplitude regime at the end of a run may have shifted.
+    pub growth_frequency: Option<f64>,
     /// First time the amplitude reaches 90 % of its saturated value.
     pub saturation_time: Option<f64>,
     /// The saturated amplitude (half peak-to-peak, median over the last fifth of the run).
@@ -139,6 +142,9 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     if linear.len() >= 4 && linear.last().unwrap().1 - linear[0].1 >= 1.0 {
         out.growth_rate = Some(slope(&linear));
         out.growth_window = Some((linear[0].0, linear.last().unwrap().0));
+        let index = |time: f64| (((time - t0) / dt).round().max(0.0) as usize).min(n);
+        let window = &u[index(linear[0].0)..index(linear.last().unwrap().0)];
+        out.growth_frequency = Some(dominant_frequency(window, dt)).filter(|f| *f > 0.0);
     }
     // Still growing at the end (the last fifth's amplitude rises by more than 20 % across
     // it): there is no saturated amplitude to judge yet.

@@ -58,12 +58,15 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
             } else {
                 "did not saturate within the run"
             };
+            let at = c
+                .growth_frequency
+                .map_or(String::new(), |hz| format!(" at {hz:.1} Hz"));
             let growth = match (c.growth_rate, &r.predicted) {
                 (Some(g), Some(p)) => format!(
-                    "; it grew at {g:.0} 1/s (complex mode {}: Re(s) {:.0} 1/s)",
-                    p.1, p.2
+                    "; it grew at {g:.0} 1/s{at} (complex mode {}: Re(s) {:.0} 1/s at {:.1} Hz)",
+                    p.1, p.2, p.3
                 ),
-                (Some(g), None) => format!("; it grew at {g:.0} 1/s"),
+                (Some(g), None) => format!("; it grew at {g:.0} 1/s{at}"),
                 _ => String::new(),
             };
             lines.push(format!(

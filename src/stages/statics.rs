@@ -55,10 +55,11 @@ pub fn preload<'p>(
     let load =
         crate::statics::pressure_load(petsc, &model.mesh, dofs, &model.loads, model.pressure)
             .map_err(|m| RunError::scene("model", m))?;
-    let rank0 = petsc.rank() == 0;
+    // Every Newton iteration for a person watching; the summary has the totals.
+    let verbose = petsc.rank() == 0 && crate::progress::interactive();
     let state = timings.stage("static preload", || {
         crate::statics::solve(petsc, &ops.k0, dofs, &contact, &load, settings, None, |r| {
-            if rank0 {
+            if verbose {
                 println!(
                     "  static step {} (pressure {:>3.0} %, friction {:>3.0} %) iteration {:>2}: residual {:.3e} N (of {:.3e}){}",
                     r.load_step,

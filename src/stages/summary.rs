@@ -631,9 +631,11 @@ impl RunSummary {
         };
         let c = &r.cycle;
         writeln!(f, "limit cycle of the braking torque: {}", c.verdict)?;
-        let growth = c
-            .growth_rate
-            .map_or("not measured".into(), |g| format!("{g:.0} 1/s"));
+        let growth = match (c.growth_rate, c.growth_frequency) {
+            (Some(g), Some(hz)) => format!("{g:.0} 1/s at {hz:.1} Hz"),
+            (Some(g), None) => format!("{g:.0} 1/s"),
+            _ => "not measured".into(),
+        };
         let predicted = r.predicted.as_ref().map_or(String::new(), |p| {
             format!(
                 " (complex mode {} of the {} route: Re(s) {:.0} 1/s at {:.1} Hz)",
@@ -641,12 +643,12 @@ impl RunSummary {
             )
         });
         writeln!(f, "    growth rate {growth}{predicted}")?;
-        if let Some(p) = &r.predicted {
-            if (p.3 - c.dominant_frequency).abs() > 0.1 * c.dominant_frequency {
+        if let (Some(p), Some(growing)) = (&r.predicted, c.growth_frequency) {
+            if (p.3 - growing).abs() > 0.1 * growing {
                 writeln!(
                     f,
-                    "    the run grows at {:.1} Hz but the most unstable complex mode computed is at {:.1} Hz: the modes near the growing frequency are missing (raise real_modes.count for the projected route) or the growth comes from the nonlinear response",
-                    c.dominant_frequency, p.3
+                    "    the run grows at {growing:.1} Hz but the most unstable complex mode computed is at {:.1} Hz: the modes near the growing frequency are missing (raise real_modes.count for the projected route) or the growth comes from the nonlinear response",
+                    p.3
                 )?;
             }
         }

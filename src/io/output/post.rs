@@ -22,6 +22,7 @@ pub fn write_limit_cycle(
     let nan = f64::NAN;
     let numbers = [
         ("growth_rate_per_s", c.growth_rate.unwrap_or(nan)),
+        ("growth_frequency_hz", c.growth_frequency.unwrap_or(nan)),
         ("saturation_time_s", c.saturation_time.unwrap_or(nan)),
         ("saturated_amplitude_nm", c.saturated_amplitude),
         ("dominant_frequency_hz", c.dominant_frequency),

@@ -184,6 +184,59 @@ pub struct TransientFiles {
     pub scene: Vec<(&'static str, u64)>,
 }
 
+/// The step control's log (rank 0): every change in `transient.log` beside the stream (a
+/// restart appends to it), the first few also on stdout, then one line saying where the rest
+/// goes: a saturated run changes its step control hundreds of times; the summary counts them.
+struct StepLog {
+    rank0: bool,
+    file: Option<std::fs::File>,
+    path: PathBuf,
+    written: usize,
+}
+
+impl StepLog {
+    /// Lines of the log shown on stdout.
+    const SHOWN: usize = 3;
+
+    fn new(rank0: bool, path: PathBuf, append: bool) -> Self {
+        let open = || {
+            std::fs::OpenOptions::new()
+                .create(true)
+                .write(true)
+                .append(append)
+                .truncate(!append)
+                .open(&path)
+                .ok()
+        };
+        StepLog {
+            rank0,
+            file: if rank0 { open() } else { None },
+            path,
+            written: 0,
+        }
+    }
+
+    fn write(&mut self, line: &str) {
+        use std::io::Write as _;
+        if !self.rank0 {
+            return;
+        }
+        let in_file = self
+            .file
+            .as_mut()
+            .is_some_and(|f| writeln!(f, "{line}").is_ok());
+        if self.written < Self::SHOWN || !in_file {
+            println!("  transient: {line}");
+        } else if self.written == Self::SHOWN {
+            println!(
+                "  transient: further changes of the step control in {} (counted in the summary)",
+                self.path.display()
+            );
+        }
+        self.written += 1;
+    }
+}
+
 impl TransientFiles {
     pub fn in_directory(dir: &Path, restart: bool) -> Self {
         TransientFiles {
@@ -315,6 +368,8 @@ pub fn run<'p>(
         };
     let rank0 = petsc.rank() == 0;
     let world = petsc.world();
+    let log_path = files.stream.with_file_name("transient.log");
+    let mut step_log = StepLog::new(rank0, log_path, files.restart);
     let mut log = |line: &str| {
         // Collective: every rank logs at the same points of the step control.
         let changes = crate::parallel::sum(world, status_changes.get() as f64);
@@ -322,11 +377,9 @@ pub fn run<'p>(
             cs.response.iter().filter(|r| r.in_friction_band()).count()
         });
         let in_band = crate::parallel::sum(world, in_band as f64);
-        if rank0 {
-            println!(
-                "  transient: {line} [{changes:.0} contact status changes between iterates since the last step; {in_band:.0} sliding points inside the friction regularization band]"
-            );
-        }
+        step_log.write(&format!(
+            "{line} [{changes:.0} contact status changes between iterates since the last step; {in_band:.0} sliding points inside the friction regularization band]"
+        ));
     };
     let forces: &mut Forces<'_, 'p> = &mut forces;
     let result = integrate_adaptive(
