@@ -94,23 +94,13 @@ pub fn run_with(
     file.flush()?;
 
     // The transient streams into transient.h5 (linked as /transient) while it runs.
-    let trajectory = match &scene.transient {
-        Some(settings) => Some(timings.stage("transient", || {
-            stages::transient::transient(
-                petsc,
-                settings,
-                &scene.damping.unwrap_or_default(),
-                a.model.as_ref(),
-                &a.ops,
-                stages::need(a.preload.as_ref(), "transient", "[statics]")?,
-                stages::need(a.modes.as_ref(), "transient", "[real_modes] (its start)")?,
-                a.reduced.as_ref(),
-                &TransientFiles::in_directory(output, options.restart)
-                    .with_scene(scene.restart_fingerprint()),
-            )
-        })?),
-        None => None,
-    };
+    // A transient that fails to start or stops early still gets the summary and report of
+    // what the run computed; its error comes last.
+    let mut failure = None;
+    let trajectory = transient(petsc, scene, &a, output, options, &mut timings)
+        .map_err(|e| failure = Some(e))
+        .ok()
+        .flatten();
     let limit_cycle = match (&trajectory, &scene.transient, &scene.post) {
         (Some(t), Some(settings), Some(post)) => post.limit_cycle.map(|lc| {
             timings.time("limit cycle", || {
@@ -189,21 +179,54 @@ pub fn run_with(
     // Reported after the results are written: the steps before the failure are kept.
     let link = link?;
     let pseudo = pseudo?;
-    let signals = match trajectory {
-        Some(t) => match t.failure {
-            Some(e) => return Err(RunError::Time(e)),
-            None => Some(t.signals),
-        },
-        None => None,
-    };
+    let signals = trajectory.map(|t| {
+        failure = failure.take().or(t.failure.map(RunError::Time));
+        t.signals
+    });
 
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
     let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
     summary.limit_cycle = limit_cycle;
     summary.link = link;
     summary.pseudo = pseudo;
+    summary.failure = failure.as_ref().map(ToString::to_string);
     write_report(petsc, &summary, scene_text, output)?;
-    Ok(summary)
+    match failure {
+        Some(e) => Err(e),
+        None => Ok(summary),
+    }
+}
+
+/// The transient stage, when the scene has one (timed).
+///
+/// # Collective
+fn transient<'p>(
+    petsc: &'p Petsc,
+    scene: &Scene,
+    a: &stages::Analyses<'p>,
+    output: &Path,
+    options: &RunOptions,
+    timings: &mut Timings,
+) -> Result<Option<stages::transient::Trajectory>, RunError> {
+    let Some(settings) = &scene.transient else {
+        return Ok(None);
+    };
+    timings
+        .stage("transient", || {
+            stages::transient::transient(
+                petsc,
+                settings,
+                &scene.damping.unwrap_or_default(),
+                a.model.as_ref(),
+                &a.ops,
+                stages::need(a.preload.as_ref(), "transient", "[statics]")?,
+                stages::need(a.modes.as_ref(), "transient", "[real_modes] (its start)")?,
+                a.reduced.as_ref(),
+                &TransientFiles::in_directory(output, options.restart)
+                    .with_scene(scene.restart_fingerprint()),
+            )
+        })
+        .map(Some)
 }
 
 /// report.html, written by rank 0 when everything else is.

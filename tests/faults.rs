@@ -147,6 +147,20 @@ fn a_nan_in_the_transient_stops_it_naming_the_step() {
         file.group("modes").is_ok(),
         "/modes missing from results.h5"
     );
+    // The report of what was computed, its answer saying why the run stopped.
+    let report = std::fs::read_to_string(dir.join("results/report.html")).expect("report.html");
+    let answer = report
+        .split("id=\"answer\"")
+        .nth(1)
+        .expect("an answer section");
+    assert!(
+        answer.contains("the run stopped early") && answer.contains("not finite"),
+        "{answer}"
+    );
+    assert!(
+        report.contains("id=\"complex-modes\""),
+        "no complex modes in the report"
+    );
 }
 
 #[test]

@@ -11,6 +11,11 @@ const NAMED: usize = 6;
 /// The answer's lines (without indentation), the report's path last.
 pub fn answer_lines(s: &RunSummary) -> Vec<String> {
     let mut lines = Vec::new();
+    if let Some(failure) = &s.failure {
+        lines.push(format!(
+            "the run stopped early: {failure}; what it computed before is below and in results.h5"
+        ));
+    }
     for c in &s.complex {
         let mut unstable: Vec<_> = c.modes.iter().filter(|m| m.unstable).collect();
         unstable.sort_by(|a, b| b.eigenvalue.0.total_cmp(&a.eigenvalue.0));

@@ -48,6 +48,8 @@ pub struct RunSummary {
     pub link: super::link::Link,
     /// The pseudo trajectories, when `[post.pseudo_trajectory]` asked for them.
     pub pseudo: Option<super::pseudo::PseudoReport>,
+    /// Why the run stopped early (the transient's error), when it did.
+    pub failure: Option<String>,
 }
 
 /// The superelement reduction, for the summary.
@@ -179,6 +181,7 @@ impl RunSummary {
             limit_cycle: None,
             link: Default::default(),
             pseudo: None,
+            failure: None,
         }
     }
 }
