@@ -199,6 +199,9 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
         )?;
         let caption = "Frequency and damping of the tracked modes against time, torque below.";
         body += &figure(output, "dynamic_stability_time.png", caption)?;
+        if let Some(r) = &s.link.dynamic_stability {
+            body += &dynamic_stability_table(r);
+        }
         body += &text(s, Part::DynamicStability);
         add(
             "dynamic-stability",
@@ -215,6 +218,7 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
             let caption = format!("{name}: pseudo dynamic stability over one period.");
             body += &figure(output, &format!("pseudo_stability_{name}.png"), &caption)?;
         }
+        body += &pseudo_table(p);
         body += &text(s, Part::Pseudo);
         add(
             "pseudo-trajectories",
@@ -374,4 +378,73 @@ fn run_table(s: &RunSummary) -> String {
         s.peak_memory_per_rank / (1024.0 * 1024.0)
     );
     t
+}
+
+/// The headline modes of the dynamic stability: at rest, along the run, how long unstable.
+fn dynamic_stability_table(r: &crate::stages::link::DynamicStabilityReport) -> String {
+    use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
+    let mut t = String::from(
+        "<table><tr><th>mode</th><th>at rest (Hz)</th><th>damping ratio at rest</th><th>frequency along the run (Hz)</th><th>damping ratio along the run</th><th>unstable (% of the time)</th><th>mean damping ratio</th></tr>",
+    );
+    for m in r.stability.tracks.iter().filter(|m| m.headline(r.margin)) {
+        let along = &m.eigenvalue[1..];
+        let span = |f: &dyn Fn((f64, f64)) -> f64| {
+            along
+                .iter()
+                .map(|&s| f(s))
+                .filter(|x| x.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(x), b.max(x))
+                })
+        };
+        let (f0, f1) = span(&frequency_hz);
+        let (z0, z1) = span(&damping_ratio);
+        let rest = m.eigenvalue[0];
+        let _ = write!(
+            t,
+            "<tr{}><td>{}</td><td>{:.1}</td><td>{:.2e}</td><td>{f0:.1} .. {f1:.1}</td><td>{z0:.2e} .. {z1:.2e}</td><td>{:.0}</td><td>{:.2e}</td></tr>",
+            if m.mean_damping_ratio < -r.margin { " class=\"unstable\"" } else { "" },
+            m.name,
+            frequency_hz(rest),
+            damping_ratio(rest),
+            100.0 * m.unstable_fraction,
+            m.mean_damping_ratio
+        );
+    }
+    t + "</table>"
+}
+
+/// Per studied mode: the amplitudes the pseudo trajectory finds and the transient's.
+fn pseudo_table(p: &crate::stages::pseudo::PseudoReport) -> String {
+    use crate::post::pseudo_trajectory::Found;
+    let show = |x: &Found| match x {
+        Found::At { alpha, .. } => format!("{alpha:.3e}"),
+        Found::BelowRange => "below the range".into(),
+        Found::AboveRange => "above the range".into(),
+    };
+    let mut t = String::from(
+        "<table><tr><th>mode</th><th>frequency (Hz)</th><th>damping ratio</th><th>alpha_crit (m)</th><th>alpha_sat (m)</th><th>in the transient (m)</th><th>alpha_sat / transient</th><th>cost (s)</th></tr>",
+    );
+    for study in &p.studies {
+        let m = &study.trajectory;
+        let (transient, ratio) =
+            study
+                .transient
+                .as_ref()
+                .map_or(("-".to_string(), "-".to_string()), |tr| {
+                    let ratio = m.alpha_sat.alpha().map_or(f64::NAN, |a| a / tr.mean);
+                    (format!("{:.3e}", tr.mean), format!("{ratio:.3}"))
+                });
+        let _ = write!(
+            t,
+            "<tr><td>{}</td><td>{:.1}</td><td>{:.2e}</td><td>{}</td><td>{}</td><td>{transient}</td><td>{ratio}</td><td>{:.1}</td></tr>",
+            m.name,
+            crate::eigen::complex_modes::frequency_hz(m.nominal),
+            crate::eigen::complex_modes::damping_ratio(m.nominal),
+            show(&m.alpha_crit),
+            show(&m.alpha_sat),
+            m.seconds
+        );
+    }
+    t + "</table>"
 }
