@@ -139,12 +139,10 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
         .take_while(|e| e.1 < 0.3 * a_sat)
         .map(|e| (e.0, e.1.ln()))
         .collect();
-    if linear.len() >= 4 && linear.last().unwrap().1 - linear[0].1 >= 1.0 {
-        out.growth_rate = Some(slope(&linear));
-        out.growth_window = Some((linear[0].0, linear.last().unwrap().0));
-        let index = |time: f64| (((time - t0) / dt).round().max(0.0) as usize).min(n);
-        let window = &u[index(linear[0].0)..index(linear.last().unwrap().0)];
-        out.growth_frequency = Some(dominant_frequency(window, dt)).filter(|f| *f > 0.0);
+    if let Some((rate, window, frequency)) = fit_growth(&linear, &u, t0, dt) {
+        out.growth_rate = Some(rate);
+        out.growth_window = Some(window);
+        out.growth_frequency = frequency;
     }
     // Still growing at the end (the last fifth's amplitude rises by more than 20 % across
     // it): there is no saturated amplitude to judge yet.
@@ -236,6 +234,25 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
         )
     };
     out
+}
+
+/// The growth rate, window and frequency of the linear phase (ln amplitude against time,
+/// `linear`) when it spans at least 4 windows and one e-fold; `u`: the signal from `t0` on the
+/// grid `dt`.
+fn fit_growth(
+    linear: &[(f64, f64)],
+    u: &[f64],
+    t0: f64,
+    dt: f64,
+) -> Option<(f64, (f64, f64), Option<f64>)> {
+    let (first, last) = (linear.first()?, linear.last()?);
+    if linear.len() < 4 || last.1 - first.1 < 1.0 {
+        return None;
+    }
+    let index = |time: f64| (((time - t0) / dt).round().max(0.0) as usize).min(u.len());
+    let window = &u[index(first.0)..index(last.0)];
+    let frequency = Some(dominant_frequency(window, dt)).filter(|f| *f > 0.0);
+    Some((slope(linear), (first.0, last.0), frequency))
 }
 
 /// The spectral peak (Hann window over the whole signal, parabolic interpolation of the log
