@@ -120,7 +120,9 @@ pub fn agree(message: &dyn Display) {
             }
             if start.elapsed() > GRACE {
                 let rank = failures.rank();
-                eprintln!("squeal: error on rank {rank} (alone; ending all ranks): {message}");
+                say(&format!(
+                    "squeal: error on rank {rank} (alone; ending all ranks): {message}"
+                ));
                 std::mem::forget(pending);
                 failures.abort(1);
             }
@@ -151,11 +153,22 @@ pub fn report_failed_run(message: &str) {
             failures.process_at_rank(0).broadcast_into(&mut root_hash);
         }
         if rank == 0 {
-            eprintln!("squeal: error: {message}");
+            say(&format!("squeal: error: {message}"));
         } else if hash != root_hash {
-            eprintln!("squeal: error on rank {rank}: {message}");
+            say(&format!("squeal: error on rank {rank}: {message}"));
         }
     });
+}
+
+/// Writes `line` and its newline to stderr in one write, so that the lines of ranks failing
+/// together never interleave (`eprintln!` may write its pieces separately; mpirun forwards
+/// each rank's writes as they come).
+pub fn say(line: &str) {
+    use std::io::Write;
+    let mut whole = String::with_capacity(line.len() + 1);
+    whole.push_str(line);
+    whole.push('\n');
+    let _ = std::io::stderr().lock().write_all(whole.as_bytes());
 }
 
 /// FNV-1a: a stable hash (the same on every rank and platform), e.g. to tell whether two

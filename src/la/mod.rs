@@ -179,7 +179,7 @@ pub fn install_panic_hook() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
         let world = SimpleCommunicator::world();
-        eprintln!("squeal: rank {} panicked: {info}", world.rank());
+        crate::fault::say(&format!("squeal: rank {} panicked: {info}", world.rank()));
         default(info);
         world.abort(70);
     }));
