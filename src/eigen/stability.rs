@@ -75,7 +75,7 @@ impl ModalProjection {
         let (n, m) = (self.points, self.size);
         assert_eq!(terms.len(), n, "one term list per local point");
         let mut out = vec![0.0; m * m];
-        // Group by channel pair: out += P_a^T diag(g) P_b, one GEMM per pair present.
+        // Weights per channel pair: out += P_a^T diag(g_ab) P_b.
         let mut weights = vec![vec![0.0f64; n]; 16];
         let mut present = [false; 16];
         for (j, list) in terms.iter().enumerate() {
@@ -85,13 +85,21 @@ impl ModalProjection {
                 present[pair] = true;
             }
         }
+        // One GEMM per row channel a: out += P_a^T S_a with S_a = sum_b diag(g_ab) P_b (the
+        // up to 11 channel pairs of sliding friction cost 4 products, not 11).
         let mut scaled = vec![0.0; n * m];
-        for pair in (0..16).filter(|&p| present[p]) {
-            let (a, b) = (pair / 4, pair % 4);
-            let g = &weights[pair];
-            for k in 0..m {
-                for j in 0..n {
-                    scaled[k * n + j] = g[j] * self.channels[b][k * n + j];
+        for a in 0..4 {
+            let pairs: Vec<usize> = (0..4).map(|b| a * 4 + b).filter(|&p| present[p]).collect();
+            if pairs.is_empty() {
+                continue;
+            }
+            scaled.fill(0.0);
+            for &pair in &pairs {
+                let (g, p_b) = (&weights[pair], &self.channels[pair % 4]);
+                for (column, source) in scaled.chunks_mut(n.max(1)).zip(p_b.chunks(n.max(1))) {
+                    for ((c, &gj), &pj) in column.iter_mut().zip(g).zip(source) {
+                        *c += gj * pj;
+                    }
                 }
             }
             let product = lapack::gemm_tn(n, m, m, &self.channels[a], &scaled);

@@ -2,6 +2,7 @@
 //! one fixed basis: sweep points, or linearizations along a trajectory.
 
 use super::complex_modes::{Complex, DenseEigenpair};
+use super::near_shift::eigenpairs_near;
 
 /// Modal assurance criterion of two complex vectors: |a^H b|^2 / (|a|^2 |b|^2).
 pub fn mac(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
@@ -68,6 +69,90 @@ pub fn pair_modes(
         }
     }
     out
+}
+
+/// How many eigenvalues beyond the tracked pair [`near_pairs`] converges, first and at most:
+/// more reach farther from the shift, so that a larger change between phases is still
+/// proven to be the one the full pairing would choose.
+const BEYOND: [usize; 2] = [1, 4];
+
+/// Start vectors carried from one phase to the next.
+pub const HINTS: usize = 8;
+
+/// The `count` eigenpairs of `pairs` nearest any of `to`.
+pub fn nearest(
+    pairs: &[DenseEigenpair],
+    to: &[DenseEigenpair],
+    count: usize,
+) -> Vec<DenseEigenpair> {
+    let distance = |p: &DenseEigenpair| {
+        to.iter()
+            .map(|t| (p.0 .0 - t.0 .0).hypot(p.0 .1 - t.0 .1))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let mut order: Vec<(f64, usize)> = pairs.iter().map(distance).zip(0..).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0));
+    order
+        .iter()
+        .take(count)
+        .map(|&(_, k)| pairs[k].clone())
+        .collect()
+}
+
+/// The eigenpairs of the projected system (`kp`, `cp`: m x m, unit mass) near the tracked
+/// pair `current` (shift-invert at each member's eigenvalue; `hints`: eigenpairs near the pair
+/// at the previous point, to start from), when they provably hold the ones the MAC pairing
+/// ([`pair_modes`]) would choose among all eigenpairs: an eigenvalue outside every radius
+/// found costs more (by its distance alone) than each choice made inside, so the greedy
+/// pairing makes the same choices before it reaches one. Else `None`: the caller solves the
+/// whole dense problem. Small bases (where the full solve is as cheap) always get `None`.
+pub fn pairs_near_tracked(
+    m: usize,
+    kp: &[f64],
+    cp: &[f64],
+    current: &[DenseEigenpair],
+    hints: &[DenseEigenpair],
+) -> Result<Option<Vec<DenseEigenpair>>, String> {
+    if m < 4 * (BEYOND[1] + 4) || current.is_empty() {
+        return Ok(None);
+    }
+    'wider: for beyond in BEYOND {
+        let mut found: Vec<DenseEigenpair> = Vec::new();
+        // Per member: the distance (relative to its eigenvalue) that anything outside the
+        // eigenvalues found lies from it.
+        let mut outside = Vec::with_capacity(current.len());
+        for member in current {
+            let mut start = vec![member.clone()];
+            start.extend(nearest(hints, std::slice::from_ref(member), HINTS));
+            let s = member.0;
+            let Some(near) = eigenpairs_near(m, kp, cp, s, &start, beyond)? else {
+                continue 'wider;
+            };
+            outside.push(near.radius / s.0.hypot(s.1).max(1e-300));
+            for pair in near.pairs {
+                let t = pair.0;
+                let same = |q: &DenseEigenpair| {
+                    (q.0 .0 - t.0).hypot(q.0 .1 - t.1) <= 1e-9 * t.0.hypot(t.1)
+                };
+                if !found.iter().any(same) {
+                    found.push(pair);
+                }
+            }
+        }
+        let mut worst_choice = 0.0f64;
+        for (i, choice) in pair_modes(current, &found).into_iter().enumerate() {
+            let Some((j, mac)) = choice else {
+                continue 'wider;
+            };
+            let (si, sj) = (current[i].0, found[j].0);
+            let scale = si.0.hypot(si.1).max(1e-300);
+            worst_choice = worst_choice.max((1.0 - mac) + (si.0 - sj.0).hypot(si.1 - sj.1) / scale);
+        }
+        if outside.iter().all(|&r| worst_choice < r) {
+            return Ok(Some(found));
+        }
+    }
+    Ok(None)
 }
 
 /// Tracks modes through the points (each point's modes with their modal coordinates in one

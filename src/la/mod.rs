@@ -8,6 +8,7 @@ pub mod eigen;
 pub(crate) mod error;
 pub mod fem_assembly;
 pub mod lapack;
+pub mod lapack_complex;
 pub mod matrix;
 pub mod observation;
 pub mod quadratic;

@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::eigen::complex_modes::{
     damping_ratio, frequency_hz, solve_dense, Complex, DenseEigenpair,
 };
-use crate::eigen::tracking::pair_modes;
+use crate::eigen::tracking::{nearest, pair_modes, pairs_near_tracked, HINTS};
 
 /// `[post.pseudo_trajectory]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -156,6 +156,8 @@ pub struct Period {
     pub sample: Vec<u8>,
     /// The mode and its partner at phase 0: where the next amplitude's tracking starts.
     start: Vec<DenseEigenpair>,
+    /// Phases whose eigenpairs needed the full dense solve (see [`pairs_near_tracked`]).
+    pub dense_solves: usize,
 }
 
 impl Period {
@@ -211,15 +213,20 @@ pub struct PseudoTrajectory {
     /// The pseudo stability diagram: the period at the diagram's amplitude.
     pub diagram: Period,
     pub linearizations: usize,
+    /// Linearizations whose eigenpairs took the full dense solve, not the shift-invert near
+    /// the tracked pair.
+    pub dense_solves: usize,
     pub seconds: f64,
 }
 
 /// Follows the mode and its coupling partner over one period at `alpha`, starting from
-/// `start` (the pair at phase 0 of a nearby amplitude). Where the pair splits (the contact
-/// state decouples it) the two continuations have nearly the same shape and either may be
-/// "the mode": the pair's least stable member is taken, a continuous function of the state
+/// `start` (the pair at phase 0 of a nearby amplitude); `near`: the eigenpairs near the pair
+/// by shift-invert where that provably gives the same pairing ([`pairs_near_tracked`]), else
+/// (and always without `near`) the full dense solve. Where the pair splits (the contact state
+/// decouples it) the two continuations have nearly the same shape and either may be "the mode": the pair's least stable member is taken, a continuous function of the state
 /// whichever member the MAC pairing follows (so the mean over the period is continuous in
 /// alpha and a bisection on it well posed).
+#[allow(clippy::too_many_arguments)] // the period's definition and how its modes are solved
 fn period(
     system: &dyn PseudoSystem,
     psi: &[Complex],
@@ -228,9 +235,12 @@ fn period(
     phases: usize,
     start: &[DenseEigenpair],
     margin: f64,
+    near: bool,
 ) -> Result<Period, String> {
     let m = psi.len();
     let mut current = start.to_vec();
+    // The eigenpairs found near the pair at the previous phase: the next phase's start block.
+    let mut hints: Vec<DenseEigenpair> = Vec::new();
     let mut out = Period {
         alpha,
         eigenvalue: Vec::with_capacity(phases),
@@ -240,11 +250,24 @@ fn period(
         fractions: Vec::with_capacity(phases),
         sample: Vec::with_capacity(phases),
         start: start.to_vec(),
+        dense_solves: 0,
     };
     for k in 0..phases {
         let theta = 2.0 * std::f64::consts::PI * k as f64 / phases as f64;
         let lin = system.linearize(psi, omega, alpha, theta)?;
-        let pairs = solve_dense(m, &lin.kp, &lin.cp)?;
+        let found = if near {
+            pairs_near_tracked(m, &lin.kp, &lin.cp, &current, &hints)?
+        } else {
+            None
+        };
+        let pairs = match found {
+            Some(pairs) => pairs,
+            None => {
+                out.dense_solves += 1;
+                solve_dense(m, &lin.kp, &lin.cp)?
+            }
+        };
+        hints = nearest(&pairs, &current, HINTS);
         out.fractions.push(lin.fractions);
         out.sample.push(lin.sample);
         let next: Option<Vec<(usize, f64)>> = pair_modes(&current, &pairs).into_iter().collect();
@@ -366,10 +389,12 @@ pub fn pseudo_trajectory(
         [1e-3 * g, 10.0 * g]
     });
     let phases = settings.phases;
-    let mut count = 0;
+    let (mut count, mut dense_solves) = (0, 0);
     let mut evaluate = |alpha: f64, start: &[DenseEigenpair]| {
         count += phases;
-        period(system, &psi, omega, alpha, phases, start, margin)
+        let p = period(system, &psi, omega, alpha, phases, start, margin, true)?;
+        dense_solves += p.dense_solves;
+        Ok::<Period, String>(p)
     };
     let mut sweep: Vec<Period> = Vec::with_capacity(settings.alphas);
     for alpha in log_space(a, b, settings.alphas) {
@@ -411,6 +436,7 @@ pub fn pseudo_trajectory(
         sign_changes,
         diagram,
         linearizations: count,
+        dense_solves,
         seconds: clock.elapsed().as_secs_f64(),
     })
 }
@@ -502,6 +528,109 @@ mod tests {
         let a = log_space(1e-3, 10.0, 5);
         assert!((a[0] - 1e-3).abs() < 1e-18 && (a[4] - 10.0).abs() < 1e-12);
         assert!((a[2] - 0.1).abs() < 1e-14);
+    }
+
+    /// A 40-mode chain whose neighbours couple through an antisymmetric (friction-like)
+    /// stiffness, and whose stiffness changes along the pseudo trajectory by
+    /// alpha (cos theta S + sin theta A), S symmetric, A antisymmetric: eigenvalues move by
+    /// several per cent over a period at alpha = 1, through close modes.
+    struct Chain {
+        m: usize,
+        k0: Vec<f64>,
+        c: Vec<f64>,
+    }
+
+    impl Chain {
+        fn new(m: usize) -> Self {
+            let mut k0 = vec![0.0; m * m];
+            let mut c = vec![0.0; m * m];
+            for i in 0..m {
+                // Pairs of close modes (1, 1.01, 2, 2.01, ...) x 1000 rad/s.
+                let w = 1e3 * ((i / 2 + 1) as f64 + 0.01 * (i % 2) as f64);
+                k0[i * m + i] = w * w;
+                c[i * m + i] = 2.0 * 0.005 * w;
+                if i + 1 < m {
+                    k0[(i + 1) * m + i] = 0.2 * w * w;
+                    k0[i * m + i + 1] = -0.2 * w * w;
+                }
+            }
+            Chain { m, k0, c }
+        }
+    }
+
+    impl PseudoSystem for Chain {
+        fn contact_amplitude(&self, _: &[Complex]) -> Result<f64, String> {
+            Ok(1.0)
+        }
+        fn linearize(
+            &self,
+            _: &[Complex],
+            _: f64,
+            alpha: f64,
+            theta: f64,
+        ) -> Result<Linearized, String> {
+            let m = self.m;
+            let mut kp = self.k0.clone();
+            for j in 0..m {
+                for i in 0..m {
+                    let scale = (self.k0[i * m + i] * self.k0[j * m + j]).sqrt();
+                    let sym = 0.03 * ((1 + i + j) as f64).sin();
+                    let anti = 0.02 * ((i as f64 - j as f64) * 0.7).sin();
+                    kp[j * m + i] += alpha * scale * (theta.cos() * sym + theta.sin() * anti);
+                }
+            }
+            Ok(Linearized {
+                kp,
+                cp: self.c.clone(),
+                fractions: [0.0, 0.0, 1.0],
+                sample: 2,
+            })
+        }
+        fn gap_scale(&self) -> f64 {
+            1.0
+        }
+    }
+
+    /// The pair followed through a period by shift-invert near it is the pair the full dense
+    /// solve follows: at every phase the same eigenvalue to 1e-9 (both converge to round-off;
+    /// the iteration stops at a residual of 1e-13 ||A||), and the shift-invert does the work
+    /// at most phases (else the test would compare the full solve with itself).
+    #[test]
+    fn pair_tracked_near_its_shift_is_the_full_dense_solves_pair() {
+        let chain = Chain::new(48);
+        let m = chain.m;
+        let nominal = solve_dense(m, &chain.k0, &chain.c).unwrap();
+        let index = nominal
+            .iter()
+            .enumerate()
+            .min_by(|a, b| damping_ratio(a.1 .0).total_cmp(&damping_ratio(b.1 .0)))
+            .map(|(k, _)| k)
+            .unwrap();
+        let pair: Vec<DenseEigenpair> = std::iter::once(index)
+            .chain(partner(&nominal, index))
+            .map(|k| nominal[k].clone())
+            .collect();
+        let omega = nominal[index].0 .1;
+        let mut near_used = 0;
+        for alpha in [1e-6, 0.1, 0.5, 1.0] {
+            let run = |near| period(&chain, &pair[0].1, omega, alpha, 32, &pair, 0.0, near);
+            let (fast, full) = (run(true).unwrap(), run(false).unwrap());
+            assert_eq!(full.dense_solves, 32);
+            near_used += 32 - fast.dense_solves;
+            for (k, (a, b)) in fast.eigenvalue.iter().zip(&full.eigenvalue).enumerate() {
+                let d = (a.0 - b.0).hypot(a.1 - b.1) / b.0.hypot(b.1);
+                assert!(
+                    d <= 1e-9,
+                    "alpha {alpha}, phase {k}: {a:?} vs {b:?} ({d:.1e})"
+                );
+            }
+            let (zf, zd) = (fast.mean_damping_ratio, full.mean_damping_ratio);
+            assert!((zf - zd).abs() <= 1e-9 * zd.abs().max(1e-3), "{zf} vs {zd}");
+        }
+        assert!(
+            near_used >= 64,
+            "shift-invert used at {near_used} of 128 phases"
+        );
     }
 
     fn cmul(a: Complex, b: Complex) -> Complex {

@@ -247,7 +247,7 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             });
         write!(
             f,
-            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s",
+            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s ({} by the full dense solve)",
             t.name,
             f_hz,
             damping_ratio(t.nominal),
@@ -256,7 +256,8 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             span.0,
             span.1,
             t.linearizations,
-            t.seconds
+            t.seconds,
+            t.dense_solves
         )?;
         if t.alpha_stable.alpha() != t.alpha_sat.alpha() {
             let above = match &t.alpha_stable {
