@@ -23,6 +23,11 @@ pub fn write_limit_cycle(
     let numbers = [
         ("growth_rate_per_s", c.growth_rate.unwrap_or(nan)),
         ("growth_frequency_hz", c.growth_frequency.unwrap_or(nan)),
+        (
+            "growth_window_start_s",
+            c.growth_window.map_or(nan, |w| w.0),
+        ),
+        ("growth_window_end_s", c.growth_window.map_or(nan, |w| w.1)),
         ("saturation_time_s", c.saturation_time.unwrap_or(nan)),
         ("saturated_amplitude_nm", c.saturated_amplitude),
         ("dominant_frequency_hz", c.dominant_frequency),
