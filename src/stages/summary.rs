@@ -114,6 +114,9 @@ pub struct TransientSummary {
     /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
     pub seconds_per_iteration: f64,
     pub seconds_per_solve: f64,
+    /// Solves with the factor in all, and where the factor lives.
+    pub factor_solves: usize,
+    pub jacobian_solver: &'static str,
     /// Per step: force evaluations (contact), operator products (the predictor's linear
     /// force, the contact tangent's correction), and the rest (vector updates, reductions,
     /// recording).
@@ -315,7 +318,9 @@ impl TransientSummary {
             krylov_iterations: t.krylov_iterations,
             factorizations: t.factorizations,
             seconds_per_iteration: stepping / iterations_run,
-            seconds_per_solve: t.seconds_solving / iterations_run,
+            seconds_per_solve: t.seconds_in_factor_solves / t.factor_solves.max(1) as f64,
+            factor_solves: t.factor_solves,
+            jacobian_solver: t.jacobian_solver,
             seconds_forces_per_step: t.seconds_in_forces / steps_run,
             seconds_products_per_step: t.seconds_in_products / steps_run,
         }
@@ -579,7 +584,7 @@ impl RunSummary {
     fn fmt_transient(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(t) = &self.transient {
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.2} ms (ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.3} ms ({} solves; ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -591,10 +596,12 @@ impl RunSummary {
                 t.krylov_iterations,
                 t.full_newton_retries,
                 t.factorizations,
+                t.jacobian_solver,
                 t.factor_entries,
                 t.seconds_factorizing,
                 1e3 * t.seconds_per_iteration,
                 1e3 * t.seconds_per_solve,
+                t.factor_solves,
                 t.seconds_per_iteration / t.seconds_per_solve.max(1e-300),
                 1e3 * t.seconds_forces_per_step,
                 1e3 * t.seconds_products_per_step

@@ -60,7 +60,8 @@ pub struct StepReport {
     /// Final residual and the reference it was compared with.
     pub residual: f64,
     pub reference: f64,
-    /// Time inside the factor's solves, the force evaluations (contact) and the products
+    /// Time inside the corrections (the factor's solves, and for Newton-Krylov the
+    /// linearization and GMRES around them), the force evaluations (contact) and the products
     /// with the model's operators (predictor) and with the Jacobian's extra part; the rest of
     /// a step is vector updates and reductions.
     pub solve_seconds: f64,
@@ -71,6 +72,32 @@ pub struct StepReport {
     pub forces_current: bool,
     /// GMRES iterations of Newton-Krylov corrections.
     pub krylov_iterations: usize,
+    /// Solves with a factor (one per fixed-Jacobian iteration, one per GMRES iteration and
+    /// one more per Newton-Krylov correction), and the time inside them alone.
+    pub factor_solves: usize,
+    pub factor_solve_seconds: f64,
+}
+
+/// Counts and times solves with a factor.
+#[derive(Debug, Clone, Copy, Default)]
+struct SolveCount {
+    solves: usize,
+    seconds: f64,
+}
+
+impl SolveCount {
+    fn solve<'p>(
+        &mut self,
+        factor: &DirectSolver<'p>,
+        b: &Vector<'p>,
+        x: &mut Vector<'p>,
+    ) -> Result<(), LaError> {
+        let t = std::time::Instant::now();
+        factor.solve(b, x)?;
+        self.solves += 1;
+        self.seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
 }
 
 /// The damping operator C.
@@ -215,6 +242,8 @@ pub struct Newmark<'a, 'p> {
     basis: Vec<Vector<'p>>,
     /// A GMRES solve of the last step attempt ended without reaching its tolerance.
     krylov_exhausted: bool,
+    /// The factor's solves of the current step attempt.
+    solves: SolveCount,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -246,6 +275,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             dz: q1.duplicate()?,
             basis: Vec::new(),
             krylov_exhausted: false,
+            solves: SolveCount::default(),
             q1,
         })
     }
@@ -347,6 +377,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
         let h = self.settings.step;
         let t1 = state.time + h;
         self.krylov_exhausted = false;
+        self.solves = SolveCount::default();
         // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
         self.q1.copy_from(&state.q)?;
         self.q1.axpy(h, &state.v)?;
@@ -368,6 +399,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             product_seconds: clock.elapsed().as_secs_f64(),
             forces_current: true,
             krylov_iterations: 0,
+            factor_solves: 0,
+            factor_solve_seconds: 0.0,
         };
         // R = z - f at the predictor; later iterates come evaluated from the correction.
         let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
@@ -387,6 +420,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             report.reference = reference;
             if r <= target {
                 self.accept(state, t1)?;
+                report.factor_solves = self.solves.solves;
+                report.factor_solve_seconds = self.solves.seconds;
                 return Ok(report);
             }
             history.push(r);
@@ -417,12 +452,13 @@ impl<'a, 'p> Newmark<'a, 'p> {
             let t = std::time::Instant::now();
             match &mut correction {
                 Correction::Fixed => {
-                    self.jacobian.factor.solve(&self.r, &mut self.dq)?;
+                    self.solves
+                        .solve(&self.jacobian.factor, &self.r, &mut self.dq)?;
                     self.linear_change(self.jacobian, &mut report)?;
                 }
                 Correction::Full(build) => {
                     let fresh = build(&self.settings, Some(&iterate(self)?))?;
-                    fresh.factor.solve(&self.r, &mut self.dq)?;
+                    self.solves.solve(&fresh.factor, &self.r, &mut self.dq)?;
                     self.linear_change(&fresh, &mut report)?;
                 }
                 Correction::Krylov(linearize) => {
@@ -450,6 +486,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             if correction <= self.settings.tolerance * self.tmp.norm2()? + floor {
                 self.accept(state, t1)?;
                 report.forces_current = line_search;
+                report.factor_solves = self.solves.solves;
+                report.factor_solve_seconds = self.solves.seconds;
                 return Ok(report);
             }
             if !line_search {
@@ -522,16 +560,21 @@ impl<'a, 'p> Newmark<'a, 'p> {
         let mut k = 0;
         while k < m {
             // w = J(state) P^-1 v_k, into basis[k + 1].
-            self.jacobian.factor.solve(&self.basis[k], &mut self.dz)?;
+            self.solves
+                .solve(&self.jacobian.factor, &self.basis[k], &mut self.dz)?;
             let (head, tail) = self.basis.split_at_mut(k + 1);
             let w = &mut tail[0];
             apply_consistent(self.jacobian, &mut self.tmp, tangent, &self.dz, w)?;
-            let _ = head;
-            let (head, tail) = self.basis.split_at_mut(k + 1);
-            let w = &mut tail[0];
-            for i in 0..=k {
-                h[k][i] = w.dot(&head[i])?;
-                w.axpy(-h[k][i], &head[i])?;
+            // Classical Gram-Schmidt twice (CGS2: as orthogonal as modified Gram-Schmidt, in
+            // two reductions over the ranks instead of k + 1).
+            let previous: Vec<&Vector<'p>> = head.iter().collect();
+            for _ in 0..2 {
+                let coefficients = w.mdot(&previous)?;
+                let negated: Vec<f64> = coefficients.iter().map(|c| -c).collect();
+                w.maxpy(&negated, &previous)?;
+                for (hi, c) in h[k].iter_mut().zip(&coefficients) {
+                    *hi += c;
+                }
             }
             h[k][k + 1] = w.norm2()?;
             if h[k][k + 1] > 0.0 {
@@ -573,7 +616,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
         for (i, yi) in y.iter().enumerate() {
             self.tmp.axpy(*yi, &self.basis[i])?;
         }
-        self.jacobian.factor.solve(&self.tmp, &mut self.dq)?;
+        self.solves
+            .solve(&self.jacobian.factor, &self.tmp, &mut self.dq)?;
         Ok(k)
     }
 

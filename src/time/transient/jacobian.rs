@@ -35,6 +35,8 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     static_state: &'a ContactState,
     /// The static mock contact stiffness (normal and stick).
     mock: SparseMatrix<'p>,
+    /// J factorized on every rank (PETSc's sequential LU) instead of by MUMPS over all ranks.
+    per_rank: bool,
     /// A restart's saved Jacobian state, used by the first factorization.
     restart_at: Option<(Vector<'p>, Vector<'p>)>,
     /// The state the current Jacobian was built at (None: the static mock).
@@ -58,6 +60,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         c: Damping<'a, 'p>,
         static_state: &'a ContactState,
         restart_at: Option<(Vector<'p>, Vector<'p>)>,
+        per_rank: bool,
     ) -> Result<Self, LaError> {
         let mock = contact.linearize(
             petsc,
@@ -74,6 +77,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             c,
             static_state,
             mock,
+            per_rank,
             restart_at,
             built_at: None,
             factor_entries: 0.0,
@@ -100,6 +104,15 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             &cs,
             &[(&CONSISTENT, 1.0), (&[Part::Damping], c1)],
         )
+    }
+
+    /// Where J is factorized, for the summary.
+    pub fn solver_name(&self) -> &'static str {
+        if self.per_rank {
+            "LU on every rank"
+        } else {
+            "MUMPS over all ranks"
+        }
     }
 
     /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
@@ -169,7 +182,11 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         } else {
             Factorization::Cholesky
         };
-        let factor = DirectSolver::factorize(self.petsc, &j, kind, "time_")?;
+        let factor = if self.per_rank {
+            DirectSolver::factorize_per_rank(self.petsc, &j, "time_")?
+        } else {
+            DirectSolver::factorize(self.petsc, &j, kind, "time_")?
+        };
         self.factor_entries = factor.report().factor_entries;
         self.built += 1;
         self.seconds_factorizing += t.elapsed().as_secs_f64();

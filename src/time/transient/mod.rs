@@ -74,12 +74,17 @@ pub struct Transient {
     pub krylov_iterations: usize,
     pub factorizations: usize,
     pub factor_entries: f64,
+    /// Where J was factorized (MUMPS over all ranks, or LU on every rank).
+    pub jacobian_solver: &'static str,
     pub seconds_factorizing: f64,
     /// The stepping loop, and the Jacobian factorizations within it.
     pub seconds_stepping: f64,
     pub seconds_jacobians: f64,
     /// Time in the factor's solves, steps and iterations (solves), over this process's steps.
     pub seconds_solving: f64,
+    /// Solves with the factor, and the time inside them alone.
+    pub factor_solves: usize,
+    pub seconds_in_factor_solves: f64,
     /// Time in the force evaluations and in the operator products (predictor, contact
     /// tangent), steps and iterations.
     pub seconds_in_forces: f64,
@@ -131,6 +136,7 @@ impl Transient {
         seconds_start: f64,
     ) {
         self.factor_entries = b.factor_entries;
+        self.jacobian_solver = b.solver_name();
         self.seconds_factorizing = seconds_start + b.seconds_factorizing;
         self.seconds_jacobians = b.seconds_in_loop;
         self.cuts = control.cuts;
@@ -158,10 +164,13 @@ impl Transient {
             krylov_iterations: 0,
             factorizations: 0,
             factor_entries: 0.0,
+            jacobian_solver: "",
             seconds_factorizing: 0.0,
             seconds_stepping: 0.0,
             seconds_jacobians: 0.0,
             seconds_solving: 0.0,
+            factor_solves: 0,
+            seconds_in_factor_solves: 0.0,
             seconds_in_forces: 0.0,
             seconds_in_products: 0.0,
             steps_run: 0,
@@ -308,6 +317,7 @@ pub fn run<'p>(
         input.c,
         input.static_state,
         restart_at,
+        settings.jacobian_factor.per_rank(k0.global_rows()),
     )?);
     let mut factorize =
         |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);
@@ -334,6 +344,8 @@ pub fn run<'p>(
             out.steps_run += 1;
             out.iterations_run += report.iterations;
             out.krylov_iterations += report.krylov_iterations;
+            out.factor_solves += report.factor_solves;
+            out.seconds_in_factor_solves += report.factor_solve_seconds;
             let evaluated = last_contact.borrow();
             let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
             let wall = wall_before + t.elapsed().as_secs_f64();
