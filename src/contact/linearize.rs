@@ -131,10 +131,24 @@ impl<'p> ContactModel<'p> {
         state: &ContactState,
         parts: &[(&[Part], f64)],
     ) -> Result<TangentOperator<'c, 'p>, LaError> {
+        let terms: Vec<_> = parts.iter().map(|&(p, scale)| (state, p, scale)).collect();
+        self.tangent_operator_of(petsc, &terms)
+    }
+
+    /// [`Self::tangent_operator`] of a combination of states' tangents, e.g. the change of the
+    /// tangent between two states (scales 1 and -1) in one operator: one set of products with
+    /// the observation rows instead of one per state.
+    ///
+    /// # Collective
+    pub fn tangent_operator_of<'c>(
+        &'c self,
+        petsc: &Petsc,
+        parts: &[(&ContactState, &[Part], f64)],
+    ) -> Result<TangentOperator<'c, 'p>, LaError> {
         let n = self.local.len();
         // One coefficient column per (a, b) channel pair that occurs on any rank.
         let mut blocks: Vec<(Channel, Channel, Vec<f64>)> = Vec::new();
-        for &(part_list, scale) in parts {
+        for &(state, part_list, scale) in parts {
             for (k, terms) in self.tangent_terms(state, part_list).into_iter().enumerate() {
                 for (coef, a, b) in terms {
                     let i = match blocks.iter().position(|x| x.0 == a && x.1 == b) {

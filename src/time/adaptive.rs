@@ -50,8 +50,10 @@ pub struct Adaptivity {
 pub type Factorize<'f, 'p> =
     dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<Jacobian<'f, 'p>, LaError> + 'f;
 
-/// The nonlinear forces' tangent X at an iterate (K_c + K_stick + K_f + gamma/(beta h) C_f for
-/// contact: the consistent Jacobian beyond the linear operators), as an operator.
+/// The change of the nonlinear forces' tangent between the Jacobian's factor and an iterate,
+/// X(iterate) - extra (X = K_c + K_stick + K_f + gamma/(beta h) C_f for contact: the
+/// consistent Jacobian beyond the linear operators; `extra`: the part J was built with), as an
+/// operator: J + that change is the consistent Jacobian at the iterate.
 pub type Linearize<'f, 'p> =
     dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn Operator<'p> + 'f>, LaError> + 'f;
 

@@ -157,7 +157,7 @@ pub struct Jacobian<'x, 'p> {
     pub factor: DirectSolver<'p>,
     pub extra: Option<Box<dyn Operator<'p> + 'x>>,
     /// J itself (what was factorized), for Krylov iterations on the consistent tangent of
-    /// another state: J(state) = J + X(state) - extra.
+    /// another state: J(state) = J + (X(state) - extra), the change from [`Linearize`].
     pub matrix: Option<SparseMatrix<'p>>,
 }
 
@@ -463,7 +463,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 }
                 Correction::Krylov(linearize) => {
                     let tangent = linearize(&self.settings, &iterate(self)?)?;
-                    report.krylov_iterations += self.krylov_solve(tangent.as_ref())?;
+                    report.krylov_iterations +=
+                        self.krylov_solve(tangent.as_ref(), 0.1 * target)?;
                     self.linear_change_from_matrix()?;
                 }
             }
@@ -536,11 +537,14 @@ impl<'a, 'p> Newmark<'a, 'p> {
 
     /// GMRES on J(state) dq = R, right-preconditioned by the step's factor, from dq = 0, to a
     /// relative residual of 1e-4 (an inexact Newton step: the outer iteration converges
-    /// linearly at that rate) or KRYLOV_MAX iterations (the best solution then: GMRES
+    /// linearly at that rate), or to `floor` (a tenth of the step's residual target: a
+    /// smaller linear residual cannot make the Newton step better than converged), or
+    /// KRYLOV_MAX iterations (the best solution then: GMRES
     /// minimizes the residual, and the line search judges the step). Returns the iterations.
     ///
     /// # Collective
-    fn krylov_solve(&mut self, tangent: &dyn Operator<'p>) -> Result<usize, LaError> {
+    fn krylov_solve(&mut self, tangent: &dyn Operator<'p>, floor: f64) -> Result<usize, LaError> {
+        let enough = |beta0: f64| (1e-4 * beta0).max(floor);
         let m = KRYLOV_MAX;
         while self.basis.len() < m + 1 {
             self.basis.push(self.q1.duplicate()?);
@@ -564,7 +568,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 .solve(&self.jacobian.factor, &self.basis[k], &mut self.dz)?;
             let (head, tail) = self.basis.split_at_mut(k + 1);
             let w = &mut tail[0];
-            apply_consistent(self.jacobian, &mut self.tmp, tangent, &self.dz, w)?;
+            apply_consistent(self.jacobian, tangent, &self.dz, w)?;
             // Classical Gram-Schmidt twice (CGS2: as orthogonal as modified Gram-Schmidt, in
             // two reductions over the ranks instead of k + 1).
             let previous: Vec<&Vector<'p>> = head.iter().collect();
@@ -596,12 +600,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
             g[k + 1] = -sn[k] * g[k];
             g[k] *= cs[k];
             k += 1;
-            if g[k].abs() <= 1e-4 * beta0 || !g[k].is_finite() {
+            if g[k].abs() <= enough(beta0) || !g[k].is_finite() {
                 break;
             }
         }
         // (A NaN counts as inexact.)
-        let reached = g[k].abs() <= 1e-4 * beta0;
+        let reached = g[k].abs() <= enough(beta0);
         self.krylov_exhausted |= !reached;
         // y from the triangular system, then dq = P^-1 (V y).
         let mut y = vec![0.0; k];
@@ -704,13 +708,13 @@ impl<'a, 'p> Newmark<'a, 'p> {
     }
 }
 
-/// y = J(state) x = J x + X(state) x - extra x (`tmp`: scratch).
+/// y = J(state) x = J x + (X(state) - extra) x, with `change` = X(state) - extra (the
+/// contact tangent's change since J was built, from [`Linearize`]).
 ///
 /// # Collective
 fn apply_consistent<'p>(
     jacobian: &Jacobian<'_, 'p>,
-    tmp: &mut Vector<'p>,
-    tangent: &dyn Operator<'p>,
+    change: &dyn Operator<'p>,
     x: &Vector<'p>,
     y: &mut Vector<'p>,
 ) -> Result<(), LaError> {
@@ -719,13 +723,7 @@ fn apply_consistent<'p>(
         .as_ref()
         .ok_or_else(|| LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into()))?;
     matrix.mult(x, y)?;
-    tangent.mult_add(x, y)?;
-    if let Some(extra) = &jacobian.extra {
-        tmp.set_all(0.0)?;
-        extra.mult_add(x, tmp)?;
-        y.axpy(-1.0, tmp)?;
-    }
-    Ok(())
+    change.mult_add(x, y)
 }
 
 /// J = M / (beta h^2) + gamma / (beta h) C + K + mock, assembled into a copy of `k`'s pattern

@@ -217,16 +217,20 @@ fn cut_and_restore(
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
     let mut state = one_dof_state(petsc, g0, 0.0)?;
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    // The contact stiffness the current factor was built with.
+    let factored = std::cell::Cell::new(1.0);
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
         // The mock 1, or the contact tangent -df/dg = exp(-g) of the given state.
         let stiffness = match at {
             Some(s) => (-s.q.gather_all()?[0]).exp(),
             None => 1.0,
         };
+        factored.set(stiffness);
         one_dof_jacobian(petsc, ns, &m, &k, stiffness, krylov)
     };
+    // The tangent's change since the factor.
     let mut linearize = |_: &NewmarkSettings, s: &State| {
-        let tangent = (-s.q.gather_all()?[0]).exp();
+        let tangent = (-s.q.gather_all()?[0]).exp() - factored.get();
         let op = tridiagonal(petsc, &[tangent], &[]).map_err(squeal::la::LaError::Invalid)?;
         Ok(Box::new(op) as Box<dyn Operator + '_>)
     };

@@ -41,6 +41,10 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     restart_at: Option<(Vector<'p>, Vector<'p>)>,
     /// The state the current Jacobian was built at (None: the static mock).
     pub built_at: Option<(Vector<'p>, Vector<'p>)>,
+    /// The contact state the current Jacobian's tangent was built from (None: the static
+    /// mock's), and gamma / (beta h) of its friction damping (0: none).
+    built_contact: Option<ContactState>,
+    built_damping: f64,
     pub factor_entries: f64,
     pub built: usize,
     /// All factorizations, and those within the stepping loop.
@@ -80,6 +84,8 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             per_rank,
             restart_at,
             built_at: None,
+            built_contact: None,
+            built_damping: 0.0,
             factor_entries: 0.0,
             built: 0,
             seconds_factorizing: 0.0,
@@ -87,8 +93,8 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         })
     }
 
-    /// The consistent contact tangent at an iterate, as an operator through the observation
-    /// rows (what Newton-Krylov adds to J in place of the factor's own tangent).
+    /// The change of the consistent contact tangent from the current Jacobian's to an
+    /// iterate's, as one operator through the observation rows (what Newton-Krylov adds to J).
     ///
     /// # Collective
     pub fn linearize(
@@ -99,11 +105,17 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         let contact = self.contact;
         let cs = contact.evaluate(&at.q, Some(&at.v), 1.0)?;
         let c1 = ns.gamma / (ns.beta * ns.step);
-        contact.tangent_operator(
-            self.petsc,
-            &cs,
-            &[(&CONSISTENT, 1.0), (&[Part::Damping], c1)],
-        )
+        let damping: &[Part] = &[Part::Damping];
+        let mock: &[Part] = &[Part::Normal, Part::Stick];
+        let mut terms = vec![(&cs, &CONSISTENT[..], 1.0), (&cs, damping, c1)];
+        match &self.built_contact {
+            Some(built) => {
+                terms.push((built, &CONSISTENT[..], -1.0));
+                terms.push((built, damping, -self.built_damping));
+            }
+            None => terms.push((self.static_state, mock, -1.0)),
+        }
+        contact.tangent_operator_of(self.petsc, &terms)
     }
 
     /// Where J is factorized, for the summary.
@@ -141,12 +153,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             let cs = contact.evaluate(q, Some(v), 1.0)?;
             // The consistent tangent: the joints' stick traction also moves with
             // the gap (StickCoupling).
-            let parts = [
-                Part::Normal,
-                Part::Stick,
-                Part::Friction,
-                Part::StickCoupling,
-            ];
+            let parts = CONSISTENT;
             let mut tangent =
                 contact.linearize(self.petsc, Base::PatternOf(self.k0_input), &cs, &parts)?;
             let damping = contact.linearize(
@@ -157,16 +164,20 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             )?;
             tangent.axpy(c1, &damping)?;
             self.built_at = Some((q.try_clone()?, v.try_clone()?));
+            self.built_damping = c1;
             let extra = contact.tangent_operator(
                 self.petsc,
                 &cs,
                 &[(&parts, 1.0), (&[Part::Damping], c1)],
             )?;
+            self.built_contact = Some(cs);
             (
                 jacobian(ns, self.m, self.c, self.k0, Some(&tangent))?,
                 extra,
             )
         } else {
+            self.built_contact = None;
+            self.built_damping = 0.0;
             let extra = contact.tangent_operator(
                 self.petsc,
                 self.static_state,
