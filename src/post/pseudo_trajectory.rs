@@ -30,6 +30,10 @@ pub struct PseudoTrajectorySettings {
     /// stage's projected route); default: those unstable at the static state.
     #[serde(default)]
     pub modes: Option<Vec<String>>,
+    /// Without `modes`: only this many of the unstable modes, the largest Re(s) first (a
+    /// large model has many; each costs its own sweep).
+    #[serde(default)]
+    pub most_unstable: Option<usize>,
     /// Swept amplitudes alpha (m): [first, last]; default [1e-3, 10] x the static gap scale.
     #[serde(default)]
     pub alpha_range: Option<[f64; 2]>,
@@ -89,6 +93,19 @@ impl PseudoTrajectorySettings {
             if !(a > 0.0 && a.is_finite()) {
                 return Err(format!("{key}.diagram_alpha' = {a}: an amplitude > 0 (m)"));
             }
+        }
+        match (&self.modes, self.most_unstable) {
+            (Some(_), Some(_)) => {
+                return Err(format!(
+                    "{key}': give either 'modes' or 'most_unstable', not both"
+                ))
+            }
+            (None, Some(0)) => {
+                return Err(format!(
+                    "{key}.most_unstable' = 0: at least one mode (or leave the key out for all)"
+                ))
+            }
+            _ => {}
         }
         if let Some(modes) = &self.modes {
             if let Some(bad) = modes.iter().find(|m| parse_mode(m).is_none()) {

@@ -5,7 +5,9 @@
 use std::path::Path;
 
 use super::{Analyses, RunError};
-use crate::eigen::complex_modes::{damping_ratio, projected_coordinates, DampingSettings};
+use crate::eigen::complex_modes::{
+    damping_ratio, projected_coordinates, DampingSettings, DenseEigenpair,
+};
 use crate::eigen::stability::ProjectedStability;
 use crate::la::Petsc;
 use crate::post::limit_cycle::LimitCycle;
@@ -57,6 +59,19 @@ pub struct Comparison<'a> {
 /// Periods of the run's cycle over which a mode's amplitude in the transient is averaged.
 const CYCLES: f64 = 3.0;
 
+/// The modes unstable beyond `margin` (damping ratio < -margin) in the order of the pairs,
+/// or only the `limit` with the largest Re(s) (in that order).
+fn most_unstable(pairs: &[DenseEigenpair], margin: f64, limit: Option<usize>) -> Vec<usize> {
+    let mut unstable: Vec<usize> = (0..pairs.len())
+        .filter(|&k| damping_ratio(pairs[k].0) < -margin)
+        .collect();
+    if let Some(n) = limit {
+        unstable.sort_by(|&a, &b| pairs[b].0 .0.total_cmp(&pairs[a].0 .0));
+        unstable.truncate(n);
+    }
+    unstable
+}
+
 /// The pseudo trajectories of the modes the scene names (default: those unstable at the
 /// static state).
 ///
@@ -93,9 +108,7 @@ pub fn pseudo_trajectories<'p>(
                 })
             })
             .collect::<Result<_, _>>()?,
-        None => (0..pairs.len())
-            .filter(|&k| damping_ratio(pairs[k].0) < -margin)
-            .collect(),
+        None => most_unstable(&pairs, margin, settings.most_unstable),
     };
     let system = ContactPseudoSystem::new(comm, contact, nominal, &stability);
     // The contact zone's relative motion over the transient's last cycles, read once.
@@ -286,4 +299,21 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
         writeln!(f)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::most_unstable;
+
+    #[test]
+    fn most_unstable_keeps_the_largest_real_parts_and_skips_the_stable() {
+        // Re(s) 5, -1 (stable), 30, 1e-9 (inside the margin), 12.
+        let pairs: Vec<_> = [5.0, -1.0, 30.0, 1e-9, 12.0]
+            .iter()
+            .map(|&re| ((re, 1000.0), vec![]))
+            .collect();
+        assert_eq!(most_unstable(&pairs, 1e-6, None), vec![0, 2, 4]);
+        assert_eq!(most_unstable(&pairs, 1e-6, Some(2)), vec![2, 4]);
+        assert_eq!(most_unstable(&pairs, 1e-6, Some(9)), vec![2, 4, 0]);
+    }
 }

@@ -1,6 +1,7 @@
 //! Nonlinear Newmark (average acceleration: beta = 1/4, gamma = 1/2) with a modified Newton
 //! whose Jacobian is fixed: J = M / (beta h^2) + gamma / (beta h) C + K + K_mock, factorized
-//! once (MUMPS) and reused for every iteration of every step (DESIGN.md §2).
+//! once (MUMPS over the ranks, or PETSc's LU whole on every rank for a small reduced model:
+//! `[transient] jacobian_factor`) and reused for every iteration of every step (DESIGN.md §2).
 //!
 //! Per step, with q1 the unknown displacement at t + h:
 //!   a1 = (q1 - q0 - h v0) / (beta h^2) - (1 / (2 beta) - 1) a0

@@ -1,7 +1,10 @@
 //! The transient's Jacobians: J = M/(beta h^2) + gamma/(beta h) C + K0 + K_mock, factorized by
-//! MUMPS. The first uses the static state's contact stiffness (normal and stick: symmetric,
-//! Cholesky) as the mock contact stiffness of DESIGN.md; a refresh uses the tangent of the
-//! current state, friction and friction damping included (unsymmetric, LU).
+//! MUMPS over the ranks or, for a small reduced model, whole on every rank by PETSc's LU (one
+//! solve streams the factor at one core's bandwidth, ~3x faster than MUMPS' distributed solve
+//! at 2,000 unknowns: benches/transient-results.md). The first uses the static state's contact
+//! stiffness (normal and stick: symmetric, Cholesky with MUMPS) as the mock contact stiffness
+//! of DESIGN.md; a refresh uses the tangent of the current state, friction and friction
+//! damping included (unsymmetric, LU).
 
 use std::time::Instant;
 
