@@ -131,9 +131,16 @@ fn draw_layer<DB: DrawingBackend>(
             // A NaN breaks the line; points outside the axes are clipped by plotters.
             let colour = rgb(*c);
             for run in points.split(|p| !(p.0.is_finite() && p.1.is_finite())) {
+                // A zigzag (the min/max of each bucket of a long signal) drawn 2 px wide gets
+                // miter spikes far beyond its points, out of the axes (plotters issue 549):
+                // such a run is drawn 1 px wide.
+                let width = if run.len() > 2 * LINE_BUCKETS { 1 } else { 2 };
                 let run = decimated(run);
                 let s = chart
-                    .draw_series(LineSeries::new(run.iter().copied(), colour.stroke_width(2)))
+                    .draw_series(LineSeries::new(
+                        run.iter().copied(),
+                        colour.stroke_width(width),
+                    ))
                     .map_err(text_error)?;
                 if let (Some(label), false) = (label, run.is_empty()) {
                     s.label(label.as_str()).legend(move |(px, py)| {

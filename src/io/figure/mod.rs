@@ -419,6 +419,58 @@ mod tests {
     }
 
     #[test]
+    fn a_long_noisy_line_stays_inside_its_axes() {
+        // 150,000 samples jumping by up to the whole range from one to the next, like the
+        // saturated torque of a 150,000-step run (which drew spikes out through the title).
+        let n = 150_000u64;
+        let points: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                let hash = i.wrapping_mul(2_654_435_761) % 10_007;
+                (i as f64, hash as f64 / 10_007.0 - 0.5)
+            })
+            .collect();
+        let (w, h) = (900u32, 400u32);
+        let mut f = Figure::new(
+            w as usize,
+            h as usize,
+            (0.0, n as f64),
+            padded(-0.5, 0.5, 0.05),
+            "noise",
+            "i",
+            "y",
+        );
+        f.series(&points, BLUE, "");
+        let dir = std::env::temp_dir().join(format!("squeal-noise-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let png = dir.join("noise.png");
+        f.save(&png).unwrap();
+        let mut reader = png::Decoder::new(std::fs::File::open(&png).unwrap())
+            .read_info()
+            .unwrap();
+        let mut rgb = vec![0u8; reader.output_buffer_size()];
+        reader.next_frame(&mut rgb).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        let blue = |x: u32, y: u32| {
+            let k = 3 * (y * w + x) as usize;
+            (0..3).all(|c| (rgb[k + c] as i32 - BLUE[c] as i32).abs() < 40)
+        };
+        // The plot area lies below the top margin and the caption, above the x labels.
+        let outside: Vec<(u32, u32)> = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| y < 20 || y > h - 40 || x < 40)
+            .filter(|&(x, y)| blue(x, y))
+            .collect();
+        assert!(
+            outside.is_empty(),
+            "line pixels outside the axes: {outside:?}"
+        );
+        assert!(
+            (0..h).any(|y| (0..w).any(|x| blue(x, y))),
+            "the line is drawn"
+        );
+    }
+
+    #[test]
     fn merged_cells_keep_the_largest_value() {
         let values: Vec<f64> = (0..16).map(f64::from).collect();
         assert_eq!(
