@@ -8,7 +8,10 @@ use std::collections::HashMap;
 
 use super::kernel::{self, Channel, Part};
 use super::{ContactModel, ContactState};
-use crate::la::{LaError, MatrixFormat, Petsc, Preallocation, SparseMatrix, Vector};
+use crate::la::{
+    ColumnKey, Dominant, LaError, MatrixFormat, Petsc, Preallocation, SparseMatrix, TangentChange,
+    Vector,
+};
 
 /// What a linearized matrix starts from: a base operator plus the tangent, or only the
 /// tangent on the base's pattern (to be combined with matrices of that pattern later).
@@ -22,6 +25,7 @@ pub enum Base<'a, 'p> {
 /// (see [`ContactModel::tangent_operator`]).
 pub struct TangentOperator<'c, 'p> {
     contact: &'c ContactModel<'p>,
+    world: &'c mpi::topology::SimpleCommunicator,
     /// (a, b, coefficient per local point), sorted by a then b, the same pairs on every rank.
     blocks: Vec<(Channel, Channel, Vec<f64>)>,
     /// C_b x per channel, and the weighted point vector of one channel a.
@@ -58,6 +62,94 @@ impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
                 .mult_transpose_add(weighted, y)?;
         }
         Ok(())
+    }
+}
+
+/// Explicit columns of the change for the preconditioner's low-rank update: a point's 4 x 4
+/// channel block D_p (rows a, columns b: the coefficient of O_a^T e_p e_p^T O_b), its
+/// columns O_a^T e_p.
+impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
+    /// The points with the largest Frobenius norm of D_p (all of them for a fraction of 1).
+    fn dominant(&self, max_points: usize, fraction: f64) -> Result<Option<Dominant>, LaError> {
+        const WIDTH: usize = 18; // row, norm, the 16 entries of D_p
+        let contact = self.contact;
+        let block = |k: usize| {
+            let mut d = [0.0; 16];
+            for (a, b, coef) in &self.blocks {
+                d[4 * *a as usize + *b as usize] = coef[k];
+            }
+            d
+        };
+        let mut local: Vec<(f64, usize)> = (0..contact.local.len())
+            .map(|k| (block(k).iter().map(|x| x * x).sum::<f64>(), k))
+            .collect();
+        let mut total = local.iter().map(|x| x.0).sum::<f64>();
+        local.sort_by(|x, y| y.0.total_cmp(&x.0));
+        local.truncate(max_points);
+        // Every rank's candidates in its own slot of one buffer, summed over the ranks.
+        use mpi::topology::Communicator;
+        let (ranks, rank) = (self.world.size() as usize, self.world.rank() as usize);
+        let mut records = vec![0.0; ranks * max_points * WIDTH];
+        for (slot, &(norm2, k)) in local.iter().enumerate() {
+            let r = &mut records[(rank * max_points + slot) * WIDTH..][..WIDTH];
+            r[0] = (contact.first_row + k) as f64;
+            r[1] = norm2;
+            r[2..].copy_from_slice(&block(k));
+        }
+        crate::parallel::sum_in_place(self.world, &mut records);
+        total = crate::parallel::sum(self.world, total);
+        if !(total > 0.0 && total.is_finite()) {
+            return Ok(None);
+        }
+        let mut candidates: Vec<&[f64]> = records.chunks(WIDTH).filter(|r| r[1] > 0.0).collect();
+        candidates.sort_by(|x, y| y[1].total_cmp(&x[1]).then(x[0].total_cmp(&y[0])));
+        let mut held = 0.0;
+        let mut chosen = Vec::new();
+        for r in candidates.into_iter().take(max_points) {
+            if fraction < 1.0 && held >= fraction * total {
+                break;
+            }
+            held += r[1];
+            chosen.push(r);
+        }
+        // Per point, the channels its block touches.
+        let mut keys = Vec::new();
+        let mut entries = Vec::new();
+        for r in &chosen {
+            let d = &r[2..];
+            for a in 0..4 {
+                if (0..4).any(|b| d[4 * a + b] != 0.0 || d[4 * b + a] != 0.0) {
+                    keys.push((r[0] as usize, a as u8));
+                    entries.push(d);
+                }
+            }
+        }
+        let s = keys.len();
+        let mut d = vec![0.0; s * s];
+        for i in 0..s {
+            for j in 0..s {
+                if keys[i].0 == keys[j].0 {
+                    d[i * s + j] = entries[i][4 * keys[i].1 as usize + keys[j].1 as usize];
+                }
+            }
+        }
+        Ok(Some(Dominant { keys, d }))
+    }
+
+    fn column(&self, key: ColumnKey, out: &mut Vector<'p>) -> Result<(), LaError> {
+        let contact = self.contact;
+        let channel = [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv]
+            .get(key.1 as usize)
+            .copied()
+            .ok_or_else(|| LaError::Invalid(format!("no channel {}", key.1)))?;
+        let mut e = contact.c_nor.new_point_vector()?;
+        if let Some(k) = key.0.checked_sub(contact.first_row) {
+            if k < contact.local.len() {
+                e.local_mut()?[k] = 1.0;
+            }
+        }
+        out.set_all(0.0)?;
+        contact.observation(channel).mult_transpose_add(&e, out)
     }
 }
 
@@ -127,7 +219,7 @@ impl<'p> ContactModel<'p> {
     /// # Collective
     pub fn tangent_operator<'c>(
         &'c self,
-        petsc: &Petsc,
+        petsc: &'c Petsc,
         state: &ContactState,
         parts: &[(&[Part], f64)],
     ) -> Result<TangentOperator<'c, 'p>, LaError> {
@@ -142,7 +234,7 @@ impl<'p> ContactModel<'p> {
     /// # Collective
     pub fn tangent_operator_of<'c>(
         &'c self,
-        petsc: &Petsc,
+        petsc: &'c Petsc,
         parts: &[(&ContactState, &[Part], f64)],
     ) -> Result<TangentOperator<'c, 'p>, LaError> {
         let n = self.local.len();
@@ -186,6 +278,7 @@ impl<'p> ContactModel<'p> {
         let weighted = self.c_nor.new_point_vector()?;
         Ok(TangentOperator {
             contact: self,
+            world: petsc.world(),
             blocks,
             work: RefCell::new((work, weighted)),
         })

@@ -5,7 +5,7 @@
 use super::newmark::{
     Damping, Forces, Jacobian, Newmark, NewmarkSettings, State, StepReport, TimeError,
 };
-use crate::la::{LaError, Operator, SparseMatrix};
+use crate::la::{LaError, SparseMatrix, TangentChange};
 
 /// What an adaptive run did besides stepping, and where its step control stands (so a
 /// checkpoint can resume it exactly).
@@ -54,8 +54,8 @@ pub type Factorize<'f, 'p> =
 /// X(iterate) - extra (X = K_c + K_stick + K_f + gamma/(beta h) C_f for contact: the
 /// consistent Jacobian beyond the linear operators; `extra`: the part J was built with), as an
 /// operator: J + that change is the consistent Jacobian at the iterate.
-pub type Linearize<'f, 'p> =
-    dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn Operator<'p> + 'f>, LaError> + 'f;
+pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn TangentChange<'p> + 'f>, LaError>
+    + 'f;
 
 /// How a step's corrections are computed.
 pub enum Correction<'r, 'f, 'p> {

@@ -28,7 +28,9 @@
 //! with its GMRES, full Newton), the line search and the carried linear force work on the same
 //! iterate vectors of one `Newmark`; the adaptive control around it is in `adaptive.rs`.
 
-use crate::la::{DirectSolver, LaError, Operator, SparseMatrix, Vector};
+use crate::la::{
+    DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, TangentChange, Vector,
+};
 
 /// Newmark parameters and the Newton tolerance.
 #[derive(Debug, Clone, Copy)]
@@ -95,6 +97,21 @@ impl SolveCount {
     ) -> Result<(), LaError> {
         let t = std::time::Instant::now();
         factor.solve(b, x)?;
+        self.solves += 1;
+        self.seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// x = P^-1 b with the factor updated by `low_rank` (one solve with the factor).
+    fn precondition<'p>(
+        &mut self,
+        low_rank: &LowRankUpdate<'p>,
+        factor: &DirectSolver<'p>,
+        b: &Vector<'p>,
+        x: &mut Vector<'p>,
+    ) -> Result<(), LaError> {
+        let t = std::time::Instant::now();
+        low_rank.apply(factor, b, x)?;
         self.solves += 1;
         self.seconds += t.elapsed().as_secs_f64();
         Ok(())
@@ -245,6 +262,9 @@ pub struct Newmark<'a, 'p> {
     krylov_exhausted: bool,
     /// The factor's solves of the current step attempt.
     solves: SolveCount,
+    /// Newton-Krylov's preconditioner: the factor updated by the tangent change's dominant
+    /// points (their columns cached for this factor's life).
+    low_rank: LowRankUpdate<'p>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -277,6 +297,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             basis: Vec::new(),
             krylov_exhausted: false,
             solves: SolveCount::default(),
+            low_rank: LowRankUpdate::default(),
             q1,
         })
     }
@@ -544,9 +565,18 @@ impl<'a, 'p> Newmark<'a, 'p> {
     /// minimizes the residual, and the line search judges the step). Returns the iterations.
     ///
     /// # Collective
-    fn krylov_solve(&mut self, tangent: &dyn Operator<'p>, floor: f64) -> Result<usize, LaError> {
+    fn krylov_solve(
+        &mut self,
+        tangent: &dyn TangentChange<'p>,
+        floor: f64,
+    ) -> Result<usize, LaError> {
         let enough = |beta0: f64| (1e-4 * beta0).max(floor);
         let m = KRYLOV_MAX;
+        let t = std::time::Instant::now();
+        self.solves.solves += self
+            .low_rank
+            .prepare(&self.jacobian.factor, tangent, &self.q1)?;
+        self.solves.seconds += t.elapsed().as_secs_f64();
         while self.basis.len() < m + 1 {
             self.basis.push(self.q1.duplicate()?);
         }
@@ -565,8 +595,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
         let mut k = 0;
         while k < m {
             // w = J(state) P^-1 v_k, into basis[k + 1].
-            self.solves
-                .solve(&self.jacobian.factor, &self.basis[k], &mut self.dz)?;
+            self.solves.precondition(
+                &self.low_rank,
+                &self.jacobian.factor,
+                &self.basis[k],
+                &mut self.dz,
+            )?;
             let (head, tail) = self.basis.split_at_mut(k + 1);
             let w = &mut tail[0];
             apply_consistent(self.jacobian, tangent, &self.dz, w)?;
@@ -621,8 +655,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
         for (i, yi) in y.iter().enumerate() {
             self.tmp.axpy(*yi, &self.basis[i])?;
         }
-        self.solves
-            .solve(&self.jacobian.factor, &self.tmp, &mut self.dq)?;
+        self.solves.precondition(
+            &self.low_rank,
+            &self.jacobian.factor,
+            &self.tmp,
+            &mut self.dq,
+        )?;
         Ok(k)
     }
 

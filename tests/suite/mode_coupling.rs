@@ -403,7 +403,7 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
     };
     let mut linearize = |ns: &NewmarkSettings, s: &State| {
         let (q, v) = pair(s)?;
-        Ok(Box::new(dense(petsc, tangent(ns, q, v))?) as Box<dyn Operator + '_>)
+        Ok(Box::new(dense(petsc, tangent(ns, q, v))?) as Box<dyn squeal::la::TangentChange + '_>)
     };
     // A kick in y from the static state.
     let mut state = State {

@@ -20,7 +20,7 @@
 //! eps in about eps / |x''| = 4e-3 s at the slip onset).
 
 use squeal::contact::law::FrictionLaw;
-use squeal::la::{DirectSolver, Factorization, Operator, Petsc, Vector};
+use squeal::la::{DirectSolver, Factorization, Petsc, Vector};
 use squeal::time::newmark::{
     initial_acceleration, integrate_adaptive, Adaptivity, Damping, NewmarkSettings, State,
     StepControl, StepReport, TimeError,
@@ -171,7 +171,7 @@ fn run(
     let mut linearize = |ns: &NewmarkSettings, s: &State| {
         let c = damping_at(ns, s)?;
         let op = tridiagonal(petsc, &[c], &[]).map_err(squeal::la::LaError::Invalid)?;
-        Ok(Box::new(op) as Box<dyn Operator + '_>)
+        Ok(Box::new(op) as Box<dyn squeal::la::TangentChange + '_>)
     };
     let mut maxima = Vec::new();
     let mut extremes: Vec<f64> = Vec::new();

@@ -232,7 +232,7 @@ fn cut_and_restore(
     let mut linearize = |_: &NewmarkSettings, s: &State| {
         let tangent = (-s.q.gather_all()?[0]).exp() - factored.get();
         let op = tridiagonal(petsc, &[tangent], &[]).map_err(squeal::la::LaError::Invalid)?;
-        Ok(Box::new(op) as Box<dyn Operator + '_>)
+        Ok(Box::new(op) as Box<dyn squeal::la::TangentChange + '_>)
     };
     let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State,

@@ -323,7 +323,7 @@ pub fn run<'p>(
         |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);
     let mut linearize = |ns: &NewmarkSettings, at: &State<'p>| {
         let op = builder.borrow().linearize(ns, at)?;
-        Ok(Box::new(op) as Box<dyn crate::la::Operator<'p> + '_>)
+        Ok(Box::new(op) as Box<dyn crate::la::TangentChange<'p> + '_>)
     };
 
     let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
