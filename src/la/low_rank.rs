@@ -55,8 +55,13 @@ pub const MAX_CACHED_COLUMNS: usize = 256;
 /// F^-1 updated by the dominant part of a tangent change; belongs to one factor.
 #[derive(Default)]
 pub struct LowRankUpdate<'p> {
-    /// Columns u with w = F^-1 u, by key.
-    cache: Vec<(ColumnKey, Vector<'p>, Vector<'p>)>,
+    /// Columns u with w = F^-1 u, by key, and u_i . w_j between every two of them (row-major
+    /// over the cache, grown as columns come: independent of the iterate, so an update over
+    /// cached columns costs no reduction).
+    keys: Vec<ColumnKey>,
+    us: Vec<Vector<'p>>,
+    ws: Vec<Vector<'p>>,
+    g: Vec<Vec<f64>>,
     /// The active columns (indices into the cache), D, and the LU of I + D U^T W.
     active: Vec<usize>,
     d: Vec<f64>,
@@ -84,43 +89,41 @@ impl<'p> LowRankUpdate<'p> {
         let Some(dominant) = change.dominant(MAX_POINTS, HELD_FRACTION)? else {
             return Ok(0);
         };
-        let new = dominant
+        let new: Vec<ColumnKey> = dominant
             .keys
             .iter()
-            .filter(|k| !self.cache.iter().any(|c| c.0 == **k))
-            .count();
-        if self.cache.len() + new > MAX_CACHED_COLUMNS {
-            self.cache.clear();
+            .filter(|k| !self.keys.contains(k))
+            .copied()
+            .collect();
+        if self.keys.len() + new.len() > MAX_CACHED_COLUMNS {
+            self.keys.clear();
+            self.us.clear();
+            self.ws.clear();
+            self.g.clear();
         }
         let mut solves = 0;
         for key in &dominant.keys {
-            let i = match self.cache.iter().position(|c| c.0 == *key) {
-                Some(i) => i,
-                None => {
-                    let mut u = like.duplicate()?;
-                    change.column(*key, &mut u)?;
-                    let mut w = like.duplicate()?;
-                    factor.solve(&u, &mut w)?;
-                    solves += 1;
-                    self.cache.push((*key, u, w));
-                    self.cache.len() - 1
-                }
-            };
-            self.active.push(i);
-        }
-        let s = self.active.len();
-        // G = U^T W (one reduction per column), then I + D G.
-        let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.cache[i].1).collect();
-        let mut g = vec![0.0; s * s];
-        for (j, &i) in self.active.iter().enumerate() {
-            for (r, value) in self.cache[i].2.mdot(&us)?.into_iter().enumerate() {
-                g[r * s + j] = value;
+            if !self.keys.contains(key) {
+                self.add_column(factor, change, *key, like)?;
+                solves += 1;
             }
         }
+        for key in &dominant.keys {
+            self.active.push(
+                self.keys
+                    .iter()
+                    .position(|k| k == key)
+                    .expect("cached above"),
+            );
+        }
+        let s = self.active.len();
+        // I + D G with G = U^T W over the active columns.
         let mut m = vec![0.0; s * s];
         for r in 0..s {
             for c in 0..s {
-                let dg: f64 = (0..s).map(|k| dominant.d[r * s + k] * g[k * s + c]).sum();
+                let dg: f64 = (0..s)
+                    .map(|k| dominant.d[r * s + k] * self.g[self.active[k]][self.active[c]])
+                    .sum();
                 m[r * s + c] = f64::from(u8::from(r == c)) + dg;
             }
         }
@@ -133,6 +136,36 @@ impl<'p> LowRankUpdate<'p> {
             None => self.active.clear(),
         }
         Ok(solves)
+    }
+
+    /// Caches the column of `key`, w = F^-1 u, and its products with the cached columns
+    /// (two reductions).
+    ///
+    /// # Collective
+    fn add_column(
+        &mut self,
+        factor: &DirectSolver<'p>,
+        change: &dyn TangentChange<'p>,
+        key: ColumnKey,
+        like: &Vector<'p>,
+    ) -> Result<(), LaError> {
+        let mut u = like.duplicate()?;
+        change.column(key, &mut u)?;
+        let mut w = like.duplicate()?;
+        factor.solve(&u, &mut w)?;
+        self.keys.push(key);
+        self.us.push(u);
+        self.ws.push(w);
+        let n = self.keys.len();
+        let (u, w) = (&self.us[n - 1], &self.ws[n - 1]);
+        // Row n-1: u_new . w_j; column n-1: u_i . w_new (both include the diagonal).
+        let row = u.mdot(&self.ws.iter().collect::<Vec<_>>())?;
+        let column = w.mdot(&self.us.iter().collect::<Vec<_>>())?;
+        for (i, g) in self.g.iter_mut().enumerate() {
+            g.push(column[i]);
+        }
+        self.g.push(row);
+        Ok(())
     }
 
     /// y = P^-1 v: one solve with the factor, then the low-rank correction.
@@ -149,13 +182,13 @@ impl<'p> LowRankUpdate<'p> {
         if s == 0 {
             return Ok(());
         }
-        let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.cache[i].1).collect();
+        let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.us[i]).collect();
         let t = y.mdot(&us)?;
         let mut x: Vec<f64> = (0..s)
             .map(|r| (0..s).map(|k| self.d[r * s + k] * t[k]).sum())
             .collect();
         lu_solve(s, &self.lu, &self.pivots, &mut x);
-        let ws: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.cache[i].2).collect();
+        let ws: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.ws[i]).collect();
         let negated: Vec<f64> = x.iter().map(|x| -x).collect();
         y.maxpy(&negated, &ws)
     }

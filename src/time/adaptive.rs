@@ -26,8 +26,9 @@ pub struct StepControl {
     pub refreshed: bool,
     pub fresh: bool,
     /// Steps retried on the consistent tangent after the refreshed Jacobian stalled: by
-    /// Newton-Krylov (the factor as preconditioner), then by a full Newton, each with line
-    /// search; and where the current step stands (0 fixed J, 1 Newton-Krylov, 2 full Newton).
+    /// Newton-Krylov (the factor, updated by the dominant contact points, as preconditioner),
+    /// then by a full Newton, each with line search; and where the current step stands (0
+    /// fixed J, 1 Newton-Krylov, 2 full Newton).
     pub krylov_retries: usize,
     pub full_newton_retries: usize,
     pub fallback: u8,
@@ -186,7 +187,7 @@ pub fn integrate_adaptive<'p>(
                     control.fallback = if krylov { 1 } else { 2 };
                     let how = if krylov {
                         control.krylov_retries += 1;
-                        "Newton-Krylov (GMRES on the consistent tangent, the factor as preconditioner)"
+                        "Newton-Krylov (GMRES on the consistent tangent, preconditioned by the factor updated at the points that changed most)"
                     } else {
                         control.full_newton_retries += 1;
                         "a full Newton (the consistent tangent factorized at every iterate)"
