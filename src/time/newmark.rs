@@ -24,7 +24,7 @@
 //! one force evaluation, one solve and no product with the model's operators. The identity
 //! holds to the solve's backward error (~1e-16 relative), far below the tolerance.
 //!
-//! Long (~740 lines), on purpose: the step, its three corrections (fixed factor, Newton-Krylov
+//! Long (~840 lines), on purpose: the step, its three corrections (fixed factor, Newton-Krylov
 //! with its GMRES, full Newton), the line search and the carried linear force work on the same
 //! iterate vectors of one `Newmark`; the adaptive control around it is in `adaptive.rs`.
 
