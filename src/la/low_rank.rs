@@ -8,6 +8,9 @@
 //! the factor. Those points' columns make the preconditioner nearly exact, at one solve per
 //! new column, cached for the factor's life.
 
+use num_complex::Complex64;
+
+use super::lapack_complex::ComplexLu;
 use super::{DirectSolver, LaError, Operator, SparseMatrix, Vector};
 
 /// One column u of a change's explicit part: (global row of a contact point, channel), the
@@ -62,11 +65,12 @@ pub struct LowRankUpdate<'p> {
     us: Vec<Vector<'p>>,
     ws: Vec<Vector<'p>>,
     g: Vec<Vec<f64>>,
-    /// The active columns (indices into the cache), D, and the LU of I + D U^T W.
+    /// The active columns (indices into the cache), D, and the LU of I + D U^T W (LAPACK's,
+    /// through the complex LU the near-shift eigen-solve already uses: a real system of order
+    /// <= 128 once per Newton iteration, the complex arithmetic costs nothing that shows).
     active: Vec<usize>,
     d: Vec<f64>,
-    lu: Vec<f64>,
-    pivots: Vec<usize>,
+    lu: Option<ComplexLu>,
 }
 
 impl<'p> LowRankUpdate<'p> {
@@ -89,13 +93,12 @@ impl<'p> LowRankUpdate<'p> {
         let Some(dominant) = change.dominant(MAX_POINTS, HELD_FRACTION)? else {
             return Ok(0);
         };
-        let new: Vec<ColumnKey> = dominant
+        let new = dominant
             .keys
             .iter()
             .filter(|k| !self.keys.contains(k))
-            .copied()
-            .collect();
-        if self.keys.len() + new.len() > MAX_CACHED_COLUMNS {
+            .count();
+        if self.keys.len() + new > MAX_CACHED_COLUMNS {
             self.keys.clear();
             self.us.clear();
             self.ws.clear();
@@ -117,23 +120,22 @@ impl<'p> LowRankUpdate<'p> {
             );
         }
         let s = self.active.len();
-        // I + D G with G = U^T W over the active columns.
-        let mut m = vec![0.0; s * s];
+        // I + D G with G = U^T W over the active columns (column-major for LAPACK).
+        let mut m = vec![Complex64::new(0.0, 0.0); s * s];
         for r in 0..s {
             for c in 0..s {
                 let dg: f64 = (0..s)
                     .map(|k| dominant.d[r * s + k] * self.g[self.active[k]][self.active[c]])
                     .sum();
-                m[r * s + c] = f64::from(u8::from(r == c)) + dg;
+                m[c * s + r] = Complex64::new(f64::from(u8::from(r == c)) + dg, 0.0);
             }
         }
-        match lu_factorize(s, m) {
-            Some((lu, pivots)) => {
-                self.lu = lu;
-                self.pivots = pivots;
-                self.d = dominant.d;
-            }
-            None => self.active.clear(),
+        // Singular or not finite: F^-1 alone.
+        self.lu = ComplexLu::new(s, m).ok();
+        if self.lu.is_some() {
+            self.d = dominant.d;
+        } else {
+            self.active.clear();
         }
         Ok(solves)
     }
@@ -184,75 +186,13 @@ impl<'p> LowRankUpdate<'p> {
         }
         let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.us[i]).collect();
         let t = y.mdot(&us)?;
-        let mut x: Vec<f64> = (0..s)
-            .map(|r| (0..s).map(|k| self.d[r * s + k] * t[k]).sum())
+        let mut x: Vec<Complex64> = (0..s)
+            .map(|r| Complex64::new((0..s).map(|k| self.d[r * s + k] * t[k]).sum(), 0.0))
             .collect();
-        lu_solve(s, &self.lu, &self.pivots, &mut x);
+        let lu = self.lu.as_ref().expect("active columns have their LU");
+        lu.solve(&mut x).map_err(LaError::Invalid)?;
         let ws: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.ws[i]).collect();
-        let negated: Vec<f64> = x.iter().map(|x| -x).collect();
+        let negated: Vec<f64> = x.iter().map(|x| -x.re).collect();
         y.maxpy(&negated, &ws)
-    }
-}
-
-/// LU with partial pivoting of a small dense row-major matrix; None if singular or not
-/// finite.
-fn lu_factorize(n: usize, mut a: Vec<f64>) -> Option<(Vec<f64>, Vec<usize>)> {
-    let mut pivots = Vec::with_capacity(n);
-    for k in 0..n {
-        let p = (k..n).max_by(|&i, &j| a[i * n + k].abs().total_cmp(&a[j * n + k].abs()))?;
-        let pivot = a[p * n + k];
-        if pivot == 0.0 || !pivot.is_finite() {
-            return None;
-        }
-        pivots.push(p);
-        if p != k {
-            for c in 0..n {
-                a.swap(k * n + c, p * n + c);
-            }
-        }
-        for i in k + 1..n {
-            let l = a[i * n + k] / pivot;
-            a[i * n + k] = l;
-            for c in k + 1..n {
-                a[i * n + c] -= l * a[k * n + c];
-            }
-        }
-    }
-    Some((a, pivots))
-}
-
-fn lu_solve(n: usize, lu: &[f64], pivots: &[usize], x: &mut [f64]) {
-    for (k, &p) in pivots.iter().enumerate() {
-        x.swap(k, p);
-    }
-    for i in 0..n {
-        let s: f64 = (0..i).map(|k| lu[i * n + k] * x[k]).sum();
-        x[i] -= s;
-    }
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| lu[i * n + k] * x[k]).sum();
-        x[i] = (x[i] - s) / lu[i * n + i];
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn small_lu_solves_a_system_that_needs_pivoting() {
-        // [[0, 2, 1], [1, 1, 0], [3, 0, 4]] x = b with x = (1, -2, 3).
-        let a = vec![0.0, 2.0, 1.0, 1.0, 1.0, 0.0, 3.0, 0.0, 4.0];
-        let x_true = [1.0, -2.0, 3.0];
-        let mut b: Vec<f64> = (0..3)
-            .map(|r| (0..3).map(|c| a[r * 3 + c] * x_true[c]).sum())
-            .collect();
-        let (lu, pivots) = lu_factorize(3, a).unwrap();
-        lu_solve(3, &lu, &pivots, &mut b);
-        for (x, t) in b.iter().zip(x_true) {
-            assert!((x - t).abs() < 1e-14, "{x} vs {t}");
-        }
-        assert!(lu_factorize(2, vec![1.0, 2.0, 2.0, 4.0]).is_none());
-        assert!(lu_factorize(1, vec![f64::NAN]).is_none());
     }
 }
