@@ -14,9 +14,9 @@
 //! - alpha -> 0 (1e-12) reproduces the closed-form flutter eigenvalue at every phase: the
 //!   tangent's change is O(alpha) = 1e-12 and LAPACK's backward-stable dgeev on a 4 x 4
 //!   companion of entries O(1) errs by O(100 eps): relative 1e-10 asserted;
-//! - alpha_sat is found by bisection to the stated tolerance (1e-3 relative): two sweeps on
-//!   different grids (25 amplitudes over [1e-3, 10], 17 over [1.3e-3, 8]) give alpha_sat within
-//!   the sum of their bisection half-widths, 1e-3 (+ round-off);
+//! - alpha_sat is found by bisection to the stated tolerance (the default, 1e-2 relative):
+//!   two sweeps on different grids (25 amplitudes over [1e-3, 10], 17 over [1.3e-3, 8]) give
+//!   alpha_sat within the sum of their bisection half-widths, the tolerance (+ round-off);
 //! - alpha_crit < alpha_sat (a mode stable over part of its period can still grow on average);
 //! - against the transient: the amplitude of the same mode in the limit cycle over its last 10
 //!   cycles (the relative displacement about the orbit's centre fitted by Re(a psi), the same
@@ -230,6 +230,15 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "alpha_sat depends on the grid: {sat} vs {sat_b} (tolerance {})",
             settings.tolerance
+        ));
+    }
+    // The diagram is drawn at alpha_sat: from the bisection's period within half the
+    // tolerance of it, or a period of its own.
+    let drawn = rel(a.diagram.alpha, sat);
+    if drawn.is_nan() || drawn > 0.5 * settings.tolerance * 1.000_001 {
+        return Err(format!(
+            "the diagram at {} is not at alpha_sat {sat}",
+            a.diagram.alpha
         ));
     }
     if crit.is_nan() || sat.is_nan() || crit >= sat {
