@@ -81,6 +81,10 @@ pub struct LimitCycle {
     pub verdict: String,
     /// The amplitude against time (window centres; half peak-to-peak per window).
     pub envelope: Vec<(f64, f64)>,
+    /// The middle of each window's range, (max + min) / 2: the envelope's centre line (the
+    /// run's mean would not do: the mean torque of a saturated brake moves away from its rest
+    /// value, so the envelope drawn about it would miss the signal where it is quiet).
+    pub envelope_centre: Vec<f64>,
 }
 
 /// Characterizes signal `y` sampled at times `t` (resampled on the grid `dt` first).
@@ -105,7 +109,7 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     }
     // Amplitude per window of 1.5 periods.
     let w = ((1.5 / (out.dominant_frequency * dt)).round() as usize).clamp(4, n / 4);
-    out.envelope = u
+    (out.envelope, out.envelope_centre) = u
         .chunks(w)
         .enumerate()
         .filter(|(_, c)| c.len() == w)
@@ -115,9 +119,12 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                     (a.min(v), b.max(v))
                 });
-            (time((k * w) as f64 + 0.5 * w as f64), 0.5 * (hi - lo))
+            (
+                (time((k * w) as f64 + 0.5 * w as f64), 0.5 * (hi - lo)),
+                0.5 * (hi + lo),
+            )
         })
-        .collect();
+        .unzip();
     let env = &out.envelope;
     let tail: Vec<f64> = env[env.len() - (env.len() / 5).max(1)..]
         .iter()
@@ -394,6 +401,34 @@ mod tests {
         );
         assert!(lc.reached, "{}", lc.verdict);
         assert!(lc.variation.unwrap() < 0.01);
+    }
+
+    /// The envelope is centred on each window's range, not on the run's mean: a torque at
+    /// rest at 480 that saturates about a lower mean (400 +- 50, as a brake whose linings open
+    /// does) has its first windows centred on 480 with zero half-range and its last on 400
+    /// with 50 (the run's mean, ~440, would put both 40 off).
+    #[test]
+    fn envelope_follows_a_moving_mean() {
+        let dt = 2e-6;
+        let t: Vec<f64> = (0..20_000).map(|i| i as f64 * dt).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                if t < 0.02 {
+                    480.0
+                } else {
+                    400.0 + 50.0 * (2.0 * std::f64::consts::PI * 3000.0 * t).sin()
+                }
+            })
+            .collect();
+        let lc = characterize(&t, &y, dt, &LimitCycleSettings::default());
+        assert_eq!(lc.envelope.len(), lc.envelope_centre.len());
+        let (first, last) = (0, lc.envelope.len() - 1);
+        assert!((lc.envelope_centre[first] - 480.0).abs() < 1e-9);
+        assert!(lc.envelope[first].1.abs() < 1e-9);
+        // Resampled at dt, a window's extremes miss the sine's by at most 1 - cos(pi f dt).
+        assert!((lc.envelope_centre[last] - 400.0).abs() < 0.05);
+        assert!((lc.envelope[last].1 - 50.0).abs() < 0.05);
     }
 
     /// A decaying signal has no saturation; a growing one that never saturates is not

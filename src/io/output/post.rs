@@ -71,6 +71,11 @@ pub fn write_limit_cycle(
     let (et, ea): (Vec<f64>, Vec<f64>) = c.envelope.iter().copied().unzip();
     file.write_table(&format!("{g}/envelope_time"), &et, "s")?;
     file.write_table(&format!("{g}/envelope"), &ea, "N m (half peak-to-peak)")?;
+    file.write_table(
+        &format!("{g}/envelope_centre"),
+        &c.envelope_centre,
+        "N m ((max + min) / 2 per window)",
+    )?;
     for (name, f) in &report.contact_fractions {
         let v = f.to_vec();
         file.write_table(
@@ -85,8 +90,8 @@ pub fn write_limit_cycle(
     Ok(())
 }
 
-/// limit_cycle.png: the braking torque (blue), its envelope (red: mean +- half peak-to-peak
-/// per window) and the start of each detected cycle (grey ticks at the bottom).
+/// limit_cycle.png: the braking torque (blue), its envelope (red: each window's max and
+/// min) and the start of each detected cycle (grey ticks at the bottom).
 fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Result<(), WriteError> {
     let torque = tr.braking_torque();
     let (lo, hi) = torque
@@ -126,15 +131,15 @@ fn write_plot(report: &LimitCycleReport, tr: &Transient, output: &Path) -> Resul
         .zip(torque.iter().copied())
         .collect();
     fig.series(&points, BLUE, "braking torque");
-    let mean = torque.iter().sum::<f64>() / torque.len().max(1) as f64;
     for sign in [1.0, -1.0] {
         let env: Vec<(f64, f64)> = c
             .envelope
             .iter()
-            .map(|&(t, a)| (t, mean + sign * a))
+            .zip(&c.envelope_centre)
+            .map(|(&(t, a), &m)| (t, m + sign * a))
             .collect();
         if sign > 0.0 {
-            fig.series(&env, RED, "envelope: mean +- half peak-to-peak");
+            fig.series(&env, RED, "envelope: max and min per 1.5 periods");
         } else {
             fig.line(&env, RED);
         }
