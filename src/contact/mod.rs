@@ -226,6 +226,9 @@ pub struct ContactModel<'p> {
     pub first_row: usize,
     /// This rank's points (ids) and their dense rows.
     pub local: Vec<usize>,
+    /// How many points each rank owns (a point goes with its first master node, so the
+    /// points follow the mesh partition, not an even split).
+    pub points_per_rank: Vec<usize>,
     pub rows: Vec<PointRows>,
     pub c_nor: ObservationMatrix<'p>,
     pub c_tan: ObservationMatrix<'p>,
@@ -312,6 +315,10 @@ impl<'p> ContactModel<'p> {
             .iter()
             .map(|p| dofs.owner_of_node(*p.master_nodes.iter().min().unwrap()))
             .collect();
+        let mut points_per_rank = vec![0; dofs.node_ranges.len() - 1];
+        for &o in &owner {
+            points_per_rank[o] += 1;
+        }
         let mut row_ids: Vec<usize> = (0..points.len()).collect();
         row_ids.sort_by_key(|&i| (owner[i], i));
         let rank = dofs.rank;
@@ -344,6 +351,7 @@ impl<'p> ContactModel<'p> {
             row_ids,
             first_row,
             local,
+            points_per_rank,
             rows,
             c_nor,
             c_tan,
@@ -413,6 +421,7 @@ impl<'p> ContactModel<'p> {
             row_ids: self.row_ids.clone(),
             first_row: self.first_row,
             local: self.local.clone(),
+            points_per_rank: self.points_per_rank.clone(),
             rows,
             c_nor,
             c_tan,

@@ -79,6 +79,7 @@ pub struct ReductionSummary {
 #[derive(Debug, Clone)]
 pub struct StaticSummary {
     pub points: usize,
+    pub points_per_rank: Vec<usize>,
     pub misses: Vec<(String, usize, usize)>,
     pub interfaces: Vec<(String, crate::contact::InterfaceSummary)>,
     pub newton_iterations: usize,
@@ -240,6 +241,7 @@ impl StaticSummary {
             .expect("a converged static state has a Newton log");
         StaticSummary {
             points: contact.points.len(),
+            points_per_rank: contact.points_per_rank.clone(),
             misses: contact
                 .interfaces
                 .iter()
@@ -463,8 +465,8 @@ impl RunSummary {
         let s = self;
         if let Some(st) = &s.statics {
             writeln!(f,
-                "static preload: {} contact points, {} load steps, {} Newton iterations ({} solves), {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
-                st.points, st.load_steps, st.newton_iterations, st.solves, st.factorizations, st.factor_entries, st.final_residual
+                "static preload: {} contact points (per rank {:?}), {} load steps, {} Newton iterations ({} solves), {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
+                st.points, st.points_per_rank, st.load_steps, st.newton_iterations, st.solves, st.factorizations, st.factor_entries, st.final_residual
             )?;
             for (name, missed, of) in &st.misses {
                 if *missed > 0 {
