@@ -226,8 +226,7 @@ pub struct ContactModel<'p> {
     pub first_row: usize,
     /// This rank's points (ids) and their dense rows.
     pub local: Vec<usize>,
-    /// How many points each rank owns (a point goes with its first master node, so the
-    /// points follow the mesh partition, not an even split).
+    /// How many points each rank owns (an even split of the rows).
     pub points_per_rank: Vec<usize>,
     pub rows: Vec<PointRows>,
     pub c_nor: ObservationMatrix<'p>,
@@ -311,23 +310,24 @@ impl<'p> ContactModel<'p> {
             }
         }
         let points = pairing.points;
-        let owner: Vec<usize> = points
+        // Rows in the order of the mesh partition (a point goes with its first master node's
+        // rank), then split evenly: the partition balances the whole model and leaves the
+        // contact zone on one rank (the small brake's 352 points [20, 332] on 2 ranks), while
+        // every per-point cost (laws, observation products, projections on the modes) wants
+        // an even share. A point's DOFs on another rank travel in the observation products
+        // and at assembly, as they already did at the partition's border.
+        let node_owner: Vec<usize> = points
             .iter()
             .map(|p| dofs.owner_of_node(*p.master_nodes.iter().min().unwrap()))
             .collect();
-        let mut points_per_rank = vec![0; dofs.node_ranges.len() - 1];
-        for &o in &owner {
-            points_per_rank[o] += 1;
-        }
         let mut row_ids: Vec<usize> = (0..points.len()).collect();
-        row_ids.sort_by_key(|&i| (owner[i], i));
-        let rank = dofs.rank;
-        let first_row = owner.iter().filter(|&&o| o < rank).count();
-        let local: Vec<usize> = row_ids
-            .iter()
-            .copied()
-            .filter(|&i| owner[i] == rank)
-            .collect();
+        row_ids.sort_by_key(|&i| (node_owner[i], i));
+        let (ranks, rank) = (dofs.node_ranges.len() - 1, dofs.rank);
+        let first_of = |r: usize| r * points.len() / ranks;
+        let points_per_rank: Vec<usize> =
+            (0..ranks).map(|r| first_of(r + 1) - first_of(r)).collect();
+        let first_row = first_of(rank);
+        let local: Vec<usize> = row_ids[first_row..first_of(rank + 1)].to_vec();
         let rows: Vec<PointRows> = local
             .iter()
             .map(|&i| point_rows(&points[i], dofs, &interfaces))
