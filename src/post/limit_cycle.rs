@@ -89,7 +89,7 @@ pub struct LimitCycle {
 
 /// Characterizes signal `y` sampled at times `t` (resampled on the grid `dt` first).
 ///
-/// About 150 lines, on purpose: resampling, dominant frequency, envelope, saturation, growth
+/// About 140 lines, on purpose: resampling, dominant frequency, envelope, saturation, growth
 /// fit, cycles and verdict in order, each able to end early with its verdict in the one
 /// `LimitCycle` it fills; apart they would pass that half-filled record along.
 pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings) -> LimitCycle {
@@ -109,22 +109,7 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     }
     // Amplitude per window of 1.5 periods.
     let w = ((1.5 / (out.dominant_frequency * dt)).round() as usize).clamp(4, n / 4);
-    (out.envelope, out.envelope_centre) = u
-        .chunks(w)
-        .enumerate()
-        .filter(|(_, c)| c.len() == w)
-        .map(|(k, c)| {
-            let (lo, hi) = c
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
-            (
-                (time((k * w) as f64 + 0.5 * w as f64), 0.5 * (hi - lo)),
-                0.5 * (hi + lo),
-            )
-        })
-        .unzip();
+    (out.envelope, out.envelope_centre) = envelope(&u, w, time);
     let env = &out.envelope;
     let tail: Vec<f64> = env[env.len() - (env.len() / 5).max(1)..]
         .iter()
@@ -348,6 +333,26 @@ fn median(v: &[f64]) -> f64 {
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
     s[s.len() / 2]
+}
+
+/// Per whole window of `w` samples of `u`: (its centre's time, half its peak-to-peak), and
+/// the middle of its range.
+fn envelope(u: &[f64], w: usize, time: impl Fn(f64) -> f64) -> (Vec<(f64, f64)>, Vec<f64>) {
+    u.chunks(w)
+        .enumerate()
+        .filter(|(_, c)| c.len() == w)
+        .map(|(k, c)| {
+            let (lo, hi) = c
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            (
+                (time((k * w) as f64 + 0.5 * w as f64), 0.5 * (hi - lo)),
+                0.5 * (hi + lo),
+            )
+        })
+        .unzip()
 }
 
 /// Least-squares slope of (x, y).
