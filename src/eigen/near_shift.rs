@@ -10,12 +10,18 @@
 use num_complex::Complex64;
 
 use super::complex_modes::{Complex, DenseEigenpair};
-use crate::la::lapack_complex::{eigen_complex, gemm, ComplexLu, Op};
+use crate::la::lapack_complex::{eigen_complex, gemm, orthonormalize, ComplexLu, Op};
 
 /// Iterations before giving up (the caller then solves the whole problem).
 const MAX_ITERATIONS: usize = 60;
 /// Converged: residual ||A z - theta z|| <= TOLERANCE ||A||_F for unit z (companion form).
 const TOLERANCE: f64 = 1e-13;
+/// Located: the eigenvalues beyond the tracked ones only set how far the search reached (the
+/// radius, compared with pairing costs of order 1e-3..1); a residual below this places them
+/// well enough and halves the iterations (7.5 instead of 15.8 on average on the brake's C35
+/// at 250 modes). A pair reported at this accuracy is flagged, so a caller that would choose
+/// it iterates further or solves the whole problem.
+const LOCATED: f64 = 1e-8;
 
 /// Eigenpairs near a shift.
 #[derive(Debug, Clone)]
@@ -23,6 +29,8 @@ pub struct NearShift {
     /// Eigenvalues (rad/s, Im >= 0 as the full solve reports them) with unit-norm coordinates
     /// y, nearest the shift first.
     pub pairs: Vec<DenseEigenpair>,
+    /// Per pair: converged to round-off (else located, to a residual of 1e-8).
+    pub accurate: Vec<bool>,
     /// Every eigenvalue within this distance of the shift (rad/s) is in `pairs` (all the
     /// block's nearest Ritz values up to it have converged).
     pub radius: f64,
@@ -77,33 +85,6 @@ impl Companion {
     }
 }
 
-/// Orthonormalizes the columns of the 2m x p block in place (modified Gram-Schmidt, twice);
-/// a column that turns out dependent is replaced by a fresh pseudo-random one.
-fn orthonormalize(q: &mut [Complex64], rows: usize, seed: &mut u64) {
-    let p = q.len() / rows;
-    for k in 0..p {
-        for attempt in 0..3 {
-            for _ in 0..2 {
-                for j in 0..k {
-                    let (done, rest) = q.split_at_mut(k * rows);
-                    let (qj, qk) = (&done[j * rows..(j + 1) * rows], &mut rest[..rows]);
-                    let dot: Complex64 = qj.iter().zip(qk.iter()).map(|(a, b)| a.conj() * b).sum();
-                    for (b, a) in qk.iter_mut().zip(qj) {
-                        *b -= dot * a;
-                    }
-                }
-            }
-            let col = &mut q[k * rows..(k + 1) * rows];
-            let norm = col.iter().map(|z| z.norm_sqr()).sum::<f64>().sqrt();
-            if norm > 1e-10 || attempt == 2 {
-                col.iter_mut().for_each(|z| *z /= norm.max(1e-300));
-                break;
-            }
-            random_column(col, seed);
-        }
-    }
-}
-
 /// A deterministic pseudo-random unit-scale column (xorshift).
 fn random_column(col: &mut [Complex64], seed: &mut u64) {
     let mut next = || {
@@ -118,21 +99,23 @@ fn random_column(col: &mut [Complex64], seed: &mut u64) {
 }
 
 /// The eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m column-major) nearest `shift`
-/// (rad/s), by block inverse iteration from the eigenpairs `start` (the tracked mode at the
-/// previous state, then any hints) and random vectors up to `beyond + 7` in all, iterated until
-/// the `beyond + 1` Ritz values nearest the shift have converged; `None` when the shift is an
-/// eigenvalue or not even the nearest converges.
+/// (rad/s), by block inverse iteration from the eigenpairs `start` (the `tracked` modes at the
+/// previous state, then any hints) and random vectors up to `tracked + beyond + 6` in all,
+/// iterated until the `tracked` Ritz values nearest the shift have converged and the
+/// `tracked + beyond` nearest are located; `None` when the shift is an eigenvalue or not even
+/// the nearest is located.
 pub fn eigenpairs_near(
     m: usize,
     kp: &[f64],
     cp: &[f64],
     shift: Complex,
     start: &[DenseEigenpair],
+    tracked: usize,
     beyond: usize,
 ) -> Result<Option<NearShift>, String> {
-    // The tracked mode first, then the hints (e.g. the eigenpairs found near it at the
+    // The tracked modes first, then the hints (e.g. the eigenpairs found near them at the
     // previous state), then random vectors up to six more than the eigenpairs wanted.
-    let tracked = start.len().min(1);
+    let tracked = tracked.min(start.len());
     let omega_r = (0..m)
         .map(|i| kp[i * m + i].abs())
         .fold(0.0f64, f64::max)
@@ -167,7 +150,7 @@ pub fn eigenpairs_near(
             None => random_column(col, &mut seed),
         }
     }
-    orthonormalize(&mut q, rows, &mut seed);
+    orthonormalize(rows, &mut q)?;
     let scale = a.norm();
     for iteration in 1..=MAX_ITERATIONS {
         // Z = (A - sigma I)^{-1} Q, through one solve with p right-hand sides.
@@ -185,7 +168,7 @@ pub fn eigenpairs_near(
                 col[i] = u[i];
             }
         }
-        orthonormalize(&mut q, rows, &mut seed);
+        orthonormalize(rows, &mut q)?;
         // Rayleigh-Ritz: H = Q^H A Q; its eigenpairs (theta, v) give the Ritz vectors Q v.
         let aq = a.apply(&q);
         let h = gemm(Op::Adjoint, p, rows, p, &q, &aq);
@@ -208,16 +191,19 @@ pub fn eigenpairs_near(
                 .norm()
                 .total_cmp(&(theta[y] - sigma).norm())
         });
-        let converged = order
-            .iter()
-            .take_while(|&&k| residual[k] <= TOLERANCE * scale)
-            .count();
+        let within = |tolerance: f64| {
+            order
+                .iter()
+                .take_while(|&&k| residual[k] <= tolerance * scale)
+                .count()
+        };
+        let (converged, located) = (within(TOLERANCE), within(LOCATED));
         // The tracked modes and `beyond` eigenvalues more: the radius then reaches past them
-        // (at the last iteration, whatever has converged).
+        // (at the last iteration, whatever has been located).
         let wanted = (tracked + beyond).min(p);
         let last = iteration == MAX_ITERATIONS;
-        if converged >= wanted || (last && converged >= 1) {
-            let pairs = order[..converged]
+        if (converged >= tracked.min(p) && located >= wanted) || (last && located >= 1) {
+            let (pairs, accurate) = order[..located]
                 .iter()
                 .filter(|&&k| theta[k].im >= 0.0)
                 .filter_map(|&k| {
@@ -226,13 +212,14 @@ pub fn eigenpairs_near(
                     (norm > 0.0).then(|| {
                         let s = theta[k] * omega_r;
                         let y = u.iter().map(|z| (z.re / norm, z.im / norm)).collect();
-                        ((s.re, s.im), y)
+                        (((s.re, s.im), y), residual[k] <= TOLERANCE * scale)
                     })
                 })
-                .collect();
-            let radius = (theta[order[converged - 1]] - sigma).norm() * omega_r;
+                .unzip();
+            let radius = (theta[order[located - 1]] - sigma).norm() * omega_r;
             return Ok(Some(NearShift {
                 pairs,
+                accurate,
                 radius,
                 iterations: iteration,
             }));
@@ -241,7 +228,7 @@ pub fn eigenpairs_near(
         for (slot, &k) in order.iter().enumerate() {
             q[slot * rows..(slot + 1) * rows].copy_from_slice(&ritz[k * rows..(k + 1) * rows]);
         }
-        orthonormalize(&mut q, rows, &mut seed);
+        orthonormalize(rows, &mut q)?;
     }
     Ok(None)
 }
@@ -267,9 +254,11 @@ mod tests {
         (k, c)
     }
 
-    /// The eigenpairs found near a shift are those of the full dense solve (eigenvalue to
-    /// 1e-10 relative, MAC 1 to 1e-10), every full eigenvalue within the stated radius is
-    /// among them, and a singular shift says so.
+    /// The eigenpairs found near a shift are those of the full dense solve: converged ones
+    /// (the tracked mode's among them) to round-off (eigenvalue 1e-10 relative, MAC 1 to
+    /// 1e-10), located ones to their residual's accuracy (1e-6, from the 1e-8 residual of a
+    /// well-conditioned eigenvalue); every full eigenvalue within the stated radius is among
+    /// them, and a singular shift says so.
     #[test]
     fn eigenpairs_near_a_shift_are_the_full_solves_within_the_radius() {
         let m = 40;
@@ -277,13 +266,14 @@ mod tests {
         let all = solve_dense(m, &kp, &cp).unwrap();
         let target = &all[17];
         let shift = (target.0 .0 + 3.0, target.0 .1 * (1.0 + 2e-3));
-        let found = eigenpairs_near(m, &kp, &cp, shift, &all[17..19], 3)
+        let found = eigenpairs_near(m, &kp, &cp, shift, &all[17..19], 1, 3)
             .unwrap()
             .expect("converges");
         assert!(found.radius > 0.0 && found.iterations < MAX_ITERATIONS);
+        assert!(found.accurate[0], "the tracked (nearest) pair converged");
         let within: Vec<&DenseEigenpair> = all
             .iter()
-            .filter(|p| (p.0 .0 - shift.0).hypot(p.0 .1 - shift.1) <= found.radius * (1.0 + 1e-9))
+            .filter(|p| (p.0 .0 - shift.0).hypot(p.0 .1 - shift.1) <= found.radius * (1.0 + 1e-6))
             .collect();
         assert!(
             within.len() >= 2,
@@ -295,23 +285,27 @@ mod tests {
             let hit = found
                 .pairs
                 .iter()
-                .find(|(t, _)| (t.0 - s.0).hypot(t.1 - s.1) <= 1e-10 * s.0.hypot(s.1));
-            let (_, z) = hit.unwrap_or_else(|| panic!("{s:?} within the radius but not found"));
+                .zip(&found.accurate)
+                .find(|((t, _), _)| (t.0 - s.0).hypot(t.1 - s.1) <= 1e-6 * s.0.hypot(s.1));
+            let ((t, z), &exact) =
+                hit.unwrap_or_else(|| panic!("{s:?} within the radius but not found"));
             let dot = y.iter().zip(z).fold((0.0, 0.0), |acc, (a, b)| {
                 (acc.0 + a.0 * b.0 + a.1 * b.1, acc.1 + a.0 * b.1 - a.1 * b.0)
             });
             let mac = dot.0 * dot.0 + dot.1 * dot.1;
-            assert!((mac - 1.0).abs() < 1e-10, "MAC {mac}");
+            let (ds, dmac) = if exact { (1e-10, 1e-10) } else { (1e-6, 1e-6) };
+            assert!((t.0 - s.0).hypot(t.1 - s.1) <= ds * s.0.hypot(s.1), "{t:?} vs {s:?}");
+            assert!((mac - 1.0).abs() < dmac, "MAC {mac} (converged: {exact})");
         }
         // At an eigenvalue itself (T(sigma) singular up to round-off) the iteration converges
         // at once onto it, or says it cannot factor.
         let exact = all[17].0;
-        if let Some(f) = eigenpairs_near(m, &kp, &cp, exact, &all[17..18], 1).unwrap() {
+        if let Some(f) = eigenpairs_near(m, &kp, &cp, exact, &all[17..18], 1, 1).unwrap() {
             let s = f.pairs[0].0;
             assert!((s.0 - exact.0).hypot(s.1 - exact.1) <= 1e-10 * exact.0.hypot(exact.1));
         }
         let nan = vec![f64::NAN; m * m];
-        assert!(eigenpairs_near(m, &nan, &cp, shift, &all[17..18], 1)
+        assert!(eigenpairs_near(m, &nan, &cp, shift, &all[17..18], 1, 1)
             .unwrap()
             .is_none());
     }

@@ -99,8 +99,35 @@ pub fn nearest(
         .collect()
 }
 
+/// Members of a tracked pair within this distance of their mean (relative to its modulus)
+/// share one shift: a coupling pair's two modes share their frequency (on the brake's C35
+/// they differ by ~2 % in |s|, mostly in the real part), so one factorization and one block
+/// find both; farther apart (the pair has split), each member gets its own.
+const SHARED_SHIFT: f64 = 0.05;
+
+/// The shifts for the members of `current`: (shift, the members it serves).
+fn shifts(current: &[DenseEigenpair]) -> Vec<(Complex, Vec<usize>)> {
+    let n = current.len() as f64;
+    let mean = current.iter().fold((0.0, 0.0), |acc, p| {
+        (acc.0 + p.0 .0 / n, acc.1 + p.0 .1 / n)
+    });
+    let modulus = mean.0.hypot(mean.1);
+    let close = current
+        .iter()
+        .all(|p| (p.0 .0 - mean.0).hypot(p.0 .1 - mean.1) <= SHARED_SHIFT * modulus);
+    if close && current.len() > 1 {
+        vec![(mean, (0..current.len()).collect())]
+    } else {
+        current
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.0, vec![i]))
+            .collect()
+    }
+}
+
 /// The eigenpairs of the projected system (`kp`, `cp`: m x m, unit mass) near the tracked
-/// pair `current` (shift-invert at each member's eigenvalue; `hints`: eigenpairs near the pair
+/// pair `current` (shift-invert at the pair's eigenvalues; `hints`: eigenpairs near the pair
 /// at the previous point, to start from), when they provably hold the ones the MAC pairing
 /// ([`pair_modes`]) would choose among all eigenpairs: an eigenvalue outside every radius
 /// found costs more (by its distance alone) than each choice made inside, so the greedy
@@ -118,30 +145,79 @@ pub fn pairs_near_tracked(
     }
     'wider: for beyond in BEYOND {
         let mut found: Vec<DenseEigenpair> = Vec::new();
+        let mut accurate: Vec<bool> = Vec::new();
         // Per member: the distance (relative to its eigenvalue) that anything outside the
         // eigenvalues found lies from it.
-        let mut outside = Vec::with_capacity(current.len());
-        for member in current {
-            let mut start = vec![member.clone()];
-            start.extend(nearest(hints, std::slice::from_ref(member), HINTS));
-            let s = member.0;
-            let Some(near) = eigenpairs_near(m, kp, cp, s, &start, beyond)? else {
+        let mut outside = vec![0.0; current.len()];
+        for (shift, members) in shifts(current) {
+            let mut start: Vec<DenseEigenpair> =
+                members.iter().map(|&i| current[i].clone()).collect();
+            start.extend(nearest(hints, &start, HINTS));
+            let tracked = members.len();
+            let Some(near) = eigenpairs_near(m, kp, cp, shift, &start, tracked, beyond)? else {
                 continue 'wider;
             };
-            outside.push(near.radius / s.0.hypot(s.1).max(1e-300));
-            for pair in near.pairs {
+            for &i in &members {
+                let s = current[i].0;
+                let offset = (s.0 - shift.0).hypot(s.1 - shift.1);
+                outside[i] = (near.radius - offset) / s.0.hypot(s.1).max(1e-300);
+            }
+            for (pair, exact) in near.pairs.into_iter().zip(near.accurate) {
                 let t = pair.0;
                 let same = |q: &DenseEigenpair| {
                     (q.0 .0 - t.0).hypot(q.0 .1 - t.1) <= 1e-9 * t.0.hypot(t.1)
                 };
-                if !found.iter().any(same) {
-                    found.push(pair);
+                match found.iter().position(same) {
+                    // The same eigenvalue from two shifts: keep the converged one.
+                    Some(k) if exact && !accurate[k] => {
+                        found[k] = pair;
+                        accurate[k] = true;
+                    }
+                    Some(_) => {}
+                    None => {
+                        found.push(pair);
+                        accurate.push(exact);
+                    }
                 }
             }
         }
+        // A continuation only located (not converged) is converged at its own eigenvalue (a
+        // shift that close takes a few iterations), and the pairing made again.
+        let mut choices = pair_modes(current, &found);
+        for _ in 0..2 {
+            let inexact: Vec<usize> = choices
+                .iter()
+                .flatten()
+                .map(|&(j, _)| j)
+                .filter(|&j| !accurate[j])
+                .collect();
+            if inexact.is_empty() {
+                break;
+            }
+            for j in inexact {
+                let s = found[j].0;
+                let start = std::slice::from_ref(&found[j]);
+                let Some(near) = eigenpairs_near(m, kp, cp, s, start, 1, 0)? else {
+                    continue 'wider;
+                };
+                let same = |t: Complex| (t.0 - s.0).hypot(t.1 - s.1) <= 1e-6 * s.0.hypot(s.1);
+                let Some(pair) = near
+                    .pairs
+                    .into_iter()
+                    .zip(near.accurate)
+                    .find_map(|(pair, exact)| (exact && same(pair.0)).then_some(pair))
+                else {
+                    continue 'wider;
+                };
+                found[j] = pair;
+                accurate[j] = true;
+            }
+            choices = pair_modes(current, &found);
+        }
         let mut worst_choice = 0.0f64;
-        for (i, choice) in pair_modes(current, &found).into_iter().enumerate() {
-            let Some((j, mac)) = choice else {
+        for (i, choice) in choices.into_iter().enumerate() {
+            // Still only located: not the dense solve's pair to round-off.
+            let Some((j, mac)) = choice.filter(|&(j, _)| accurate[j]) else {
                 continue 'wider;
             };
             let (si, sj) = (current[i].0, found[j].0);

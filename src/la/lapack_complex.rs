@@ -42,6 +42,27 @@ extern "C" {
         c: *mut Complex64,
         ldc: *const c_int,
     );
+    fn zgeqrf_(
+        m: *const c_int,
+        n: *const c_int,
+        a: *mut Complex64,
+        lda: *const c_int,
+        tau: *mut Complex64,
+        work: *mut Complex64,
+        lwork: *const c_int,
+        info: *mut c_int,
+    );
+    fn zungqr_(
+        m: *const c_int,
+        n: *const c_int,
+        k: *const c_int,
+        a: *mut Complex64,
+        lda: *const c_int,
+        tau: *const Complex64,
+        work: *mut Complex64,
+        lwork: *const c_int,
+        info: *mut c_int,
+    );
     fn zgeev_(
         jobvl: *const c_char,
         jobvr: *const c_char,
@@ -203,6 +224,64 @@ impl ComplexLu {
     }
 }
 
+/// Replaces the columns of the column-major rows x cols block `q` (rows >= cols) by an
+/// orthonormal basis of their span, by Householder QR (zgeqrf, zungqr): orthonormal to
+/// round-off whatever their conditioning; where columns are dependent, the reflectors supply
+/// orthonormal directions beyond their span.
+pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), String> {
+    if rows == 0 || q.is_empty() {
+        return Ok(());
+    }
+    let cols = q.len() / rows;
+    if q.len() != rows * cols || cols > rows {
+        return Err(format!(
+            "orthonormalize: {} entries in columns of {rows}",
+            q.len()
+        ));
+    }
+    let (mi, ni) = (dim(rows)?, dim(cols)?);
+    let lwork = 64 * cols;
+    let lw = dim(lwork)?;
+    let mut tau = vec![Complex64::default(); cols];
+    let mut work = vec![Complex64::default(); lwork];
+    let mut info: c_int = 0;
+    // SAFETY: q is rows x cols (lda rows, rows >= cols, checked above), tau has cols entries,
+    // work has lwork >= cols entries.
+    unsafe {
+        zgeqrf_(
+            &mi,
+            &ni,
+            q.as_mut_ptr(),
+            &mi,
+            tau.as_mut_ptr(),
+            work.as_mut_ptr(),
+            &lw,
+            &mut info,
+        );
+    }
+    if info != 0 {
+        return Err(format!("zgeqrf failed (info {info})"));
+    }
+    // SAFETY: as above; zungqr forms the cols x cols reflectors' Q in place.
+    unsafe {
+        zungqr_(
+            &mi,
+            &ni,
+            &ni,
+            q.as_mut_ptr(),
+            &mi,
+            tau.as_ptr(),
+            work.as_mut_ptr(),
+            &lw,
+            &mut info,
+        );
+    }
+    if info != 0 {
+        return Err(format!("zungqr failed (info {info})"));
+    }
+    Ok(())
+}
+
 /// Eigenvalues and right eigenvectors (column j of the returned n x n column-major matrix,
 /// Euclidean norm 1) of the general complex n x n column-major matrix `a` (consumed).
 pub fn eigen_complex(
@@ -290,5 +369,36 @@ mod tests {
             ComplexLu::new(2, vec![c(1.0, 0.0), c(2.0, 0.0), c(2.0, 0.0), c(4.0, 0.0)]).is_err()
         );
         assert!(ComplexLu::new(1, vec![c(f64::NAN, 0.0)]).is_err());
+    }
+
+    /// Orthonormal columns spanning the block's span, also where two columns are parallel.
+    #[test]
+    fn orthonormalized_columns_are_orthonormal_and_span_the_block() {
+        let rows = 5;
+        let a: Vec<Complex64> = (0..rows * 3)
+            .map(|k| c((k as f64 * 0.7).sin(), (k as f64 * 1.3).cos()))
+            .collect();
+        let mut q = a.clone();
+        // The third column parallel to the first.
+        for i in 0..rows {
+            q[2 * rows + i] = q[i] * c(0.0, 2.0);
+        }
+        let parallel = q.clone();
+        orthonormalize(rows, &mut q).unwrap();
+        let gram = gemm(Op::Adjoint, 3, rows, 3, &q, &q);
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((gram[j * 3 + i] - c(want, 0.0)).norm() < 1e-14);
+            }
+        }
+        // The first two input columns lie in the span: Q Q^H a = a.
+        for col in parallel.chunks(rows).take(2) {
+            let coef = gemm(Op::Adjoint, 3, rows, 1, &q, col);
+            let back = gemm(Op::Plain, rows, 3, 1, &q, &coef);
+            for (b, x) in back.iter().zip(col) {
+                assert!((b - x).norm() < 1e-14);
+            }
+        }
     }
 }

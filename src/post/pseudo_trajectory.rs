@@ -15,6 +15,8 @@
 //! The model is reached through [`PseudoSystem`] (the brake's projected contact tangent, or a
 //! closed-form model in the tests), so everything here is plain arithmetic on m x m matrices.
 
+use std::time::Instant;
+
 use serde::{Deserialize, Serialize};
 
 use crate::eigen::complex_modes::{
@@ -175,8 +177,27 @@ pub struct Period {
     pub sample: Vec<u8>,
     /// The mode and its partner at phase 0: where the next amplitude's tracking starts.
     start: Vec<DenseEigenpair>,
+    pub cost: Cost,
+}
+
+/// Where a study's time goes: the linearizations (contact laws and the projection of the
+/// tangent on the modes) and the eigenpairs, near the tracked pair or by the full dense solve.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Cost {
+    pub linearize_seconds: f64,
+    pub near_shift_seconds: f64,
+    pub dense_seconds: f64,
     /// Phases whose eigenpairs needed the full dense solve (see [`pairs_near_tracked`]).
     pub dense_solves: usize,
+}
+
+impl std::ops::AddAssign for Cost {
+    fn add_assign(&mut self, other: Cost) {
+        self.linearize_seconds += other.linearize_seconds;
+        self.near_shift_seconds += other.near_shift_seconds;
+        self.dense_seconds += other.dense_seconds;
+        self.dense_solves += other.dense_solves;
+    }
 }
 
 impl Period {
@@ -232,9 +253,7 @@ pub struct PseudoTrajectory {
     /// The pseudo stability diagram: the period at the diagram's amplitude.
     pub diagram: Period,
     pub linearizations: usize,
-    /// Linearizations whose eigenpairs took the full dense solve, not the shift-invert near
-    /// the tracked pair.
-    pub dense_solves: usize,
+    pub cost: Cost,
     pub seconds: f64,
 }
 
@@ -269,21 +288,28 @@ fn period(
         fractions: Vec::with_capacity(phases),
         sample: Vec::with_capacity(phases),
         start: start.to_vec(),
-        dense_solves: 0,
+        cost: Cost::default(),
     };
     for k in 0..phases {
         let theta = 2.0 * std::f64::consts::PI * k as f64 / phases as f64;
+        let clock = Instant::now();
         let lin = system.linearize(psi, omega, alpha, theta)?;
+        out.cost.linearize_seconds += clock.elapsed().as_secs_f64();
+        let clock = Instant::now();
         let found = if near {
             pairs_near_tracked(m, &lin.kp, &lin.cp, &current, &hints)?
         } else {
             None
         };
+        out.cost.near_shift_seconds += clock.elapsed().as_secs_f64();
         let pairs = match found {
             Some(pairs) => pairs,
             None => {
-                out.dense_solves += 1;
-                solve_dense(m, &lin.kp, &lin.cp)?
+                let clock = Instant::now();
+                let pairs = solve_dense(m, &lin.kp, &lin.cp)?;
+                out.cost.dense_seconds += clock.elapsed().as_secs_f64();
+                out.cost.dense_solves += 1;
+                pairs
             }
         };
         hints = nearest(&pairs, &current, HINTS);
@@ -395,7 +421,7 @@ pub fn pseudo_trajectory(
     settings: &PseudoTrajectorySettings,
     margin: f64,
 ) -> Result<PseudoTrajectory, String> {
-    let clock = std::time::Instant::now();
+    let clock = Instant::now();
     let (s, y) = &nominal[index];
     let pair: Vec<DenseEigenpair> = std::iter::once(index)
         .chain(partner(nominal, index))
@@ -414,11 +440,11 @@ pub fn pseudo_trajectory(
         [1e-3 * g, 10.0 * g]
     });
     let phases = settings.phases;
-    let (mut count, mut dense_solves) = (0, 0);
+    let (mut count, mut cost) = (0, Cost::default());
     let mut evaluate = |alpha: f64, start: &[DenseEigenpair]| {
         count += phases;
         let p = period(system, &psi, omega, alpha, phases, start, margin, true)?;
-        dense_solves += p.dense_solves;
+        cost += p.cost;
         Ok::<Period, String>(p)
     };
     let mut sweep: Vec<Period> = Vec::with_capacity(settings.alphas);
@@ -479,7 +505,7 @@ pub fn pseudo_trajectory(
         sign_changes,
         diagram,
         linearizations: count,
-        dense_solves,
+        cost,
         seconds: clock.elapsed().as_secs_f64(),
     })
 }
@@ -658,8 +684,8 @@ mod tests {
         for alpha in [1e-6, 0.1, 0.5, 1.0] {
             let run = |near| period(&chain, &pair[0].1, omega, alpha, 32, &pair, 0.0, near);
             let (fast, full) = (run(true).unwrap(), run(false).unwrap());
-            assert_eq!(full.dense_solves, 32);
-            near_used += 32 - fast.dense_solves;
+            assert_eq!(full.cost.dense_solves, 32);
+            near_used += 32 - fast.cost.dense_solves;
             for (k, (a, b)) in fast.eigenvalue.iter().zip(&full.eigenvalue).enumerate() {
                 let d = (a.0 - b.0).hypot(a.1 - b.1) / b.0.hypot(b.1);
                 assert!(

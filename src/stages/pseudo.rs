@@ -260,7 +260,7 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             });
         write!(
             f,
-            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s ({} by the full dense solve)",
+            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s ({:.2} s linearizing, {:.2} s near the pair, {:.2} s in {} full dense solves)",
             t.name,
             f_hz,
             damping_ratio(t.nominal),
@@ -270,7 +270,10 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             span.1,
             t.linearizations,
             t.seconds,
-            t.dense_solves
+            t.cost.linearize_seconds,
+            t.cost.near_shift_seconds,
+            t.cost.dense_seconds,
+            t.cost.dense_solves
         )?;
         if t.alpha_stable.alpha() != t.alpha_sat.alpha() {
             let above = match &t.alpha_stable {

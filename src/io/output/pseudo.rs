@@ -83,7 +83,10 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
     file.set_number(&m, "alpha_stable_m", value(&t.alpha_stable))?;
     file.set_number(&m, "sign_changes", t.sign_changes as f64)?;
     file.set_number(&m, "linearizations", t.linearizations as f64)?;
-    file.set_number(&m, "dense_solves", t.dense_solves as f64)?;
+    file.set_number(&m, "dense_solves", t.cost.dense_solves as f64)?;
+    file.set_number(&m, "linearize_seconds", t.cost.linearize_seconds)?;
+    file.set_number(&m, "near_shift_seconds", t.cost.near_shift_seconds)?;
+    file.set_number(&m, "dense_seconds", t.cost.dense_seconds)?;
     file.set_number(&m, "seconds", t.seconds)?;
     if let Some(tr) = &s.transient {
         file.set_number(&m, "transient_amplitude_mean_m", tr.mean)?;
