@@ -418,10 +418,10 @@ pub fn project_operators(
     Ok((k, c, mm))
 }
 
-/// Eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m, column-major) with Im(s) >= 0; y has
-/// unit 2-norm. Solved on the companion matrix, scaled by omega_r = sqrt(max |K_p,ii|) so its
-/// blocks are of order one (LAPACK balances the rest).
-pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpair>, String> {
+/// The companion matrix [[0, I], [-K_p, -C_p]] of `(s^2 I + s C_p + K_p) y = 0` (order 2m,
+/// column-major), scaled by omega_r = sqrt(max |K_p,ii|) so its blocks are of order one
+/// (LAPACK balances the rest); returned with omega_r (its eigenvalues times omega_r are s).
+pub fn companion(m: usize, kp: &[f64], cp: &[f64]) -> (Vec<f64>, f64) {
     let n = 2 * m;
     let omega_r = (0..m)
         .map(|i| kp[i * m + i].abs())
@@ -436,23 +436,33 @@ pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpai
             a[(m + j) * n + m + i] = -cp[j * m + i] / omega_r;
         }
     }
-    let e = lapack::eigen_general(n, a)?;
+    (a, omega_r)
+}
+
+/// The coordinates y (unit 2-norm) of a companion eigenvector z = [y; s y], or None where
+/// its y part vanishes.
+pub fn coordinates(m: usize, z: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
+    let norm = z[..m]
+        .iter()
+        .map(|&(r, i)| r * r + i * i)
+        .sum::<f64>()
+        .sqrt();
+    (norm > 0.0).then(|| z[..m].iter().map(|&(r, i)| (r / norm, i / norm)).collect())
+}
+
+/// Eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m, column-major) with Im(s) >= 0; y has
+/// unit 2-norm. Solved on the scaled companion matrix ([`companion`]).
+pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpair>, String> {
+    let (a, omega_r) = companion(m, kp, cp);
+    let e = lapack::eigen_general(2 * m, a)?;
     let mut out = Vec::new();
     for (j, &(re, im)) in e.values.iter().enumerate() {
         if im < 0.0 {
             continue;
         }
-        let z = &e.vectors[j];
-        let norm = z[..m]
-            .iter()
-            .map(|&(r, i)| r * r + i * i)
-            .sum::<f64>()
-            .sqrt();
-        if norm == 0.0 {
-            continue;
+        if let Some(y) = coordinates(m, &e.vectors[j]) {
+            out.push(((re * omega_r, im * omega_r), y));
         }
-        let y = z[..m].iter().map(|&(r, i)| (r / norm, i / norm)).collect();
-        out.push(((re * omega_r, im * omega_r), y));
     }
     Ok(out)
 }

@@ -294,7 +294,10 @@ mod tests {
             });
             let mac = dot.0 * dot.0 + dot.1 * dot.1;
             let (ds, dmac) = if exact { (1e-10, 1e-10) } else { (1e-6, 1e-6) };
-            assert!((t.0 - s.0).hypot(t.1 - s.1) <= ds * s.0.hypot(s.1), "{t:?} vs {s:?}");
+            assert!(
+                (t.0 - s.0).hypot(t.1 - s.1) <= ds * s.0.hypot(s.1),
+                "{t:?} vs {s:?}"
+            );
             assert!((mac - 1.0).abs() < dmac, "MAC {mac} (converged: {exact})");
         }
         // At an eigenvalue itself (T(sigma) singular up to round-off) the iteration converges

@@ -1,8 +1,11 @@
 //! Mode tracking by MAC (modal assurance criterion) across a sequence of eigen-solutions in
 //! one fixed basis: sweep points, or linearizations along a trajectory.
 
-use super::complex_modes::{Complex, DenseEigenpair};
+use std::collections::BTreeMap;
+
+use super::complex_modes::{companion, coordinates, Complex, DenseEigenpair};
 use super::near_shift::eigenpairs_near;
+use crate::la::hessenberg::EigenvaluesFirst;
 
 /// Modal assurance criterion of two complex vectors: |a^H b|^2 / (|a|^2 |b|^2).
 pub fn mac(a: &[(f64, f64)], b: &[(f64, f64)]) -> f64 {
@@ -231,6 +234,89 @@ pub fn pairs_near_tracked(
     Ok(None)
 }
 
+/// The eigenpairs of the projected system that the MAC pairing of `current` needs, from all
+/// its eigenvalues (the whole problem, solved without vectors) and the vectors of those
+/// nearest each member only: at least the `HINTS` nearest, and every eigenvalue nearer a
+/// member than the costliest choice the pairing makes among them (the argument of
+/// [`pairs_near_tracked`], here with every eigenvalue known). The pairing is then the one the
+/// full dense solve gives, at about two thirds of its cost on the brake's 250 modes, where
+/// shift-invert near the pair cannot prove its choice (the mode changes much between phases).
+pub fn pairs_from_all_eigenvalues(
+    m: usize,
+    kp: &[f64],
+    cp: &[f64],
+    current: &[DenseEigenpair],
+) -> Result<Vec<DenseEigenpair>, String> {
+    let (a, omega_r) = companion(m, kp, cp);
+    let all = EigenvaluesFirst::new(2 * m, a)?;
+    // The eigenvalues with Im >= 0, as the full solve reports them.
+    let upper: Vec<(usize, Complex)> = all
+        .values
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| v.1 >= 0.0)
+        .map(|(j, &(re, im))| (j, (re * omega_r, im * omega_r)))
+        .collect();
+    let relative = |i: usize, t: Complex| {
+        let s = current[i].0;
+        (s.0 - t.0).hypot(s.1 - t.1) / s.0.hypot(s.1).max(1e-300)
+    };
+    // Per member, the eigenvalues by distance.
+    let by_distance: Vec<Vec<(f64, usize)>> = (0..current.len())
+        .map(|i| {
+            let mut d: Vec<(f64, usize)> = (0..upper.len())
+                .map(|k| (relative(i, upper[k].1), k))
+                .collect();
+            d.sort_by(|a, b| a.0.total_cmp(&b.0));
+            d
+        })
+        .collect();
+    // Vectors computed so far (None: no coordinates, skipped as the full solve skips it).
+    let mut computed: BTreeMap<usize, Option<DenseEigenpair>> = BTreeMap::new();
+    let (mut reach, mut worst) = (HINTS, 0.0f64);
+    loop {
+        let wanted: Vec<usize> = by_distance
+            .iter()
+            .flat_map(|d| {
+                d.iter()
+                    .enumerate()
+                    .take_while(move |&(rank, &(dist, _))| rank < reach || dist <= worst)
+                    .map(|(_, &(_, k))| k)
+            })
+            .filter(|k| !computed.contains_key(k))
+            .collect::<std::collections::BTreeSet<usize>>()
+            .into_iter()
+            .collect();
+        let indices: Vec<usize> = wanted.iter().map(|&k| upper[k].0).collect();
+        for (&k, z) in wanted.iter().zip(all.vectors(&indices)?) {
+            computed.insert(k, coordinates(m, &z).map(|y| (upper[k].1, y)));
+        }
+        let pairs: Vec<DenseEigenpair> = computed.values().flatten().cloned().collect();
+        if computed.len() == upper.len() || current.is_empty() {
+            return Ok(pairs);
+        }
+        let choices = pair_modes(current, &pairs);
+        let costs: Option<Vec<f64>> = choices
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c.map(|(j, mac)| (1.0 - mac) + relative(i, pairs[j].0)))
+            .collect();
+        if let Some(costs) = costs {
+            worst = costs.into_iter().fold(0.0, f64::max);
+            // The nearest eigenvalue without a vector, per member, lies beyond every choice.
+            let proven = by_distance.iter().all(|d| {
+                d.iter()
+                    .find(|(_, k)| !computed.contains_key(k))
+                    .is_none_or(|&(dist, _)| worst < dist)
+            });
+            if proven {
+                return Ok(pairs);
+            }
+        }
+        reach *= 2;
+    }
+}
+
 /// Tracks modes through the points (each point's modes with their modal coordinates in one
 /// fixed basis). Tracks start at the first point; a mode of a later point that continues no
 /// track is dropped (its track would start mid-sweep).
@@ -323,5 +409,56 @@ mod tests {
                 ),
             }
         }
+    }
+
+    /// A 40-mode flutter chain, perturbed from one point to the next by a growing change of
+    /// its coupling: the pairing of the tracked pair among the eigenpairs computed from all
+    /// eigenvalues is the pairing among the full dense solve's (the same eigenvalues to
+    /// 1e-10, MAC 1 to 1e-10), with vectors computed for fewer eigenvalues than all.
+    #[test]
+    fn pairing_from_all_eigenvalues_is_the_full_solves() {
+        use crate::eigen::complex_modes::solve_dense;
+        let m = 40;
+        let chain = |mu: f64| {
+            let (mut k, mut c) = (vec![0.0; m * m], vec![0.0; m * m]);
+            for i in 0..m {
+                let w = 1e3 * ((i / 2 + 1) as f64 + 0.01 * (i % 2) as f64);
+                k[i * m + i] = w * w;
+                c[i * m + i] = 2.0 * 0.005 * w;
+                if i + 1 < m {
+                    k[(i + 1) * m + i] = mu * w * w;
+                    k[i * m + i + 1] = -mu * w * w;
+                }
+            }
+            (k, c)
+        };
+        let (k0, c0) = chain(0.2);
+        let nominal = solve_dense(m, &k0, &c0).unwrap();
+        let least = (0..nominal.len())
+            .min_by(|&a, &b| nominal[a].0 .0.total_cmp(&nominal[b].0 .0).reverse())
+            .unwrap();
+        let current = vec![nominal[least].clone()];
+        let mut fewer = 0;
+        for mu in [0.2001, 0.21, 0.3, 0.6] {
+            let (k, c) = chain(mu);
+            let full = solve_dense(m, &k, &c).unwrap();
+            let subset = pairs_from_all_eigenvalues(m, &k, &c, &current).unwrap();
+            fewer += usize::from(subset.len() < full.len());
+            let a = pair_modes(&current, &full)[0].expect("paired in the full solve");
+            let b = pair_modes(&current, &subset)[0].expect("paired in the subset");
+            let (sa, sb) = (full[a.0].0, subset[b.0].0);
+            let d = (sa.0 - sb.0).hypot(sa.1 - sb.1) / sa.0.hypot(sa.1);
+            assert!(d <= 1e-10, "mu {mu}: {sa:?} vs {sb:?}");
+            assert!(
+                (a.1 - b.1).abs() <= 1e-10,
+                "mu {mu}: MAC {} vs {}",
+                a.1,
+                b.1
+            );
+        }
+        assert!(
+            fewer >= 2,
+            "vectors for fewer than all eigenvalues at {fewer} of 4"
+        );
     }
 }

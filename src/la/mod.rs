@@ -7,6 +7,7 @@
 pub mod eigen;
 pub(crate) mod error;
 pub mod fem_assembly;
+pub mod hessenberg;
 pub mod lapack;
 pub mod lapack_complex;
 pub mod low_rank;

@@ -22,7 +22,9 @@ use serde::{Deserialize, Serialize};
 use crate::eigen::complex_modes::{
     damping_ratio, frequency_hz, solve_dense, Complex, DenseEigenpair,
 };
-use crate::eigen::tracking::{nearest, pair_modes, pairs_near_tracked, HINTS};
+use crate::eigen::tracking::{
+    nearest, pair_modes, pairs_from_all_eigenvalues, pairs_near_tracked, HINTS,
+};
 
 /// `[post.pseudo_trajectory]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -306,7 +308,11 @@ fn period(
             Some(pairs) => pairs,
             None => {
                 let clock = Instant::now();
-                let pairs = solve_dense(m, &lin.kp, &lin.cp)?;
+                let pairs = if near {
+                    pairs_from_all_eigenvalues(m, &lin.kp, &lin.cp, &current)?
+                } else {
+                    solve_dense(m, &lin.kp, &lin.cp)?
+                };
                 out.cost.dense_seconds += clock.elapsed().as_secs_f64();
                 out.cost.dense_solves += 1;
                 pairs
