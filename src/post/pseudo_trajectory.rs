@@ -265,7 +265,9 @@ pub struct PseudoTrajectory {
 /// (and always without `near`) the full dense solve. Where the pair splits (the contact state
 /// decouples it) the two continuations have nearly the same shape and either may be "the mode": the pair's least stable member is taken, a continuous function of the state
 /// whichever member the MAC pairing follows (so the mean over the period is continuous in
-/// alpha and a bisection on it well posed).
+/// alpha and a bisection on it well posed). `until_stable`: stop at the first stable phase
+/// (all the bisection for alpha_crit asks of a period that has one; the statistics then
+/// cover the phases evaluated).
 #[allow(clippy::too_many_arguments)] // the period's definition and how its modes are solved
 fn period(
     system: &dyn PseudoSystem,
@@ -276,6 +278,7 @@ fn period(
     start: &[DenseEigenpair],
     margin: f64,
     near: bool,
+    until_stable: bool,
 ) -> Result<Period, String> {
     let m = psi.len();
     let mut current = start.to_vec();
@@ -334,6 +337,9 @@ fn period(
                     .min_by(|a, b| damping_ratio(*a).total_cmp(&damping_ratio(*b)))
                     .unwrap_or((f64::NAN, f64::NAN));
                 out.eigenvalue.push(least_stable);
+                if until_stable && damping_ratio(least_stable) >= -margin {
+                    break;
+                }
             }
             None => {
                 out.min_mac = f64::NAN;
@@ -345,10 +351,11 @@ fn period(
         }
     }
     let zeta = out.damping_ratios();
+    let evaluated = zeta.len() as f64;
     // A lost phase counts as unstable and makes the mean NaN: nothing is concluded from it.
     out.unstable_fraction =
-        zeta.iter().filter(|z| z.is_nan() || **z < -margin).count() as f64 / phases as f64;
-    out.mean_damping_ratio = zeta.iter().sum::<f64>() / phases as f64;
+        zeta.iter().filter(|z| z.is_nan() || **z < -margin).count() as f64 / evaluated;
+    out.mean_damping_ratio = zeta.iter().sum::<f64>() / evaluated;
     Ok(out)
 }
 
@@ -447,19 +454,33 @@ pub fn pseudo_trajectory(
     });
     let phases = settings.phases;
     let (mut count, mut cost) = (0, Cost::default());
-    let mut evaluate = |alpha: f64, start: &[DenseEigenpair]| {
-        count += phases;
-        let p = period(system, &psi, omega, alpha, phases, start, margin, true)?;
+    let mut run = |alpha: f64, start: &[DenseEigenpair], until_stable: bool| {
+        let p = period(
+            system,
+            &psi,
+            omega,
+            alpha,
+            phases,
+            start,
+            margin,
+            true,
+            until_stable,
+        )?;
+        count += p.eigenvalue.len();
         cost += p.cost;
         Ok::<Period, String>(p)
     };
     let mut sweep: Vec<Period> = Vec::with_capacity(settings.alphas);
     for alpha in log_space(a, b, settings.alphas) {
         let start = sweep.last().map_or(&pair, |p| &p.start).clone();
-        sweep.push(evaluate(alpha, &start)?);
+        sweep.push(run(alpha, &start, false)?);
     }
     let tol = settings.tolerance;
-    let (alpha_crit, _) = bracket_and_bisect(&sweep, tol, &mut evaluate, Period::has_stable_phase)?;
+    // alpha_crit's refinement asks of a period only whether it has a stable phase (its
+    // periods are not kept): each stops at its first.
+    let until_stable = |alpha: f64, start: &[DenseEigenpair]| run(alpha, start, true);
+    let (alpha_crit, _) = bracket_and_bisect(&sweep, tol, until_stable, Period::has_stable_phase)?;
+    let mut evaluate = |alpha: f64, start: &[DenseEigenpair]| run(alpha, start, false);
     let crosses = |p: &Period| p.mean_damping_ratio >= 0.0;
     let (alpha_sat, mut near_sat) = bracket_and_bisect(&sweep, tol, &mut evaluate, crosses)?;
     let sign_changes = sweep
@@ -688,7 +709,11 @@ mod tests {
         let omega = nominal[index].0 .1;
         let mut near_used = 0;
         for alpha in [1e-6, 0.1, 0.5, 1.0] {
-            let run = |near| period(&chain, &pair[0].1, omega, alpha, 32, &pair, 0.0, near);
+            let run = |near| {
+                period(
+                    &chain, &pair[0].1, omega, alpha, 32, &pair, 0.0, near, false,
+                )
+            };
             let (fast, full) = (run(true).unwrap(), run(false).unwrap());
             assert_eq!(full.cost.dense_solves, 32);
             near_used += 32 - fast.cost.dense_solves;
