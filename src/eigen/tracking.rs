@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use super::complex_modes::{companion, coordinates, Complex, DenseEigenpair};
+use super::complex_modes::{companion, coordinates, solve_dense, Complex, DenseEigenpair};
 use super::near_shift::eigenpairs_near;
 use crate::la::hessenberg::EigenvaluesFirst;
 
@@ -247,6 +247,9 @@ pub fn pairs_from_all_eigenvalues(
     cp: &[f64],
     current: &[DenseEigenpair],
 ) -> Result<Vec<DenseEigenpair>, String> {
+    if current.is_empty() {
+        return solve_dense(m, kp, cp);
+    }
     let (a, omega_r) = companion(m, kp, cp);
     let all = EigenvaluesFirst::new(2 * m, a)?;
     // The eigenvalues with Im >= 0, as the full solve reports them.
@@ -292,7 +295,7 @@ pub fn pairs_from_all_eigenvalues(
             computed.insert(k, coordinates(m, &z).map(|y| (upper[k].1, y)));
         }
         let pairs: Vec<DenseEigenpair> = computed.values().flatten().cloned().collect();
-        if computed.len() == upper.len() || current.is_empty() {
+        if computed.len() == upper.len() {
             return Ok(pairs);
         }
         let choices = pair_modes(current, &pairs);
@@ -417,7 +420,6 @@ mod tests {
     /// 1e-10, MAC 1 to 1e-10), with vectors computed for fewer eigenvalues than all.
     #[test]
     fn pairing_from_all_eigenvalues_is_the_full_solves() {
-        use crate::eigen::complex_modes::solve_dense;
         let m = 40;
         let chain = |mu: f64| {
             let (mut k, mut c) = (vec![0.0; m * m], vec![0.0; m * m]);
