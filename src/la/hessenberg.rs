@@ -8,6 +8,8 @@
 
 use std::os::raw::{c_char, c_int};
 
+use super::lapack::dim;
+
 extern "C" {
     fn dgebal_(
         job: *const c_char,
@@ -95,10 +97,6 @@ extern "C" {
         ldv: *const c_int,
         info: *mut c_int,
     );
-}
-
-fn dim(n: usize) -> Result<c_int, String> {
-    c_int::try_from(n).map_err(|_| format!("dense order {n} is too large for LAPACK"))
 }
 
 fn check(routine: &str, info: c_int) -> Result<(), String> {

@@ -58,7 +58,8 @@ pub struct DenseEigen {
     pub vectors: Vec<Vec<(f64, f64)>>,
 }
 
-fn dim(n: usize) -> Result<c_int, String> {
+/// A dimension as LAPACK's integer.
+pub(crate) fn dim(n: usize) -> Result<c_int, String> {
     c_int::try_from(n).map_err(|_| format!("dense order {n} is too large for LAPACK"))
 }
 

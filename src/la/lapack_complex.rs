@@ -1,11 +1,13 @@
 //! Dense complex LAPACK (OpenBLAS here) for the eigenpairs near a shift of the projected
-//! quadratic problem: the LU of a complex matrix (zgetrf / zgetrs) and the eigenpairs of a
-//! small complex matrix (zgeev). Column-major storage; `Complex64` has the layout of Fortran's
+//! quadratic problem: the LU of a complex matrix (zgetrf / zgetrs), orthonormal columns by
+//! Householder QR (zgeqrf / zungqr) and the eigenpairs of a small complex matrix (zgeev). Column-major storage; `Complex64` has the layout of Fortran's
 //! double complex.
 
 use std::os::raw::{c_char, c_int};
 
 use num_complex::Complex64;
+
+use super::lapack::dim;
 
 extern "C" {
     fn zgetrf_(
@@ -79,10 +81,6 @@ extern "C" {
         rwork: *mut f64,
         info: *mut c_int,
     );
-}
-
-fn dim(n: usize) -> Result<c_int, String> {
-    c_int::try_from(n).map_err(|_| format!("dense order {n} is too large for LAPACK"))
 }
 
 /// How [`gemm`] reads an operand.
