@@ -33,6 +33,17 @@ pub struct Tracks {
 /// Relative eigenvalue spacing below which modes form a cluster (a doublet of the disc).
 const CLUSTER: f64 = 2e-3;
 
+/// |t - s| / |s|: the pairing's distance term.
+fn relative_distance(s: Complex, t: Complex) -> f64 {
+    (s.0 - t.0).hypot(s.1 - t.1) / s.0.hypot(s.1).max(1e-300)
+}
+
+/// What [`pair_modes`] pays for continuing the mode at `s` by the one at `t` with MAC `mac`;
+/// at least their relative distance, which is what proves a choice made among a subset.
+fn choice_cost(s: Complex, t: Complex, mac: f64) -> f64 {
+    (1.0 - mac) + relative_distance(s, t)
+}
+
 /// Pairs the modes of one point with those of the next: for each previous mode, the index of
 /// its continuation and the MAC (or None). Greedy on the cost (1 - MAC) + |s_i - s_j| / |s_i|,
 /// where for a mode inside a cluster (a doublet: eigenvalues within 2e-3) the MAC is taken
@@ -48,7 +59,6 @@ pub fn pair_modes(
     };
     let mut candidates = Vec::with_capacity(previous.len() * next.len());
     for (i, (si, _)) in previous.iter().enumerate() {
-        let scale = si.0.hypot(si.1).max(1e-300);
         let cluster: Vec<usize> = (0..previous.len())
             .filter(|&k| close(previous[k].0, *si))
             .collect();
@@ -58,8 +68,7 @@ pub fn pair_modes(
                 .map(|&k| mac(&previous[k].1, yj))
                 .sum::<f64>()
                 .min(1.0);
-            let ds = (si.0 - sj.0).hypot(si.1 - sj.1) / scale;
-            candidates.push(((1.0 - m) + ds, i, j, m));
+            candidates.push((choice_cost(*si, *sj, m), i, j, m));
         }
     }
     candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -223,9 +232,7 @@ pub fn pairs_near_tracked(
             let Some((j, mac)) = choice.filter(|&(j, _)| accurate[j]) else {
                 continue 'wider;
             };
-            let (si, sj) = (current[i].0, found[j].0);
-            let scale = si.0.hypot(si.1).max(1e-300);
-            worst_choice = worst_choice.max((1.0 - mac) + (si.0 - sj.0).hypot(si.1 - sj.1) / scale);
+            worst_choice = worst_choice.max(choice_cost(current[i].0, found[j].0, mac));
         }
         if outside.iter().all(|&r| worst_choice < r) {
             return Ok(Some(found));
@@ -260,15 +267,11 @@ pub fn pairs_from_all_eigenvalues(
         .filter(|(_, v)| v.1 >= 0.0)
         .map(|(j, &(re, im))| (j, (re * omega_r, im * omega_r)))
         .collect();
-    let relative = |i: usize, t: Complex| {
-        let s = current[i].0;
-        (s.0 - t.0).hypot(s.1 - t.1) / s.0.hypot(s.1).max(1e-300)
-    };
     // Per member, the eigenvalues by distance.
     let by_distance: Vec<Vec<(f64, usize)>> = (0..current.len())
         .map(|i| {
             let mut d: Vec<(f64, usize)> = (0..upper.len())
-                .map(|k| (relative(i, upper[k].1), k))
+                .map(|k| (relative_distance(current[i].0, upper[k].1), k))
                 .collect();
             d.sort_by(|a, b| a.0.total_cmp(&b.0));
             d
@@ -302,7 +305,7 @@ pub fn pairs_from_all_eigenvalues(
         let costs: Option<Vec<f64>> = choices
             .iter()
             .enumerate()
-            .map(|(i, c)| c.map(|(j, mac)| (1.0 - mac) + relative(i, pairs[j].0)))
+            .map(|(i, c)| c.map(|(j, mac)| choice_cost(current[i].0, pairs[j].0, mac)))
             .collect();
         if let Some(costs) = costs {
             worst = costs.into_iter().fold(0.0, f64::max);
