@@ -86,11 +86,18 @@ impl ModalProjection {
             }
         }
         // One GEMM per row channel a: out += P_a^T S_a with S_a = sum_b diag(g_ab) P_b (the
-        // up to 11 channel pairs of sliding friction cost 4 products, not 11).
+        // up to 11 channel pairs of sliding friction cost 4 products, not 11). A row channel
+        // with its diagonal pair alone (the normal stiffness, the friction damping) is a
+        // symmetric product: half the flops by dsyrk.
         let mut scaled = vec![0.0; n * m];
         for a in 0..4 {
             let pairs: Vec<usize> = (0..4).map(|b| a * 4 + b).filter(|&p| present[p]).collect();
             if pairs.is_empty() {
+                continue;
+            }
+            // (A non-finite weight takes the GEMM, which carries it into the result.)
+            if pairs == [a * 5] && weights[a * 5].iter().all(|g| g.is_finite()) {
+                add_symmetric(n, m, &weights[a * 5], &self.channels[a], &mut out);
                 continue;
             }
             scaled.fill(0.0);
@@ -138,6 +145,28 @@ impl ModalProjection {
             cp[i * m + i] += damping.rayleigh_alpha;
         }
         (kp, cp)
+    }
+}
+
+/// out += P^T diag(g) P for P (points x modes, column-major): sum over the points of either
+/// sign of (sqrt|g| P)^T (sqrt|g| P), each by dsyrk over those points' rows only.
+fn add_symmetric(n: usize, m: usize, g: &[f64], p: &[f64], out: &mut [f64]) {
+    for sign in [1.0, -1.0] {
+        let rows: Vec<(usize, f64)> = (0..n)
+            .filter(|&j| g[j] * sign > 0.0)
+            .map(|j| (j, (g[j] * sign).sqrt()))
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let k = rows.len();
+        let mut z = vec![0.0; k * m];
+        for (column, source) in z.chunks_mut(k).zip(p.chunks(n)) {
+            for (zi, &(j, root)) in column.iter_mut().zip(&rows) {
+                *zi = root * source[j];
+            }
+        }
+        lapack::add_gram(k, m, sign, &z, out);
     }
 }
 
@@ -213,5 +242,30 @@ impl ProjectedStability {
     ) -> Result<Vec<DenseEigenpair>, String> {
         let (kp, cp) = self.operators_at(comm, contact, state);
         solve_dense(self.projection.size, &kp, &cp)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The symmetric route against the sum over points written out: weights of both signs
+    /// and zero, each point's rows taken once.
+    #[test]
+    fn symmetric_projection_matches_the_sum_over_points() {
+        let (n, m) = (9, 4);
+        let p: Vec<f64> = (0..n * m).map(|i| (i as f64 * 0.37).sin()).collect();
+        let g: Vec<f64> = (0..n)
+            .map(|j| [2.0, -0.5, 0.0][j % 3] * (1.0 + j as f64))
+            .collect();
+        let mut out = vec![1.0; m * m];
+        add_symmetric(n, m, &g, &p, &mut out);
+        for a in 0..m {
+            for b in 0..m {
+                let sum: f64 = (0..n).map(|j| g[j] * p[a * n + j] * p[b * n + j]).sum();
+                let got = out[b * m + a] - 1.0;
+                assert!((got - sum).abs() < 1e-12, "({a}, {b}): {got} vs {sum}");
+            }
+        }
     }
 }

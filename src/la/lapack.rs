@@ -1,7 +1,7 @@
 //! Dense LAPACK/BLAS (the library PETSc links, OpenBLAS here) for the small dense problems of
 //! the projected complex modes and the reduction: the general eigenproblem of the companion
 //! matrix (dgeev, with its balancing), the symmetric one of a Gram matrix (dsyev) and matrix
-//! products (dgemm). Column-major storage throughout.
+//! products (dgemm, and dsyrk for symmetric ones). Column-major storage throughout.
 
 use std::os::raw::{c_char, c_int};
 
@@ -44,6 +44,18 @@ extern "C" {
         lda: *const c_int,
         b: *const f64,
         ldb: *const c_int,
+        beta: *const f64,
+        c: *mut f64,
+        ldc: *const c_int,
+    );
+    fn dsyrk_(
+        uplo: *const c_char,
+        trans: *const c_char,
+        n: *const c_int,
+        k: *const c_int,
+        alpha: *const f64,
+        a: *const f64,
+        lda: *const c_int,
         beta: *const f64,
         c: *mut f64,
         ldc: *const c_int,
@@ -271,6 +283,45 @@ pub fn gemm_nn(m: usize, k: usize, n: usize, a: &[f64], b: &[f64]) -> Vec<f64> {
     gemm(false, false, m, k, n, a, b)
 }
 
+/// out += sign A^T A for column-major A (k x m), out m x m column-major: half the flops of
+/// [`gemm_tn`] for a symmetric product (dsyrk fills one triangle; it is mirrored here).
+pub fn add_gram(k: usize, m: usize, sign: f64, a: &[f64], out: &mut [f64]) {
+    assert!(
+        a.len() >= k * m && out.len() == m * m,
+        "syrk: operand sizes"
+    );
+    if k == 0 || m == 0 {
+        return;
+    }
+    let (ki, mi) = (dim(k).expect("syrk order"), dim(m).expect("syrk order"));
+    let mut c = vec![0.0; m * m];
+    let (uplo, trans, beta) = (b'U' as c_char, b'T' as c_char, 0.0f64);
+    // SAFETY: A is k x m with leading dimension k (asserted), C is m x m with ldc m.
+    unsafe {
+        dsyrk_(
+            &uplo,
+            &trans,
+            &mi,
+            &ki,
+            &sign,
+            a.as_ptr(),
+            &ki,
+            &beta,
+            c.as_mut_ptr(),
+            &mi,
+        );
+    }
+    for j in 0..m {
+        for i in 0..=j {
+            let v = c[j * m + i];
+            out[j * m + i] += v;
+            if i != j {
+                out[i * m + j] += v;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -331,6 +382,19 @@ mod tests {
                 let s: f64 = (0..k).map(|l| a[i * k + l] * b[j * k + l]).sum();
                 assert!((c[j * m + i] - s).abs() < 1e-14);
             }
+        }
+    }
+
+    #[test]
+    fn add_gram_matches_the_general_product_in_both_triangles() {
+        let (k, m) = (7, 4);
+        let a: Vec<f64> = (0..k * m).map(|i| (i as f64 * 1.3).sin()).collect();
+        let full = gemm_tn(k, m, m, &a, &a);
+        let mut out: Vec<f64> = (0..m * m).map(|i| i as f64).collect();
+        add_gram(k, m, -2.0, &a, &mut out);
+        for (i, (o, f)) in out.iter().zip(&full).enumerate() {
+            let expected = i as f64 - 2.0 * f;
+            assert!((o - expected).abs() < 1e-13, "entry {i}: {o} vs {expected}");
         }
     }
 
