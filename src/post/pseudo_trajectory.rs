@@ -252,6 +252,10 @@ pub struct PseudoTrajectory {
     /// last bits); the interval between the two is what can be said.
     pub alpha_stable: Found,
     pub sign_changes: usize,
+    /// The periods the bisections for alpha_sat and alpha_stable evaluated, by amplitude:
+    /// where the mean damping was found to cross zero (between two grid amplitudes it can
+    /// jump, so the sweep's line does not show the crossing).
+    pub refinement: Vec<Period>,
     /// The pseudo stability diagram: the period at the diagram's amplitude.
     pub diagram: Period,
     pub linearizations: usize,
@@ -488,6 +492,7 @@ pub fn pseudo_trajectory(
         .filter(|w| (w[0].mean_damping_ratio < 0.0) != (w[1].mean_damping_ratio < 0.0))
         .count();
     let first_crossing = sweep.iter().position(crosses);
+    let mut refinement = Vec::new();
     let alpha_stable = match sweep
         .iter()
         .rposition(|p| p.mean_damping_ratio.is_nan() || p.mean_damping_ratio < 0.0)
@@ -498,9 +503,13 @@ pub fn pseudo_trajectory(
         Some(j) if Some(j + 1) == first_crossing => alpha_sat,
         Some(j) => {
             let (lo, hi) = (&sweep[j], &sweep[j + 1]);
-            bisect(lo, hi, tol, &mut evaluate, crosses)?.0
+            let (found, periods) = bisect(lo, hi, tol, &mut evaluate, crosses)?;
+            refinement.extend(periods);
+            found
         }
     };
+    refinement.extend(near_sat.iter().cloned());
+    refinement.sort_by(|a, b| a.alpha.total_cmp(&b.alpha));
     // The diagram at alpha_sat: the period the refinement evaluated within the tolerance of
     // it, when there is one (one period fewer), else a new one.
     let at = settings.diagram_alpha.or(alpha_sat.alpha()).unwrap_or(b);
@@ -530,6 +539,7 @@ pub fn pseudo_trajectory(
         alpha_sat,
         alpha_stable,
         sign_changes,
+        refinement,
         diagram,
         linearizations: count,
         cost,

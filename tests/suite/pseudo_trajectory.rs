@@ -241,6 +241,32 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
             a.diagram.alpha
         ));
     }
+    // The periods kept (the sweep's and the bisection's, which the figure draws) straddle
+    // alpha_sat within the tolerance: the nearest below decays on average, the nearest above
+    // grows.
+    let kept = || a.sweep.iter().chain(&a.refinement);
+    let below = kept()
+        .filter(|p| p.alpha < sat)
+        .max_by(|x, y| x.alpha.total_cmp(&y.alpha));
+    let above = kept()
+        .filter(|p| p.alpha > sat)
+        .min_by(|x, y| x.alpha.total_cmp(&y.alpha));
+    let straddles = match (below, above) {
+        (Some(lo), Some(hi)) => {
+            lo.mean_damping_ratio < 0.0
+                && hi.mean_damping_ratio >= 0.0
+                && hi.alpha / lo.alpha <= (1.0 + settings.tolerance) * 1.000_001
+        }
+        _ => false,
+    };
+    if !straddles {
+        return Err(format!(
+            "the periods kept do not straddle alpha_sat {sat}: {:?}",
+            kept()
+                .map(|p| (p.alpha, p.mean_damping_ratio))
+                .collect::<Vec<_>>()
+        ));
+    }
     if crit.is_nan() || sat.is_nan() || crit >= sat {
         return Err(format!("alpha_crit {crit} not below alpha_sat {sat}"));
     }

@@ -66,6 +66,19 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
     for (name, values, units) in tables {
         file.write_table(&format!("{m}/sweep/{name}"), &values, units)?;
     }
+    let refined = |f: &dyn Fn(&Period) -> f64| t.refinement.iter().map(f).collect::<Vec<f64>>();
+    let refinement: [(&str, Vec<f64>, &str); 3] = [
+        ("alpha", refined(&|p| p.alpha), "m"),
+        (
+            "mean_damping_ratio",
+            refined(&|p| p.mean_damping_ratio),
+            "1",
+        ),
+        ("unstable_fraction", refined(&|p| p.unstable_fraction), "1"),
+    ];
+    for (name, values, units) in refinement {
+        file.write_table(&format!("{m}/refinement/{name}"), &values, units)?;
+    }
     let d = &t.diagram;
     let (re, im): (Vec<f64>, Vec<f64>) = d.eigenvalue.iter().copied().unzip();
     file.write_table(&format!("{m}/diagram/re_s"), &re, "1/s; per phase")?;
@@ -154,17 +167,27 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         t.diagram.eigenvalue.len()
     );
     let zeta: Vec<f64> = t.sweep.iter().map(|p| p.mean_damping_ratio).collect();
-    let yz = padded(
-        range(zeta.iter().copied()).0,
-        range(zeta.iter().copied()).1.max(0.0),
-        0.08,
-    );
+    let refined = |f: fn(&Period) -> f64| -> Vec<(f64, f64)> {
+        t.refinement
+            .iter()
+            .map(|p| (p.alpha.log10(), f(p)))
+            .collect()
+    };
+    let refined_zeta = refined(|p| p.mean_damping_ratio);
+    let all_zeta = || zeta.iter().copied().chain(refined_zeta.iter().map(|p| p.1));
+    let yz = padded(range(all_zeta()).0, range(all_zeta()).1.max(0.0), 0.08);
     let mut damping = Figure::new(1200, 320, x, yz, &title, xl, "mean damping ratio (1)").log_x();
     damping.hline(0.0, BLACK);
     let points: Vec<(f64, f64)> = log.iter().copied().zip(zeta).collect();
     damping.line(&points, BLUE);
     for &(a, z) in &points {
         damping.marker(a, z, BLUE, 2);
+    }
+    // The bisections' periods: where the crossing was found, off the sweep's line.
+    let bisected = "bisection periods";
+    if !t.refinement.is_empty() {
+        damping.markers(refined_zeta.clone(), PALETTE[5], 3);
+        damping.legend(0, bisected, PALETTE[5]);
     }
     marks(&mut damping);
 
@@ -184,6 +207,10 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
         .zip(t.sweep.iter().map(|p| p.unstable_fraction))
         .collect();
     fraction.line(&points, BLUE);
+    if !t.refinement.is_empty() {
+        fraction.markers(refined(|p| p.unstable_fraction), PALETTE[5], 3);
+        fraction.legend(0, bisected, PALETTE[5]);
+    }
     marks(&mut fraction);
 
     let lo: Vec<f64> = t
