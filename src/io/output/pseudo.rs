@@ -30,11 +30,16 @@ pub fn write_pseudo(
     Ok(())
 }
 
+/// One figure per period.
+fn values(periods: &[Period], f: &dyn Fn(&Period) -> f64) -> Vec<f64> {
+    periods.iter().map(f).collect()
+}
+
 fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), WriteError> {
     let t = &s.trajectory;
     let m = format!("{g}/{}", t.name);
     let sweep = &t.sweep;
-    let column = |f: &dyn Fn(&Period) -> f64| sweep.iter().map(f).collect::<Vec<f64>>();
+    let column = |f: &dyn Fn(&Period) -> f64| values(sweep, f);
     let span = |p: &Period, highest: bool| {
         let f = p.frequencies_hz().into_iter().filter(|x| x.is_finite());
         if highest {
@@ -66,7 +71,7 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
     for (name, values, units) in tables {
         file.write_table(&format!("{m}/sweep/{name}"), &values, units)?;
     }
-    let refined = |f: &dyn Fn(&Period) -> f64| t.refinement.iter().map(f).collect::<Vec<f64>>();
+    let refined = |f: &dyn Fn(&Period) -> f64| values(&t.refinement, f);
     let refinement: [(&str, Vec<f64>, &str); 3] = [
         ("alpha", refined(&|p| p.alpha), "m"),
         (
@@ -186,7 +191,7 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
     // The bisections' periods: where the crossing was found, off the sweep's line.
     let bisected = "bisection periods";
     if !t.refinement.is_empty() {
-        damping.markers(refined_zeta.clone(), PALETTE[5], 3);
+        damping.markers(refined_zeta, PALETTE[5], 3);
         damping.legend(0, bisected, PALETTE[5]);
     }
     marks(&mut damping);
