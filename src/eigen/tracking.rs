@@ -83,6 +83,51 @@ pub fn pair_modes(
     out
 }
 
+/// Whether two eigenvalues form a flutter (mode-coupling) pair: locked to one frequency and
+/// split in their real parts, both by the cluster spacing. (A doublet of the disc lies
+/// within it, a crossing of two modes is split in frequency.)
+pub fn flutter_pair(a: Complex, b: Complex) -> bool {
+    let tolerance = CLUSTER * a.0.hypot(a.1).max(b.0.hypot(b.1));
+    (a.1 - b.1).abs() <= tolerance && (a.0 - b.0).abs() > tolerance
+}
+
+/// The MAC with a member before the step above which a mode outside the tracked pair counts
+/// as the member's continuation too: the two halves of a pair born at a coalescence inside
+/// the step (on the brake's C35 at 4.6 um, 0.56 and 0.54) each carry part of the member.
+const INHERITS: f64 = 0.25;
+
+/// The mode's coupling pair after a step: `chosen[i]` is the continuation (index into
+/// `next`) of `previous[i]`. Where the contact state decouples the pair, its two members
+/// go on as separate modes, and one of them may couple with a third mode. Both halves of
+/// that new flutter pair continue the member (they are born together at the coalescence,
+/// either may be "the mode", as at the pair's own split), so the pair tracked becomes that
+/// one: the member's continuation and the mode outside the pair (a flutter partner of it
+/// with MAC >= INHERITS to the member) replace the members. Tracking one half only lost the
+/// unstable one and made the mean damping depend on the phase where the period starts:
+/// C35 at 4.6 um, 1 vs 2 ranks whose psi differ in sign, +3.3e-4 vs -7.8e-3. Unchanged
+/// while the tracked members are themselves a flutter pair, or none couples.
+pub fn coupling_pair(
+    previous: &[DenseEigenpair],
+    next: &[DenseEigenpair],
+    chosen: &[usize],
+) -> Vec<usize> {
+    for (i, &j) in chosen.iter().enumerate() {
+        let s = next[j].0;
+        if chosen.iter().any(|&o| o != j && flutter_pair(s, next[o].0)) {
+            continue;
+        }
+        let partner = (0..next.len())
+            .filter(|k| !chosen.contains(k) && flutter_pair(s, next[*k].0))
+            .map(|k| (mac(&previous[i].1, &next[k].1), k))
+            .filter(|&(m, _)| m >= INHERITS)
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((_, k)) = partner {
+            return vec![j, k];
+        }
+    }
+    chosen.to_vec()
+}
+
 /// How many eigenvalues beyond the tracked pair [`near_pairs`] converges, first and at most:
 /// more reach farther from the shift, so that a larger change between phases is still
 /// proven to be the one the full pairing would choose.
@@ -415,6 +460,51 @@ mod tests {
                 ),
             }
         }
+    }
+
+    /// The coalescence found on the brake's C35 (4.6 um, phase 11 of 32), in four shapes:
+    /// the tracked pair has decoupled into a (e0) and b (e1); within the step a couples with
+    /// a third mode c (e2) into a flutter pair whose halves are (e0 +- e2)/sqrt(2), each with
+    /// MAC 1/2 to a. The pairing continues a by the stable half and b by itself; the pair
+    /// tracked becomes the new flutter pair. Not when the members already form one, nor for
+    /// a doublet, a mode split in frequency, or one that carries nothing of the member.
+    #[test]
+    fn a_member_coupling_with_a_third_mode_brings_its_flutter_partner_into_the_pair() {
+        let n = 4;
+        let half = |sign: f64| -> Vec<Complex> {
+            let r = std::f64::consts::FRAC_1_SQRT_2;
+            vec![(r, 0.0), (0.0, 0.0), (sign * r, 0.0), (0.0, 0.0)]
+        };
+        let previous = vec![
+            ((-12.9, 17862.6), unit(0, n)),
+            ((-13.2, 18247.3), unit(1, n)),
+        ];
+        let next = vec![
+            ((-73.7, 17820.6), half(1.0)),
+            ((-15.2, 18108.8), unit(1, n)),
+            ((53.4, 17820.0), half(-1.0)),
+            ((-9.0, 19300.0), unit(3, n)),
+        ];
+        let chosen: Vec<usize> = pair_modes(&previous, &next)
+            .into_iter()
+            .map(|c| c.unwrap().0)
+            .collect();
+        assert_eq!(chosen, vec![0, 1]);
+        assert_eq!(coupling_pair(&previous, &next, &chosen), vec![0, 2]);
+        // The tracked members are the flutter pair already: unchanged.
+        let pair = vec![next[0].clone(), next[2].clone()];
+        let mut with_copy = next.clone();
+        with_copy.push(((60.0, 17820.3), half(-1.0)));
+        assert_eq!(coupling_pair(&pair, &with_copy, &[0, 2]), vec![0, 2]);
+        // A partner within the doublet spacing, split in frequency, or orthogonal: unchanged.
+        for other in [(-73.6, 17820.5), (53.4, 17700.0)] {
+            let mut modes = next.clone();
+            modes[2].0 = other;
+            assert_eq!(coupling_pair(&previous, &modes, &chosen), vec![0, 1]);
+        }
+        let mut orthogonal = next.clone();
+        orthogonal[2].1 = unit(2, n);
+        assert_eq!(coupling_pair(&previous, &orthogonal, &chosen), vec![0, 1]);
     }
 
     /// A 40-mode flutter chain, perturbed from one point to the next by a growing change of

@@ -8,6 +8,7 @@ pub mod dynamic_stability;
 pub mod limit_cycle;
 pub mod modal_energy;
 pub mod pseudo_contact;
+pub mod pseudo_period;
 pub mod pseudo_trajectory;
 pub mod spectrum;
 pub mod states;

@@ -56,6 +56,26 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
             .collect()
     }
 
+    /// The point where the relative displacement of the observed shape is largest over all
+    /// ranks: that displacement, and the point's local index on the rank that owns it. Values
+    /// within 1e-9 of the largest tie, and a tie goes to the lowest point id, so that all
+    /// ranks, and any number of them, agree.
+    ///
+    /// # Collective
+    fn largest_point(&self, channels: &[Vec<Complex>; 4]) -> (f64, Option<usize>) {
+        let relative = Self::relative(channels);
+        let mut largest = [relative.iter().copied().fold(0.0f64, f64::max)];
+        max_in_place(self.comm, &mut largest);
+        let tied = |r: f64| r >= (1.0 - 1e-9) * largest[0];
+        let mine = (0..relative.len())
+            .filter(|&k| tied(relative[k]))
+            .min_by_key(|&k| self.contact.local[k]);
+        let mut lowest = [mine.map_or(f64::NEG_INFINITY, |k| -(self.contact.local[k] as f64))];
+        max_in_place(self.comm, &mut lowest);
+        let owned = mine.filter(|&k| -(self.contact.local[k] as f64) == lowest[0]);
+        (largest[0], owned)
+    }
+
     /// The observation of `psi` (cached: one mode's sweep asks for the same psi each time).
     ///
     /// # Collective
@@ -65,23 +85,7 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
             return;
         }
         let channels = self.stability.projection.observe(psi);
-        let relative = Self::relative(&channels);
-        let local_max = relative
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1));
-        let mut global = [local_max.map_or(f64::NEG_INFINITY, |m| *m.1)];
-        max_in_place(self.comm, &mut global);
-        // The owner of the largest value; on a tie, the lowest point id (all ranks agree).
-        let mine = local_max
-            .filter(|m| *m.1 == global[0])
-            .map(|m| m.0)
-            .map(|k| (k, self.contact.local[k]));
-        let mut lowest = [mine.map_or(f64::NEG_INFINITY, |(_, id)| -(id as f64))];
-        max_in_place(self.comm, &mut lowest);
-        let sample = mine
-            .filter(|(_, id)| -(*id as f64) == lowest[0])
-            .map(|(k, _)| k);
+        let (_, sample) = self.largest_point(&channels);
         *cache = Some(Observation {
             psi: psi.to_vec(),
             channels,
@@ -91,11 +95,27 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
 }
 
 impl PseudoSystem for ContactPseudoSystem<'_, '_> {
-    fn contact_amplitude(&self, y: &[Complex]) -> Result<f64, String> {
+    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, String> {
         let channels = self.stability.projection.observe(y);
-        let mut largest = [Self::relative(&channels).into_iter().fold(0.0f64, f64::max)];
-        max_in_place(self.comm, &mut largest);
-        Ok(largest[0])
+        let (largest, owned) = self.largest_point(&channels);
+        // The phase of the largest of gap and slips at that point, from its owner.
+        let mut phase = [0.0, 0.0];
+        if let Some(k) = owned {
+            let abs = |c: Complex| c.0.hypot(c.1);
+            let at = (0..3).map(|j| channels[j][k]).fold((0.0, 0.0), |a, c| {
+                if abs(c) > abs(a) {
+                    c
+                } else {
+                    a
+                }
+            });
+            let r = abs(at);
+            if r > 0.0 {
+                phase = [at.0 / r, at.1 / r];
+            }
+        }
+        sum_in_place(self.comm, &mut phase);
+        Ok((largest * phase[0], largest * phase[1]))
     }
 
     fn linearize(

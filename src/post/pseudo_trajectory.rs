@@ -19,12 +19,9 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::eigen::complex_modes::{
-    damping_ratio, frequency_hz, solve_dense, Complex, DenseEigenpair,
-};
-use crate::eigen::tracking::{
-    nearest, pair_modes, pairs_from_all_eigenvalues, pairs_near_tracked, HINTS,
-};
+use super::pseudo_period::period;
+pub use super::pseudo_period::{Cost, Period, Sampling, Start};
+use crate::eigen::complex_modes::{Complex, DenseEigenpair};
 
 /// `[post.pseudo_trajectory]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -47,6 +44,13 @@ pub struct PseudoTrajectorySettings {
     /// Phases per period.
     #[serde(default = "default_phases")]
     pub phases: usize,
+    /// How often the step between two phases may be halved where the mode is not followed
+    /// with MAC >= 0.9 across it (the points between carry the tracking, not the
+    /// statistics). 0 by default: on the small brake's C35 (250 modes) 3 halvings change
+    /// nothing where the period closes and cost 4x; where it does not, they give another
+    /// answer, as more phases do, which is what shows the answer there is not resolved.
+    #[serde(default = "default_halvings")]
+    pub halvings: usize,
     /// Relative tolerance of the bisections for alpha_crit and alpha_sat. 1 % by default:
     /// what the phase count leaves is larger (the brake's C35: alpha_sat 1.94e-5 m at 32
     /// phases, 2.03e-5 at 64, 1.52e-5 at 16), and each halving of it costs one period.
@@ -62,6 +66,9 @@ fn default_alphas() -> usize {
 }
 fn default_phases() -> usize {
     32
+}
+fn default_halvings() -> usize {
+    0
 }
 fn default_tolerance() -> f64 {
     1e-2
@@ -80,6 +87,12 @@ impl PseudoTrajectorySettings {
             return Err(format!(
                 "{key}': alphas = {} and phases = {}: need at least 2 and 4",
                 self.alphas, self.phases
+            ));
+        }
+        if self.halvings > 8 {
+            return Err(format!(
+                "{key}.halvings' = {}: at most 8 (a step of 1/256 of the phase spacing); raise phases instead",
+                self.halvings
             ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 0.5) {
@@ -148,8 +161,13 @@ pub struct Linearized {
 /// A model along which pseudo trajectories are linearized (collective calls where the model
 /// is distributed: every rank calls with the same arguments).
 pub trait PseudoSystem {
-    /// The largest relative displacement at a contact point of the shape with coordinates y.
-    fn contact_amplitude(&self, y: &[Complex]) -> Result<f64, String>;
+    /// The factor c of psi = y / c for the shape with coordinates y: |c| is the largest
+    /// relative displacement at a contact point, and its phase makes the largest of gap and
+    /// slips at that point real and positive in psi. So phase 0 is the same instant of the
+    /// motion whatever the phase of y, which the eigensolver leaves to the signs of the real
+    /// modes (1 and 2 ranks chose opposite ones for the brake's C35 at 250 modes, and the
+    /// pseudo trajectory's statistics can depend on the phase where a period starts).
+    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, String>;
     /// The tangent at q_static + Re(alpha psi e^{i theta}), qdot = Re(i omega alpha psi
     /// e^{i theta}), psi given by its coordinates.
     fn linearize(
@@ -162,56 +180,6 @@ pub trait PseudoSystem {
     /// Contact-law scale of the static state (m): the pressure-weighted mean of p / k_c over
     /// the points in contact (1 / lambda for the exponential law).
     fn gap_scale(&self) -> f64;
-}
-
-/// The mode followed over one period at one amplitude.
-#[derive(Debug, Clone)]
-pub struct Period {
-    pub alpha: f64,
-    /// The mode's eigenvalue at each phase (NaN where it was lost).
-    pub eigenvalue: Vec<Complex>,
-    /// The smallest MAC between successive phases.
-    pub min_mac: f64,
-    pub unstable_fraction: f64,
-    pub mean_damping_ratio: f64,
-    /// Open / stick / slide fractions of all contact points, per phase.
-    pub fractions: Vec<[f64; 3]>,
-    pub sample: Vec<u8>,
-    /// The mode and its partner at phase 0: where the next amplitude's tracking starts.
-    start: Vec<DenseEigenpair>,
-    pub cost: Cost,
-}
-
-/// Where a study's time goes: the linearizations (contact laws and the projection of the
-/// tangent on the modes) and the eigenpairs, near the tracked pair or by the full dense solve.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Cost {
-    pub linearize_seconds: f64,
-    pub near_shift_seconds: f64,
-    pub dense_seconds: f64,
-    /// Phases whose eigenpairs needed the full dense solve (see [`pairs_near_tracked`]).
-    pub dense_solves: usize,
-}
-
-impl std::ops::AddAssign for Cost {
-    fn add_assign(&mut self, other: Cost) {
-        self.linearize_seconds += other.linearize_seconds;
-        self.near_shift_seconds += other.near_shift_seconds;
-        self.dense_seconds += other.dense_seconds;
-        self.dense_solves += other.dense_solves;
-    }
-}
-
-impl Period {
-    pub fn frequencies_hz(&self) -> Vec<f64> {
-        self.eigenvalue.iter().map(|&s| frequency_hz(s)).collect()
-    }
-    pub fn damping_ratios(&self) -> Vec<f64> {
-        self.eigenvalue.iter().map(|&s| damping_ratio(s)).collect()
-    }
-    fn has_stable_phase(&self) -> bool {
-        self.unstable_fraction < 1.0
-    }
 }
 
 /// A bisection's result: the amplitude, and whether the sweep bracketed it (else it lies
@@ -239,8 +207,8 @@ pub struct PseudoTrajectory {
     pub name: String,
     pub nominal: Complex,
     pub psi: Vec<Complex>,
-    /// psi = y / scale for the unit-norm coordinates y of the complex-mode solver.
-    pub scale: f64,
+    /// psi = y / normalization for the unit-norm coordinates y of the complex-mode solver.
+    pub normalization: Complex,
     pub sweep: Vec<Period>,
     pub alpha_crit: Found,
     pub alpha_sat: Found,
@@ -263,106 +231,6 @@ pub struct PseudoTrajectory {
     pub seconds: f64,
 }
 
-/// Follows the mode and its coupling partner over one period at `alpha`, starting from
-/// `start` (the pair at phase 0 of a nearby amplitude); `near`: the eigenpairs near the pair
-/// by shift-invert where that provably gives the same pairing ([`pairs_near_tracked`]), else
-/// (and always without `near`) the full dense solve. Where the pair splits (the contact state
-/// decouples it) the two continuations have nearly the same shape and either may be "the mode": the pair's least stable member is taken, a continuous function of the state
-/// whichever member the MAC pairing follows (so the mean over the period is continuous in
-/// alpha and a bisection on it well posed). `until_stable`: stop at the first stable phase
-/// (all the bisection for alpha_crit asks of a period that has one; the statistics then
-/// cover the phases evaluated).
-#[allow(clippy::too_many_arguments)] // the period's definition and how its modes are solved
-fn period(
-    system: &dyn PseudoSystem,
-    psi: &[Complex],
-    omega: f64,
-    alpha: f64,
-    phases: usize,
-    start: &[DenseEigenpair],
-    margin: f64,
-    near: bool,
-    until_stable: bool,
-) -> Result<Period, String> {
-    let m = psi.len();
-    let mut current = start.to_vec();
-    // The eigenpairs found near the pair at the previous phase: the next phase's start block.
-    let mut hints: Vec<DenseEigenpair> = Vec::new();
-    let mut out = Period {
-        alpha,
-        eigenvalue: Vec::with_capacity(phases),
-        min_mac: 1.0,
-        unstable_fraction: 0.0,
-        mean_damping_ratio: 0.0,
-        fractions: Vec::with_capacity(phases),
-        sample: Vec::with_capacity(phases),
-        start: start.to_vec(),
-        cost: Cost::default(),
-    };
-    for k in 0..phases {
-        let theta = 2.0 * std::f64::consts::PI * k as f64 / phases as f64;
-        let clock = Instant::now();
-        let lin = system.linearize(psi, omega, alpha, theta)?;
-        out.cost.linearize_seconds += clock.elapsed().as_secs_f64();
-        let clock = Instant::now();
-        let found = if near {
-            pairs_near_tracked(m, &lin.kp, &lin.cp, &current, &hints)?
-        } else {
-            None
-        };
-        out.cost.near_shift_seconds += clock.elapsed().as_secs_f64();
-        let pairs = match found {
-            Some(pairs) => pairs,
-            None => {
-                let clock = Instant::now();
-                let pairs = if near {
-                    pairs_from_all_eigenvalues(m, &lin.kp, &lin.cp, &current)?
-                } else {
-                    solve_dense(m, &lin.kp, &lin.cp)?
-                };
-                out.cost.dense_seconds += clock.elapsed().as_secs_f64();
-                out.cost.dense_solves += 1;
-                pairs
-            }
-        };
-        hints = nearest(&pairs, &current, HINTS);
-        out.fractions.push(lin.fractions);
-        out.sample.push(lin.sample);
-        let next: Option<Vec<(usize, f64)>> = pair_modes(&current, &pairs).into_iter().collect();
-        match next {
-            Some(next) => {
-                for &(_, mac) in &next {
-                    out.min_mac = out.min_mac.min(mac);
-                }
-                current = next.iter().map(|&(j, _)| pairs[j].clone()).collect();
-                let least_stable = current
-                    .iter()
-                    .map(|p| p.0)
-                    .min_by(|a, b| damping_ratio(*a).total_cmp(&damping_ratio(*b)))
-                    .unwrap_or((f64::NAN, f64::NAN));
-                out.eigenvalue.push(least_stable);
-                if until_stable && damping_ratio(least_stable) >= -margin {
-                    break;
-                }
-            }
-            None => {
-                out.min_mac = f64::NAN;
-                out.eigenvalue.push((f64::NAN, f64::NAN));
-            }
-        }
-        if k == 0 {
-            out.start = current.clone();
-        }
-    }
-    let zeta = out.damping_ratios();
-    let evaluated = zeta.len() as f64;
-    // A lost phase counts as unstable and makes the mean NaN: nothing is concluded from it.
-    out.unstable_fraction =
-        zeta.iter().filter(|z| z.is_nan() || **z < -margin).count() as f64 / evaluated;
-    out.mean_damping_ratio = zeta.iter().sum::<f64>() / evaluated;
-    Ok(out)
-}
-
 /// Log-spaced amplitudes over `[a, b]`.
 pub fn log_space(a: f64, b: f64, n: usize) -> Vec<f64> {
     (0..n)
@@ -379,14 +247,14 @@ fn bisect(
     lo: &Period,
     hi: &Period,
     tolerance: f64,
-    mut evaluate: impl FnMut(f64, &[DenseEigenpair]) -> Result<Period, String>,
+    mut evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, String>,
     crosses: impl Fn(&Period) -> bool,
 ) -> Result<(Found, Vec<Period>), String> {
     let (mut lo, mut hi_alpha) = (lo.clone(), hi.alpha);
     let mut evaluated = Vec::new();
     while hi_alpha / lo.alpha > 1.0 + tolerance {
         let mid = (lo.alpha * hi_alpha).sqrt();
-        let p = evaluate(mid, &lo.start)?;
+        let p = evaluate(mid, lo.start())?;
         if crosses(&p) {
             hi_alpha = mid;
         } else {
@@ -407,7 +275,7 @@ fn bisect(
 fn bracket_and_bisect(
     sweep: &[Period],
     tolerance: f64,
-    evaluate: impl FnMut(f64, &[DenseEigenpair]) -> Result<Period, String>,
+    evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, String>,
     crosses: impl Fn(&Period) -> bool,
 ) -> Result<(Found, Vec<Period>), String> {
     match sweep.iter().position(&crosses) {
@@ -444,47 +312,63 @@ pub fn pseudo_trajectory(
         .chain(partner(nominal, index))
         .map(|k| nominal[k].clone())
         .collect();
-    let scale = system.contact_amplitude(y)?;
+    let normalization = system.contact_normalization(y)?;
+    let scale = normalization.0.hypot(normalization.1);
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(format!(
             "{name} does not move the contact points (contact amplitude {scale:.3e}): no pseudo trajectory"
         ));
     }
-    let psi: Vec<Complex> = y.iter().map(|&(r, i)| (r / scale, i / scale)).collect();
+    let (c, d) = (normalization.0 / scale, -normalization.1 / scale);
+    let psi: Vec<Complex> = y
+        .iter()
+        .map(|&(r, i)| ((r * c - i * d) / scale, (r * d + i * c) / scale))
+        .collect();
     let omega = s.1;
     let [a, b] = settings.alpha_range.unwrap_or_else(|| {
         let g = system.gap_scale();
         [1e-3 * g, 10.0 * g]
     });
-    let phases = settings.phases;
+    let sampling = Sampling {
+        phases: settings.phases,
+        halvings: settings.halvings,
+    };
     let (mut count, mut cost) = (0, Cost::default());
-    let mut run = |alpha: f64, start: &[DenseEigenpair], until_stable: bool| {
+    let mut run = |alpha: f64, start: Start<'_>, until_stable: bool| {
         let p = period(
             system,
             &psi,
             omega,
             alpha,
-            phases,
+            sampling,
             start,
             margin,
             true,
             until_stable,
         )?;
-        count += p.eigenvalue.len();
+        count += p.linearizations();
         cost += p.cost;
         Ok::<Period, String>(p)
     };
     let mut sweep: Vec<Period> = Vec::with_capacity(settings.alphas);
+    let nominal_start = Start {
+        alpha: 0.0,
+        pair: &pair,
+    };
     for alpha in log_space(a, b, settings.alphas) {
-        let start = sweep.last().map_or(&pair, |p| &p.start).clone();
-        sweep.push(run(alpha, &start, false)?);
+        let p = run(
+            alpha,
+            sweep.last().map_or(nominal_start, Period::start),
+            false,
+        )?;
+        sweep.push(p);
     }
     let tol = settings.tolerance;
     // alpha_crit's refinement asks of a period only whether it has a stable phase (its
     // periods are not kept): each stops at its first.
-    let until_stable = |alpha: f64, start: &[DenseEigenpair]| run(alpha, start, true);
+    let until_stable = |alpha: f64, start: Start<'_>| run(alpha, start, true);
     let (alpha_crit, _) = bracket_and_bisect(&sweep, tol, until_stable, Period::has_stable_phase)?;
-    let mut evaluate = |alpha: f64, start: &[DenseEigenpair]| run(alpha, start, false);
+    let mut evaluate = |alpha: f64, start: Start<'_>| run(alpha, start, false);
     let crosses = |p: &Period| p.mean_damping_ratio >= 0.0;
     let (alpha_sat, mut near_sat) = bracket_and_bisect(&sweep, tol, &mut evaluate, crosses)?;
     let sign_changes = sweep
@@ -525,15 +409,14 @@ pub fn pseudo_trajectory(
         Some(p) => p,
         None => {
             let below = sweep.iter().rev().find(|p| p.alpha <= at);
-            let start = below.map_or(&pair, |p| &p.start).clone();
-            evaluate(at, &start)?
+            evaluate(at, below.map_or(nominal_start, Period::start))?
         }
     };
     Ok(PseudoTrajectory {
         name: name.to_string(),
         nominal: *s,
         psi,
-        scale,
+        normalization,
         sweep,
         alpha_crit,
         alpha_sat,
@@ -634,113 +517,6 @@ mod tests {
         let a = log_space(1e-3, 10.0, 5);
         assert!((a[0] - 1e-3).abs() < 1e-18 && (a[4] - 10.0).abs() < 1e-12);
         assert!((a[2] - 0.1).abs() < 1e-14);
-    }
-
-    /// A 40-mode chain whose neighbours couple through an antisymmetric (friction-like)
-    /// stiffness, and whose stiffness changes along the pseudo trajectory by
-    /// alpha (cos theta S + sin theta A), S symmetric, A antisymmetric: eigenvalues move by
-    /// several per cent over a period at alpha = 1, through close modes.
-    struct Chain {
-        m: usize,
-        k0: Vec<f64>,
-        c: Vec<f64>,
-    }
-
-    impl Chain {
-        fn new(m: usize) -> Self {
-            let mut k0 = vec![0.0; m * m];
-            let mut c = vec![0.0; m * m];
-            for i in 0..m {
-                // Pairs of close modes (1, 1.01, 2, 2.01, ...) x 1000 rad/s.
-                let w = 1e3 * ((i / 2 + 1) as f64 + 0.01 * (i % 2) as f64);
-                k0[i * m + i] = w * w;
-                c[i * m + i] = 2.0 * 0.005 * w;
-                if i + 1 < m {
-                    k0[(i + 1) * m + i] = 0.2 * w * w;
-                    k0[i * m + i + 1] = -0.2 * w * w;
-                }
-            }
-            Chain { m, k0, c }
-        }
-    }
-
-    impl PseudoSystem for Chain {
-        fn contact_amplitude(&self, _: &[Complex]) -> Result<f64, String> {
-            Ok(1.0)
-        }
-        fn linearize(
-            &self,
-            _: &[Complex],
-            _: f64,
-            alpha: f64,
-            theta: f64,
-        ) -> Result<Linearized, String> {
-            let m = self.m;
-            let mut kp = self.k0.clone();
-            for j in 0..m {
-                for i in 0..m {
-                    let scale = (self.k0[i * m + i] * self.k0[j * m + j]).sqrt();
-                    let sym = 0.03 * ((1 + i + j) as f64).sin();
-                    let anti = 0.02 * ((i as f64 - j as f64) * 0.7).sin();
-                    kp[j * m + i] += alpha * scale * (theta.cos() * sym + theta.sin() * anti);
-                }
-            }
-            Ok(Linearized {
-                kp,
-                cp: self.c.clone(),
-                fractions: [0.0, 0.0, 1.0],
-                sample: 2,
-            })
-        }
-        fn gap_scale(&self) -> f64 {
-            1.0
-        }
-    }
-
-    /// The pair followed through a period by shift-invert near it is the pair the full dense
-    /// solve follows: at every phase the same eigenvalue to 1e-9 (both converge to round-off;
-    /// the iteration stops at a residual of 1e-13 ||A||), and the shift-invert does the work
-    /// at most phases (else the test would compare the full solve with itself).
-    #[test]
-    fn pair_tracked_near_its_shift_is_the_full_dense_solves_pair() {
-        let chain = Chain::new(48);
-        let m = chain.m;
-        let nominal = solve_dense(m, &chain.k0, &chain.c).unwrap();
-        let index = nominal
-            .iter()
-            .enumerate()
-            .min_by(|a, b| damping_ratio(a.1 .0).total_cmp(&damping_ratio(b.1 .0)))
-            .map(|(k, _)| k)
-            .unwrap();
-        let pair: Vec<DenseEigenpair> = std::iter::once(index)
-            .chain(partner(&nominal, index))
-            .map(|k| nominal[k].clone())
-            .collect();
-        let omega = nominal[index].0 .1;
-        let mut near_used = 0;
-        for alpha in [1e-6, 0.1, 0.5, 1.0] {
-            let run = |near| {
-                period(
-                    &chain, &pair[0].1, omega, alpha, 32, &pair, 0.0, near, false,
-                )
-            };
-            let (fast, full) = (run(true).unwrap(), run(false).unwrap());
-            assert_eq!(full.cost.dense_solves, 32);
-            near_used += 32 - fast.cost.dense_solves;
-            for (k, (a, b)) in fast.eigenvalue.iter().zip(&full.eigenvalue).enumerate() {
-                let d = (a.0 - b.0).hypot(a.1 - b.1) / b.0.hypot(b.1);
-                assert!(
-                    d <= 1e-9,
-                    "alpha {alpha}, phase {k}: {a:?} vs {b:?} ({d:.1e})"
-                );
-            }
-            let (zf, zd) = (fast.mean_damping_ratio, full.mean_damping_ratio);
-            assert!((zf - zd).abs() <= 1e-9 * zd.abs().max(1e-3), "{zf} vs {zd}");
-        }
-        assert!(
-            near_used >= 64,
-            "shift-invert used at {near_used} of 128 phases"
-        );
     }
 
     fn cmul(a: Complex, b: Complex) -> Complex {

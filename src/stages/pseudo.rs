@@ -260,7 +260,7 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             });
         write!(
             f,
-            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations, {:.2} s ({:.2} s linearizing, {:.2} s near the pair, {:.2} s in {} full dense solves)",
+            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations ({} between phases, where the tracking halved the step), {:.2} s ({:.2} s linearizing, {:.2} s near the pair, {:.2} s in {} full dense solves)",
             t.name,
             f_hz,
             damping_ratio(t.nominal),
@@ -269,6 +269,7 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             span.0,
             span.1,
             t.linearizations,
+            t.cost.between_phases,
             t.seconds,
             t.cost.linearize_seconds,
             t.cost.near_shift_seconds,
@@ -284,6 +285,22 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
                 f,
                 "; the mean damping changes sign {} times on the grid: {above}",
                 t.sign_changes
+            )?;
+        }
+        let open: Vec<f64> = t
+            .sweep
+            .iter()
+            .filter(|p| !p.closed)
+            .map(|p| p.alpha)
+            .collect();
+        if let Some(&first) = open.first() {
+            let sat_beyond = t.alpha_sat.alpha().is_some_and(|a| a > first);
+            write!(
+                f,
+                "; at {} of {} amplitudes (the first {first:.2e} m{}) the pair followed over the period does not come back to its start: there the statistics depend on the phase where the period starts, and are not resolved (raise phases or halvings)",
+                open.len(),
+                t.sweep.len(),
+                if sat_beyond { ", below alpha_sat" } else { "" }
             )?;
         }
         if let (Some(tr), Some(total)) = (&s.transient, r.transient_seconds) {

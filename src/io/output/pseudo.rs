@@ -48,7 +48,7 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
             f.fold(f64::INFINITY, f64::min)
         }
     };
-    let tables: [(&str, Vec<f64>, &str); 7] = [
+    let tables: [(&str, Vec<f64>, &str); 8] = [
         ("alpha", column(&|p| p.alpha), "m"),
         ("mean_damping_ratio", column(&|p| p.mean_damping_ratio), "1"),
         ("unstable_fraction", column(&|p| p.unstable_fraction), "1"),
@@ -58,6 +58,11 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
             "min_mac",
             column(&|p| p.min_mac),
             "MAC between successive phases",
+        ),
+        (
+            "closed",
+            column(&|p| f64::from(u8::from(p.closed))),
+            "1 where the pair tracked over the period came back to its start, else 0",
         ),
         (
             "sample_status",
@@ -72,7 +77,7 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
         file.write_table(&format!("{m}/sweep/{name}"), &values, units)?;
     }
     let refined = |f: &dyn Fn(&Period) -> f64| values(&t.refinement, f);
-    let refinement: [(&str, Vec<f64>, &str); 3] = [
+    let refinement: [(&str, Vec<f64>, &str); 4] = [
         ("alpha", refined(&|p| p.alpha), "m"),
         (
             "mean_damping_ratio",
@@ -80,6 +85,11 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
             "1",
         ),
         ("unstable_fraction", refined(&|p| p.unstable_fraction), "1"),
+        (
+            "closed",
+            refined(&|p| f64::from(u8::from(p.closed))),
+            "1 where the pair tracked over the period came back to its start, else 0",
+        ),
     ];
     for (name, values, units) in refinement {
         file.write_table(&format!("{m}/refinement/{name}"), &values, units)?;
@@ -101,6 +111,8 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
     file.set_number(&m, "alpha_stable_m", value(&t.alpha_stable))?;
     file.set_number(&m, "sign_changes", t.sign_changes as f64)?;
     file.set_number(&m, "linearizations", t.linearizations as f64)?;
+    file.set_number(&m, "between_phases", t.cost.between_phases as f64)?;
+    file.set_number(&m, "solves", t.cost.solves as f64)?;
     file.set_number(&m, "dense_solves", t.cost.dense_solves as f64)?;
     file.set_number(&m, "linearize_seconds", t.cost.linearize_seconds)?;
     file.set_number(&m, "near_shift_seconds", t.cost.near_shift_seconds)?;
