@@ -197,6 +197,18 @@ fn plot_amplitude(s: &PseudoStudy, output: &Path) -> Result<(), WriteError> {
     damping.hline(0.0, BLACK);
     let points: Vec<(f64, f64)> = log.iter().copied().zip(zeta).collect();
     damping.line(&points, BLUE);
+    // Where the pair followed over the period does not come back to its start: there the
+    // statistics depend on where the period starts (not resolved by the phases).
+    let open: Vec<(f64, f64)> = points
+        .iter()
+        .zip(&t.sweep)
+        .filter(|(_, p)| !p.closed)
+        .map(|(&xy, _)| xy)
+        .collect();
+    if !open.is_empty() {
+        damping.markers(open, PALETTE[6], 5);
+        damping.legend(0, "period not closed", PALETTE[6]);
+    }
     for &(a, z) in &points {
         damping.marker(a, z, BLUE, 2);
     }
