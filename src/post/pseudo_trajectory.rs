@@ -52,8 +52,8 @@ pub struct PseudoTrajectorySettings {
     #[serde(default = "default_halvings")]
     pub halvings: usize,
     /// Relative tolerance of the bisections for alpha_crit and alpha_sat. 1 % by default:
-    /// what the phase count leaves is larger (the brake's C35: alpha_sat 1.94e-5 m at 32
-    /// phases, 2.03e-5 at 64, 1.52e-5 at 16), and each halving of it costs one period.
+    /// what the phase count leaves is larger (the default scene's C35: alpha_sat 463 um at 32
+    /// phases, 21.5 um at 64 and 128), and each halving of it costs one period.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
     /// Amplitude (m) of the pseudo stability diagram; default alpha_sat (else the largest).
@@ -215,9 +215,9 @@ pub struct PseudoTrajectory {
     /// Where the mean damping stays non-negative up to the end of the sweep (the last
     /// crossing; the same as alpha_sat when it crosses once), and how often it changes sign
     /// on the sweep's grid. A mean damping that hovers near zero above alpha_sat (found on the
-    /// brake: within 4e-4 over a decade) makes the first crossing sensitive to round-off
-    /// (4.3e-6 and 2.1e-5 m for the same mode in two runs whose real modes differed in their
-    /// last bits); the interval between the two is what can be said.
+    /// brake: within 4e-4 over a decade) makes the first crossing sensitive to the phase count
+    /// (the default scene's C35: 463 um at 32 phases, 21.5 um at 64 and 128); the interval
+    /// between the two is what can be said.
     pub alpha_stable: Found,
     pub sign_changes: usize,
     /// The periods the bisections for alpha_sat and alpha_stable evaluated, by amplitude:
