@@ -297,7 +297,7 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
             let sat_beyond = t.alpha_sat.alpha().is_some_and(|a| a > first);
             write!(
                 f,
-                "; at {} of {} amplitudes (the first {first:.2e} m{}) the pair followed over the period does not come back to its start: there the statistics depend on the phase where the period starts, and are not resolved (raise phases or halvings)",
+                "; at {} of {} amplitudes (the first {first:.2e} m{}) the pair followed over the period does not come back to its start: there the statistics depend on the phase where the period starts, and are not resolved (raise phases)",
                 open.len(),
                 t.sweep.len(),
                 if sat_beyond { ", below alpha_sat" } else { "" }
