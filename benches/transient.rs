@@ -14,6 +14,7 @@
 //!
 //!   mpirun -n 2 target/release/deps/transient-* --dofs 600000 --modes 200 --steps 500
 
+use squeal::measure::nan_max;
 use std::time::Instant;
 
 use clap::Parser;
@@ -204,8 +205,8 @@ fn main() {
         let rt = read(&ref_dir, "transient/time");
         let rv = read(&ref_dir, "transient/sensors/pad/velocity");
         let rq = read(&ref_dir, "transient/braking_torque");
-        let vmax = rv.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let qmax = rq.iter().map(|q| (q - rq[0]).abs()).fold(0.0, f64::max);
+        let vmax = rv.iter().map(|v| v.abs()).fold(0.0, nan_max);
+        let qmax = rq.iter().map(|q| (q - rq[0]).abs()).fold(0.0, nan_max);
         say(&format!(
             "step size vs error: reduced {}-DOF brake over {} s, kick 1e-7 m on mode 2; reference h = {reference} us ({ref_seconds:.1} s); pad velocity up to {vmax:.2e} m/s, torque fluctuation up to {qmax:.2e} N m",
             args.study_dofs, args.study_time
@@ -225,9 +226,9 @@ fn main() {
                     break;
                 }
                 for c in 0..3 {
-                    ev = ev.max((v[3 * k + c] - rv[3 * j + c]).abs());
+                    ev = nan_max(ev, (v[3 * k + c] - rv[3 * j + c]).abs());
                 }
-                eq = eq.max((q[k] - rq[j]).abs());
+                eq = nan_max(eq, (q[k] - rq[j]).abs());
             }
             let tr = s.transient.as_ref().expect("transient ran");
             say(&format!(

@@ -12,6 +12,7 @@ pub mod fault;
 pub mod fem;
 pub mod io;
 pub mod la;
+pub mod measure;
 pub mod mesh;
 pub mod parallel;
 pub mod pipeline;

@@ -4,15 +4,44 @@
 use std::io::{IsTerminal, Write};
 use std::time::Instant;
 
-/// A person is watching: stdout is a terminal, TERM names one, and neither CI nor
-/// SQUEAL_PROGRESS=0 says otherwise (mpirun gives ranks a pseudo-terminal even when its own
-/// output goes to a file, so the terminal test alone is not enough).
+/// A person is watching: SQUEAL_PROGRESS=1 says so, SQUEAL_PROGRESS=0 or CI says not; otherwise
+/// the output must reach a terminal (and TERM name one). Under mpirun the rank's own stdout is
+/// no evidence (Open MPI gives ranks a pseudo-terminal even when mpirun's output goes to a file
+/// or a SLURM log), so there it is the launcher's stdout that must be a terminal.
 pub fn interactive() -> bool {
+    match std::env::var("SQUEAL_PROGRESS").as_deref() {
+        Ok("1") => return true,
+        Ok("0") => return false,
+        _ => {}
+    }
     let term_ok = std::env::var("TERM").is_ok_and(|t| !t.is_empty() && t != "dumb");
-    std::io::stdout().is_terminal()
-        && term_ok
-        && std::env::var_os("CI").is_none()
-        && std::env::var("SQUEAL_PROGRESS").map_or(true, |v| v != "0")
+    let launched_by_mpirun = ["OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some());
+    let to_terminal = if launched_by_mpirun {
+        launcher_stdout_is_terminal()
+    } else {
+        std::io::stdout().is_terminal()
+    };
+    to_terminal && term_ok && std::env::var_os("CI").is_none()
+}
+
+/// Whether the parent process (mpirun, or the daemon that started this rank) writes its stdout
+/// to a terminal; false when that cannot be told (no /proc, another user's process).
+fn launcher_stdout_is_terminal() -> bool {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return false;
+    };
+    // The fields after the command name (which is in parentheses and may hold spaces):
+    // state, then the parent's pid.
+    let after_name = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+    let Some(parent) = after_name.split_whitespace().nth(1) else {
+        return false;
+    };
+    std::fs::read_link(format!("/proc/{parent}/fd/1")).is_ok_and(|target| {
+        let target = target.to_string_lossy();
+        target.starts_with("/dev/pts/") || target.starts_with("/dev/tty")
+    })
 }
 
 pub struct Progress {

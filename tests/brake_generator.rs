@@ -8,6 +8,7 @@
 
 use squeal::fem::element::ElementKernel;
 use squeal::fem::shape::ElementKind;
+use squeal::measure::nan_max;
 use squeal::mesh::brake::{
     anchor, caliper, disc, element_size_for, generate, generate_with_size, pad, piston, BrakeSpec,
     Component, Side,
@@ -57,7 +58,7 @@ fn max_dtheta(spec: &BrakeSpec, name: &str, h: f64) -> f64 {
         _ => pad::grid(g, Side::Inner, h),
     };
     let (theta, _) = grid.axes[1].points();
-    theta.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max)
+    theta.windows(2).map(|w| w[1] - w[0]).fold(0.0, nan_max)
 }
 
 #[test]
@@ -233,11 +234,11 @@ fn assembled(mesh: &Mesh, clamps: &[squeal::mesh::Clamp]) -> (MapSink, MapSink) 
 }
 
 fn max_relative_difference(a: &MapSink, b: &MapSink) -> f64 {
-    let scale = a.0.values().fold(0.0_f64, |s, v| s.max(v.abs()));
+    let scale = a.0.values().fold(0.0_f64, |s, v| nan_max(s, v.abs()));
     assert_eq!(a.0.len(), b.0.len(), "different sparsity");
     a.0.iter()
         .map(|(key, v)| (v - b.0.get(key).copied().unwrap_or(f64::NAN)).abs() / scale)
-        .fold(0.0, f64::max)
+        .fold(0.0, nan_max)
 }
 
 #[test]

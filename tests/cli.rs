@@ -2,29 +2,36 @@
 //! the default scene completes and writes its results; bad input gives a non-zero exit and a
 //! message that names the file and the key, without hanging any rank.
 
+use squeal::measure::nan_max;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+use std::time::Duration;
+
+#[path = "support/launch.rs"]
+mod launch;
 
 fn squeal() -> &'static str {
     env!("CARGO_BIN_EXE_squeal")
 }
 
+/// Runs `squeal args...` on `ranks` ranks in `cwd`; a run that outlives the deadline is killed
+/// (mpirun and its ranks) and fails the test, never hangs it.
 fn mpirun(ranks: usize, args: &[&str], cwd: &Path) -> Output {
-    let have_mpirun = Command::new("mpirun").arg("--version").output().is_ok();
-    let mut cmd = if have_mpirun {
-        let mut c = Command::new("mpirun");
-        c.args(["-n", &ranks.to_string()]).arg(squeal());
-        c.env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-            .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-            .env("OMPI_MCA_rmaps_base_oversubscribe", "1");
-        c
-    } else {
-        Command::new(squeal())
+    let deadline = Duration::from_secs(600);
+    let run = launch::squeal_run(ranks, args, cwd, &[], deadline);
+    let Some(status) = run.status else {
+        panic!(
+            "squeal {args:?} on {ranks} ranks still ran after {} s: killed\n{}\n{}",
+            deadline.as_secs(),
+            run.stdout,
+            run.stderr
+        );
     };
-    cmd.args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("squeal runs")
+    Output {
+        status,
+        stdout: run.stdout.into_bytes(),
+        stderr: run.stderr.into_bytes(),
+    }
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -231,7 +238,7 @@ fn check_growth_into_saturation(results: &Path) {
         !saturated.is_empty() && saturated.iter().all(|a| a.is_finite()),
         "envelope after saturation: {saturated:?}"
     );
-    let largest = saturated.iter().copied().fold(0.0, f64::max);
+    let largest = saturated.iter().copied().fold(0.0, nan_max);
     assert!(
         amplitude > 0.0 && largest <= 2.0 * amplitude,
         "envelope up to {largest} N m after saturation vs saturated amplitude {amplitude} N m"
@@ -351,7 +358,7 @@ fn check_figures(results: &Path, at_least: usize) {
         let svg = std::fs::read_to_string(png.with_extension("svg"))
             .unwrap_or_else(|e| panic!("{name}: no SVG twin ({e})"));
         let texts = svg_texts(&svg);
-        let largest = texts.iter().map(|t| font_size(&t.0)).fold(0.0, f64::max);
+        let largest = texts.iter().map(|t| font_size(&t.0)).fold(0.0, nan_max);
         let title: Vec<&str> = texts
             .iter()
             .filter(|t| font_size(&t.0) == largest && !t.1.is_empty())

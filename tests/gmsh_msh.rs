@@ -30,63 +30,7 @@ fn materials(names: &[&str]) -> BTreeMap<String, Material> {
 
 /// Two unit cubes along x (physical volumes "disc" and "pad"), the x = 2 face as physical
 /// surface "end" (a quad), the x = 0 face nodes as physical surface "hub".
-const TWO_CUBES: &str = r#"$MeshFormat
-4.1 0 8
-$EndMeshFormat
-$PhysicalNames
-4
-2 10 "end"
-2 11 "hub"
-3 1 "disc"
-3 2 "pad"
-$EndPhysicalNames
-$Entities
-0 0 2 2
-1 2 0 0 2 1 1 1 10 0
-2 0 0 0 0 1 1 1 11 0
-1 0 0 0 1 1 1 1 1 0
-2 1 0 0 2 1 1 1 2 0
-$EndEntities
-$Nodes
-1 12 1 12
-3 1 0 12
-1
-2
-3
-4
-5
-6
-7
-8
-9
-10
-11
-12
-0 0 0
-1 0 0
-2 0 0
-0 1 0
-1 1 0
-2 1 0
-0 0 1
-1 0 1
-2 0 1
-0 1 1
-1 1 1
-2 1 1
-$EndNodes
-$Elements
-4 4 1 4
-3 1 5 1
-1 1 2 5 4 7 8 11 10
-3 2 5 1
-2 2 3 6 5 8 9 12 11
-2 1 3 1
-3 3 6 12 9
-2 2 3 1
-4 1 7 10 4
-$EndElements
-"#;
+const TWO_CUBES: &str = include_str!("data/seeds/two_cubes.msh");
 
 #[test]
 fn physical_groups_become_components_surfaces_and_node_sets() {

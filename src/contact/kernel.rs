@@ -249,6 +249,7 @@ pub fn add_tangent(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::measure::nan_max;
 
     fn rows(n: usize, seed: u64) -> PointRows {
         let mut s = seed;
@@ -339,11 +340,14 @@ mod tests {
                                 fd[i * n + j] = -(fp[i] - fm[i]) / (2.0 * h);
                             }
                         }
-                        let scale = matrix.iter().chain(&fd).fold(0.0f64, |m, x| m.max(x.abs()));
+                        let scale = matrix
+                            .iter()
+                            .chain(&fd)
+                            .fold(0.0f64, |m, x| nan_max(m, x.abs()));
                         let err = matrix
                             .iter()
                             .zip(&fd)
-                            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+                            .fold(0.0f64, |m, (a, b)| nan_max(m, (a - b).abs()));
                         // The linear law's kink and Coulomb's slip-speed kink are not
                         // differentiable: skip states sitting on them.
                         let on_kink =

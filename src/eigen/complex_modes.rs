@@ -14,6 +14,7 @@
 //! every eigenpair on the full model, ||(s^2 M + s C + K) psi|| / ((|s|^2 ||M|| + |s| ||C|| +
 //! ||K||) ||psi||) (infinity norms of the matrices, 2-norm of the vectors; PEP's definition).
 
+use crate::measure::nan_max;
 use std::f64::consts::PI;
 use std::time::Instant;
 
@@ -332,7 +333,7 @@ pub fn full<'p>(
             .iter()
             .take(2 * nev)
             .map(|&(r, i)| r.hypot(i))
-            .fold(0.0f64, f64::max);
+            .fold(0.0f64, nan_max);
         match wanted_radius {
             Some(w) if radius < w && nev < 4096 && sol.values.len() >= 2 * nev => {
                 // Not every eigenvalue below f_max is in yet: widen the search.
@@ -425,7 +426,7 @@ pub fn companion(m: usize, kp: &[f64], cp: &[f64]) -> (Vec<f64>, f64) {
     let n = 2 * m;
     let omega_r = (0..m)
         .map(|i| kp[i * m + i].abs())
-        .fold(0.0f64, f64::max)
+        .fold(0.0f64, nan_max)
         .sqrt()
         .max(1e-300);
     let mut a = vec![0.0; n * n];

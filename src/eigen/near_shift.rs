@@ -7,6 +7,7 @@
 //! every eigenvalue was found, so a caller can prove that a choice made among these eigenpairs
 //! is the one it would have made among all of them.
 
+use crate::measure::nan_max;
 use num_complex::Complex64;
 
 use super::complex_modes::{Complex, DenseEigenpair};
@@ -118,7 +119,7 @@ pub fn eigenpairs_near(
     let tracked = tracked.min(start.len());
     let omega_r = (0..m)
         .map(|i| kp[i * m + i].abs())
-        .fold(0.0f64, f64::max)
+        .fold(0.0f64, nan_max)
         .sqrt()
         .max(1e-300);
     let a = Companion::new(m, kp, cp, omega_r);

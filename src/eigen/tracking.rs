@@ -1,6 +1,7 @@
 //! Mode tracking by MAC (modal assurance criterion) across a sequence of eigen-solutions in
 //! one fixed basis: sweep points, or linearizations along a trajectory.
 
+use crate::measure::{nan_max, nan_min};
 use std::collections::BTreeMap;
 
 use super::complex_modes::{companion, coordinates, solve_dense, Complex, DenseEigenpair};
@@ -145,7 +146,7 @@ pub fn nearest(
     let distance = |p: &DenseEigenpair| {
         to.iter()
             .map(|t| (p.0 .0 - t.0 .0).hypot(p.0 .1 - t.0 .1))
-            .fold(f64::INFINITY, f64::min)
+            .fold(f64::INFINITY, nan_min)
     };
     let mut order: Vec<(f64, usize)> = pairs.iter().map(distance).zip(0..).collect();
     order.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -277,7 +278,7 @@ pub fn pairs_near_tracked(
             let Some((j, mac)) = choice.filter(|&(j, _)| accurate[j]) else {
                 continue 'wider;
             };
-            worst_choice = worst_choice.max(choice_cost(current[i].0, found[j].0, mac));
+            worst_choice = nan_max(worst_choice, choice_cost(current[i].0, found[j].0, mac));
         }
         if outside.iter().all(|&r| worst_choice < r) {
             return Ok(Some(found));
@@ -353,7 +354,7 @@ pub fn pairs_from_all_eigenvalues(
             .map(|(i, c)| c.map(|(j, mac)| choice_cost(current[i].0, pairs[j].0, mac)))
             .collect();
         if let Some(costs) = costs {
-            worst = costs.into_iter().fold(0.0, f64::max);
+            worst = costs.into_iter().fold(0.0, nan_max);
             // The nearest eigenvalue without a vector, per member, lies beyond every choice.
             let proven = by_distance.iter().all(|d| {
                 d.iter()

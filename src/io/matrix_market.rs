@@ -123,9 +123,17 @@ pub fn read(path: &Path) -> Result<Triplets, MatrixMarketError> {
                         .ok_or_else(|| parse(lineno, "expected 'rows cols entries'".into()))
                 };
                 let (r, c, n) = (num()?, num()?, num()?);
+                if r > u32::MAX as usize || c > u32::MAX as usize {
+                    return Err(parse(
+                        lineno,
+                        format!("{r} x {c}: at most {} rows and columns", u32::MAX),
+                    ));
+                }
                 t.rows = r;
                 t.cols = c;
-                t.entries.reserve(n);
+                // The announced count is checked at the end; a corrupt one must not allocate
+                // gigabytes up front.
+                t.entries.reserve(n.min(1 << 24));
                 size = Some((r, c, n));
             }
             Some((r, c, _)) => {

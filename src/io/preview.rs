@@ -5,6 +5,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use crate::measure::{nan_max, nan_min};
 use crate::mesh::Mesh;
 
 /// Component colours (RGB), cycled.
@@ -110,7 +111,7 @@ pub fn render(mesh: &Mesh, width: usize, height: usize) -> Vec<u8> {
             .iter()
             .zip(s.iter().cycle().skip(1))
             .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt())
-            .fold(f64::INFINITY, f64::min);
+            .fold(f64::INFINITY, nan_min);
         let edges = size > 6.0;
         // Fan triangulation; each triangle draws its outer edges (not the fan diagonals).
         for t in 1..s.len() - 1 {
@@ -152,25 +153,25 @@ fn fill_triangle(
     let x0 = t
         .iter()
         .map(|p| p[0])
-        .fold(f64::INFINITY, f64::min)
+        .fold(f64::INFINITY, nan_min)
         .floor()
         .max(0.0) as usize;
     let x1 = (t
         .iter()
         .map(|p| p[0])
-        .fold(f64::NEG_INFINITY, f64::max)
+        .fold(f64::NEG_INFINITY, nan_max)
         .ceil() as usize)
         .min(width - 1);
     let y0 = t
         .iter()
         .map(|p| p[1])
-        .fold(f64::INFINITY, f64::min)
+        .fold(f64::INFINITY, nan_min)
         .floor()
         .max(0.0) as usize;
     let y1 = (t
         .iter()
         .map(|p| p[1])
-        .fold(f64::NEG_INFINITY, f64::max)
+        .fold(f64::NEG_INFINITY, nan_max)
         .ceil() as usize)
         .min(height - 1);
     // Heights of the triangle over each edge, in pixels (for the edge distance).

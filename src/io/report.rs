@@ -4,6 +4,7 @@
 //! the run's PNGs embedded as data URIs, the style is inline: the file opens anywhere, offline,
 //! and can be mailed on its own. A section appears only when its stage ran.
 
+use crate::measure::nan_max;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -276,7 +277,7 @@ fn real_modes_table(s: &RunSummary) -> String {
         f.len(),
         f[0],
         f[f.len() - 1],
-        s.backward_errors.iter().copied().fold(0.0f64, f64::max)
+        s.backward_errors.iter().copied().fold(0.0f64, nan_max)
     );
     for (i, hz) in s.frequencies_hz.iter().enumerate() {
         let _ = write!(
@@ -324,7 +325,7 @@ fn complex_table(c: &crate::stages::summary::ComplexSummary) -> String {
 /// Every stage's time with the accuracy figure that goes with it.
 fn run_table(s: &RunSummary) -> String {
     let accuracy = |stage: &str| -> String {
-        let max = |v: &[f64]| v.iter().copied().fold(0.0f64, f64::max);
+        let max = |v: &[f64]| v.iter().copied().fold(0.0f64, nan_max);
         match stage {
             "static preload" => s.statics.as_ref().map_or(String::new(), |st| {
                 format!(

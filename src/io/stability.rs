@@ -7,12 +7,16 @@ use super::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::eigen::complex_modes::ComplexMode;
 use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
 use crate::eigen::tracking::Tracks;
+use crate::measure::nan_max;
 
 /// Writes the diagram of `modes` as a PNG.
 pub fn write_diagram(path: &Path, modes: &[ComplexMode], title: &str) -> std::io::Result<()> {
-    let f = modes.iter().map(|m| m.frequency_hz);
+    let f = modes
+        .iter()
+        .map(|m| m.frequency_hz)
+        .filter(|x| x.is_finite());
     let z = modes.iter().map(|m| m.damping_ratio);
-    let (f_min, f_max) = (0.0f64, f.fold(0.0f64, f64::max));
+    let (f_min, f_max) = (0.0f64, f.fold(0.0f64, nan_max));
     let (z_min, z_max) = z.fold((0.0f64, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
     let mut fig = Figure::new(
         1000,

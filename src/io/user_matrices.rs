@@ -2,6 +2,7 @@
 //! operator a sum of Matrix Market files with coefficients, e.g.
 //! K(Omega) = K1 + KR + Omega^2 KGEO.
 
+use crate::measure::nan_max;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -93,11 +94,11 @@ pub fn load_sum<'p>(
         }
     }
     let n = n.unwrap();
-    let max = sum.values().fold(0.0f64, |a, v| a.max(v.abs()));
+    let max = sum.values().fold(0.0f64, |a, v| nan_max(a, v.abs()));
     let asym = sum
         .iter()
         .map(|(&(i, j), v)| (v - sum.get(&(j, i)).copied().unwrap_or(0.0)).abs())
-        .fold(0.0f64, f64::max);
+        .fold(0.0f64, nan_max);
     let asymmetry = if max > 0.0 { asym / max } else { 0.0 };
 
     let ranges = row_ranges(n, petsc.size() as usize);

@@ -358,6 +358,7 @@ impl EigenvaluesFirst {
 mod tests {
     use super::*;
     use crate::la::lapack::eigen_general;
+    use crate::measure::nan_min;
 
     /// The eigenvalues are dgeev's, and each selected vector satisfies A v = lambda v to
     /// round-off (a scaled, unsymmetric matrix with real and complex eigenvalues, balanced).
@@ -379,7 +380,7 @@ mod tests {
                 .values
                 .iter()
                 .map(|&(r, i)| (r - re).hypot(i - im))
-                .fold(f64::INFINITY, f64::min);
+                .fold(f64::INFINITY, nan_min);
             assert!(nearest <= 1e-12 * norm, "{re} {im}: {nearest}");
         }
         let complex = e.values.iter().position(|v| v.1 != 0.0).expect("a pair");

@@ -137,6 +137,10 @@ pub struct MshModel {
     pub skipped: Vec<(usize, String)>,
 }
 
+/// The most entries reserved ahead from a count the file announces (a corrupt count must not
+/// allocate gigabytes before the entries are read).
+const CAPACITY_HINT: usize = 1 << 20;
+
 /// Reads a Gmsh 4.1 ASCII file. `materials` gives the material of each physical volume by
 /// name; every volume group needs one.
 ///
@@ -244,8 +248,10 @@ pub fn read(path: &Path, materials: &BTreeMap<String, Material>) -> Result<MshMo
                         return Err(r.syntax("node block header needs 4 numbers"));
                     }
                     // Parametric coordinates (b[2] = 1) follow x y z on the same line.
-                    let n = b[3] as usize;
-                    let mut tags = Vec::with_capacity(n);
+                    let n = usize::try_from(b[3])
+                        .map_err(|_| r.syntax(format!("negative node count {}", b[3])))?;
+                    // A count read from the file is a hint, not a size to allocate up front.
+                    let mut tags = Vec::with_capacity(n.min(CAPACITY_HINT));
                     for _ in 0..n {
                         let t: Vec<u64> = r.numbers()?;
                         tags.push(*t.first().ok_or_else(|| r.syntax("missing node tag"))?);
@@ -281,8 +287,10 @@ pub fn read(path: &Path, materials: &BTreeMap<String, Material>) -> Result<MshMo
                             "element type {ty} is not supported (volumes: 4 tet4, 5 hex8, 11 tet10, 17 hex20; faces: 2, 3, 9, 10, 16)"
                         ))
                     })?;
-                    let mut elements = Vec::with_capacity(b[3] as usize);
-                    for _ in 0..b[3] {
+                    let count = usize::try_from(b[3])
+                        .map_err(|_| r.syntax(format!("negative element count {}", b[3])))?;
+                    let mut elements = Vec::with_capacity(count.min(CAPACITY_HINT));
+                    for _ in 0..count {
                         let v: Vec<u64> = r.numbers()?;
                         if v.len() != nodes + 1 {
                             return Err(r.syntax(format!(

@@ -142,6 +142,7 @@ mod tests {
     use super::*;
     use crate::fem::material::Material;
     use crate::fem::shape::ElementKind;
+    use crate::measure::nan_max;
     use crate::mesh::structured::block;
 
     #[test]
@@ -151,10 +152,7 @@ mod tests {
         let order = bisection_order(&mesh.coords);
         renumber(&mut mesh, &order);
         let n = mesh.node_count();
-        let max_x_first_half = mesh.coords[..n / 2]
-            .iter()
-            .map(|x| x[0])
-            .fold(0.0, f64::max);
+        let max_x_first_half = mesh.coords[..n / 2].iter().map(|x| x[0]).fold(0.0, nan_max);
         assert!(max_x_first_half <= 4.0 + 1e-12, "{max_x_first_half}");
         // Node sets follow their nodes.
         for &i in &mesh.node_sets["u0"] {

@@ -4,6 +4,7 @@
 //! paper: 66 % under the piston), and the fractions of the pad's points open, sticking and
 //! sliding over the phases.
 
+use crate::measure::nan_max;
 use serde::{Deserialize, Serialize};
 
 use super::states::{ContactAt, StatesError, StoredStates};
@@ -142,7 +143,7 @@ pub fn contact_cycle(
                 .collect();
             let largest: Vec<f64> = stiffness
                 .iter()
-                .map(|phase| mine.iter().map(|&j| phase[j]).fold(0.0, f64::max))
+                .map(|phase| mine.iter().map(|&j| phase[j]).fold(0.0, nan_max))
                 .collect();
             let arg = |better: fn(f64, f64) -> bool| {
                 (0..largest.len())

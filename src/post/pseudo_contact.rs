@@ -4,6 +4,7 @@
 //! = (C Phi) y from the real modes' observation the projection keeps: no vector of size n, no
 //! factorization; each point costs the laws and the projected tangent O(points x modes^2).
 
+use crate::measure::nan_max;
 use std::cell::RefCell;
 
 use mpi::topology::SimpleCommunicator;
@@ -64,7 +65,7 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
     /// # Collective
     fn largest_point(&self, channels: &[Vec<Complex>; 4]) -> (f64, Option<usize>) {
         let relative = Self::relative(channels);
-        let mut largest = [relative.iter().copied().fold(0.0f64, f64::max)];
+        let mut largest = [relative.iter().copied().fold(0.0f64, nan_max)];
         max_in_place(self.comm, &mut largest);
         let tied = |r: f64| r >= (1.0 - 1e-9) * largest[0];
         let mine = (0..relative.len())

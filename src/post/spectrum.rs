@@ -2,6 +2,7 @@
 //! with a Hann window) of a signal, resampled onto a uniform grid first when step cuts made
 //! its steps uneven.
 
+use crate::measure::nan_max;
 use std::f64::consts::PI;
 
 use rustfft::num_complex::Complex;
@@ -141,7 +142,7 @@ pub fn spectrogram_db(t: &[f64], y: &[f64], dt: f64, max_hz: f64) -> Option<Spec
                 .map(|p| 10.0 * p.max(1e-300).log10()),
         );
     }
-    let top_db = db.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let top_db = db.iter().copied().fold(f64::NEG_INFINITY, nan_max);
     Some(SpectrogramDb {
         columns,
         rows,

@@ -19,6 +19,7 @@
 //! the kept block sparse as in the full model, the modal block dense, the coupling only in the
 //! rows and columns of kept DOFs on the border of the kept zone.
 
+use crate::measure::nan_max;
 use std::ops::Range;
 use std::time::Instant;
 
@@ -371,7 +372,7 @@ pub fn reduce<'p>(
     // drop tolerance: S = D V_k Lambda_k^-1/2, B <- B S, M B <- (M B) S.
     let largest = (0..offered)
         .map(|j| gram[j * offered + j])
-        .fold(0.0, f64::max);
+        .fold(0.0, nan_max);
     let scale: Vec<f64> = (0..offered)
         .map(|j| {
             let d = gram[j * offered + j];
@@ -390,7 +391,7 @@ pub fn reduce<'p>(
     }
     let (values, vectors) =
         lapack::eigen_symmetric(offered, normalized).map_err(LaError::Invalid)?;
-    let top = values.iter().copied().fold(0.0, f64::max);
+    let top = values.iter().copied().fold(0.0, nan_max);
     let keep: Vec<usize> = (0..offered)
         .filter(|&j| values[j] > settings.drop_tolerance * top)
         .collect();
@@ -411,7 +412,7 @@ pub fn reduce<'p>(
     crate::parallel::sum_in_place(world, &mut identity);
     partial.orthonormality = (0..modal * modal)
         .map(|k| (identity[k] - if k % (modal + 1) == 0 { 1.0 } else { 0.0 }).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, nan_max);
     let stiffness_products = products(&partial, k0, &mut work, &mut product)?;
 
     let local_reduced = partial.kept_local.len() + if last_rank { modal } else { 0 };

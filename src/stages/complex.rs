@@ -13,6 +13,7 @@ use crate::eigen::complex_modes::{
 use crate::eigen::real_modes::RealModes;
 use crate::eigen::stability::ProjectedStability;
 use crate::la::{LaError, Petsc, SparseMatrix};
+use crate::measure::nan_max;
 
 /// Why the complex modes could not be computed.
 #[derive(Debug, thiserror::Error)]
@@ -76,7 +77,7 @@ pub fn complex_modes<'p>(
                         let n = modes.shapes.len();
                         let deviation = (0..n * n)
                             .map(|i| (mp[i] - f64::from(u8::from(i % (n + 1) == 0))).abs())
-                            .fold(0.0f64, f64::max);
+                            .fold(0.0f64, nan_max);
                         // NaN-aware: a NaN deviation is no orthonormality.
                         if deviation.is_nan() || deviation > 1e-8 {
                             return Err(ComplexModesError::NotOrthonormal { deviation });

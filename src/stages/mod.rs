@@ -50,6 +50,12 @@ pub enum RunError {
     Msh(#[from] crate::mesh::gmsh_msh::MshError),
     #[error("{0}")]
     Quality(#[from] crate::mesh::quality::QualityError),
+    /// An imported mesh with an inverted or degenerate element: the file to fix comes first.
+    #[error("{}: {source} (elements counted from 0 in the order of the file)", file.display())]
+    ImportedQuality {
+        file: std::path::PathBuf,
+        source: crate::mesh::quality::QualityError,
+    },
     #[error("brake model: {0}")]
     Brake(String),
     /// A scene asks for something its other tables do not provide.

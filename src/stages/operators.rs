@@ -170,7 +170,19 @@ pub fn from_scene<'p>(
         super::model::build_model(&scene.model, scene_dir)
     })?;
     let model = model.ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
-    let quality = timings.stage("mesh quality", || crate::mesh::quality::check(&model.mesh))?;
+    let imported_from = match &scene.model {
+        ModelSource::Abaqus { file } | ModelSource::Gmsh { file, .. } => Some(scene_dir.join(file)),
+        _ => None,
+    };
+    let quality = timings.stage("mesh quality", || {
+        crate::mesh::quality::check(&model.mesh).map_err(|source| match &imported_from {
+            Some(file) => RunError::ImportedQuality {
+                file: file.clone(),
+                source,
+            },
+            None => RunError::Quality(source),
+        })
+    })?;
     // The static Newton's tangent K0 + contact is unsymmetric (LU): AIJ then.
     let format = scene.statics.as_ref().map(|_| MatrixFormat::Aij);
     let ops = timings.stage("assembly", || assemble(petsc, &model, format))?;

@@ -2,6 +2,7 @@
 //! (DESIGN.md §2b), and, when the scene also ran the transient, the same modes' amplitude in
 //! its last cycles next to the predicted alpha_sat.
 
+use crate::measure::nan_max;
 use std::path::Path;
 
 use super::{Analyses, RunError};
@@ -214,7 +215,7 @@ fn observed_motion<'p>(
             x.chunks(3)
                 .map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt())
         })
-        .fold(0.0f64, f64::max)];
+        .fold(0.0f64, nan_max)];
     crate::parallel::max_in_place(petsc.world(), &mut largest);
     Ok(ObservedMotion {
         states: out,

@@ -11,6 +11,7 @@ use crate::contact::linearize::Base;
 use crate::contact::{ContactError, ContactModel, ContactState};
 use crate::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
 use crate::la::{LaError, Petsc, Vector};
+use crate::measure::nan_max;
 use crate::reduce::{ReducedModel, ReductionSettings};
 
 /// Why the reduction could not be built.
@@ -45,7 +46,7 @@ impl Reduced<'_> {
         self.mode_check
             .iter()
             .map(|(f, g)| (g - f).abs() / f.abs().max(1e-300))
-            .fold(0.0, |a: f64, e| if e.is_nan() { e } else { a.max(e) })
+            .fold(0.0, nan_max)
     }
 }
 

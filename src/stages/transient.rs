@@ -10,6 +10,7 @@ use super::RunError;
 use crate::eigen::complex_modes::DampingSettings;
 use crate::eigen::real_modes::RealModes;
 use crate::la::{Petsc, SparseMatrix, Vector};
+use crate::measure::nan_max;
 use crate::mesh::Mesh;
 use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{Damping, ModalDamping, TimeError};
@@ -356,7 +357,7 @@ pub fn modal_damping<'p>(
     reduction: Option<&crate::reduce::Reduction>,
 ) -> Result<ModalDamping<'p>, TransientSetupError> {
     let [low, high] = damping.modal_band_hz.unwrap_or([0.0, 0.0]);
-    let highest = modes.frequencies_hz.iter().copied().fold(0.0, f64::max);
+    let highest = modes.frequencies_hz.iter().copied().fold(0.0, nan_max);
     if high > highest {
         return Err(TransientSetupError::BandAboveModes {
             low,

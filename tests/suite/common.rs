@@ -4,6 +4,7 @@ use squeal::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
 use squeal::fem::material::Material;
 use squeal::la::fem_assembly::{assemble_system, AssembledSystem};
 use squeal::la::Petsc;
+use squeal::measure::{largest_abs, max_abs_difference};
 use squeal::mesh::Clamp;
 use squeal::mesh::Mesh;
 
@@ -44,14 +45,16 @@ pub fn rel(a: f64, b: f64) -> f64 {
 /// The largest |a - b| over the pairs, relative to the largest |a| (NaN if any is NaN or
 /// the lengths differ): how far a series from another rank count is from the 1-rank one.
 pub fn max_scaled_difference(one: &[f64], other: &[f64]) -> f64 {
-    if one.len() != other.len() {
-        return f64::NAN;
+    max_abs_difference(one, other) / largest_abs(one)
+}
+
+/// Ok when `value <= bound`; an error naming `what` otherwise, and when `value` is NaN.
+pub fn check_le(what: &str, value: f64, bound: f64) -> Result<(), String> {
+    if value <= bound {
+        Ok(())
+    } else {
+        Err(format!("{what}: {value:e} exceeds the bound {bound:e}"))
     }
-    let scale = one.iter().fold(0.0f64, |m, z| m.max(z.abs()));
-    one.iter()
-        .zip(other)
-        .map(|(a, b)| (a - b).abs() / scale)
-        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) })
 }
 
 /// Where the 1-rank run of the suite leaves results for the 2-rank run to compare against.
@@ -61,34 +64,85 @@ pub fn suite_dir() -> std::path::PathBuf {
         .unwrap_or_else(|| std::env::temp_dir().join("squeal-mpi-suite"))
 }
 
-/// Values kept by the 1-rank run of the suite for the 2-rank run to compare against: on 1
-/// rank writes `values` under `name` in the suite folder and returns None; on more ranks
-/// returns the 1-rank values (an error if they are missing or of another length).
+/// Values kept by the 1-rank run of the suite for the 2- and 4-rank runs to compare against:
+/// on 1 rank writes `values` under `name` in the suite folder, marks the test skipped (there is
+/// nothing to compare with yet) and returns None; on more ranks returns the 1-rank values (an
+/// error if they are missing or of another length).
 pub fn one_rank_values(
     petsc: &squeal::la::Petsc,
     name: &str,
     values: &[f64],
 ) -> Result<Option<Vec<f64>>, String> {
+    let rows = one_rank_rows(petsc, name, &[values.to_vec()])?;
+    Ok(rows.map(|mut r| r.remove(0)))
+}
+
+/// As `one_rank_values`, for several rows (one per line of the stored file); rows may differ
+/// in length, and each is compared in length with the 1-rank row.
+pub fn one_rank_rows(
+    petsc: &squeal::la::Petsc,
+    name: &str,
+    rows: &[Vec<f64>],
+) -> Result<Option<Vec<Vec<f64>>>, String> {
     let file = suite_dir().join(format!("{name}-1-rank.txt"));
     if petsc.size() == 1 {
-        if petsc.rank() == 0 {
-            let text: Vec<String> = values.iter().map(|x| format!("{x:e}")).collect();
-            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
-        }
+        std::fs::create_dir_all(suite_dir()).map_err(|e| e.to_string())?;
+        let text: Vec<String> = rows
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .map(|x| format!("{x:e}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            })
+            .collect();
+        std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
+        skip(&format!(
+            "1 rank: stored the reference {} for the runs on more ranks",
+            file.display()
+        ));
         return Ok(None);
     }
     let text = std::fs::read_to_string(&file)
         .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
-    let one: Vec<f64> = text
+    let one: Vec<Vec<f64>> = text
         .lines()
-        .map(|l| l.parse().unwrap_or(f64::NAN))
+        .map(|l| {
+            l.split_whitespace()
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
-    if one.len() != values.len() {
+    if one.len() != rows.len() {
         return Err(format!(
-            "{name}: {} values on 1 rank, {} here",
+            "{name}: {} rows on 1 rank, {} here",
             one.len(),
-            values.len()
+            rows.len()
         ));
     }
+    for (i, (a, b)) in one.iter().zip(rows).enumerate() {
+        if a.len() != b.len() {
+            return Err(format!(
+                "{name}: row {i} has {} values on 1 rank, {} here",
+                a.len(),
+                b.len()
+            ));
+        }
+    }
     Ok(Some(one))
+}
+
+thread_local! {
+    static SKIPPED: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Marks the running test as skipped with a reason: it returns Ok but checked nothing on this
+/// rank count (the harness reports it as skipped, not passed).
+pub fn skip(reason: &str) {
+    SKIPPED.with(|s| *s.borrow_mut() = Some(reason.to_string()));
+}
+
+/// The reason the test that just ran was skipped, if it was (and clears it for the next test).
+pub fn take_skip() -> Option<String> {
+    SKIPPED.with(|s| s.borrow_mut().take())
 }

@@ -18,6 +18,7 @@ use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::eigen::complex_modes::{full, solve_dense, ComplexModeSettings, Operators};
 use squeal::eigen::stability::ModalProjection;
 use squeal::la::{MatrixFormat, Petsc, Preallocation, SparseMatrix};
+use squeal::measure::{exceeds, nan_max, nan_min};
 
 use super::common::{rel, say};
 
@@ -73,8 +74,8 @@ fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
             .iter()
             .filter(|e| e.0.is_finite())
             .map(|e| (e.0 - s.0).hypot(e.1 - s.1) / s.0.hypot(s.1))
-            .fold(f64::INFINITY, f64::min);
-        worst = worst.max(d);
+            .fold(f64::INFINITY, nan_min);
+        worst = nan_max(worst, d);
     }
     say(
         petsc,
@@ -85,7 +86,7 @@ fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
             sweep.unstable_per_point
         ),
     );
-    if sweep.tracks < nominal.len() || worst > 1e-7 {
+    if sweep.tracks < nominal.len() || exceeds(worst, 1e-7) {
         return Err(format!(
             "{} tracks vs {} nominal modes; nominal point off by {worst:e}",
             sweep.tracks,
@@ -134,7 +135,7 @@ fn brake_m0_band(petsc: &Petsc) -> Result<(), String> {
         .iter()
         .chain(&mb)
         .map(|m| m.backward_error)
-        .fold(0.0f64, f64::max);
+        .fold(0.0f64, nan_max);
     let mut worst = 0.0f64;
     for m in &ma {
         let d = mb
@@ -143,8 +144,8 @@ fn brake_m0_band(petsc: &Petsc) -> Result<(), String> {
                 (n.eigenvalue.0 - m.eigenvalue.0).hypot(n.eigenvalue.1 - m.eigenvalue.1)
                     / m.eigenvalue.0.hypot(m.eigenvalue.1)
             })
-            .fold(f64::INFINITY, f64::min);
-        worst = worst.max(d);
+            .fold(f64::INFINITY, nan_min);
+        worst = nan_max(worst, d);
     }
     let lightly_damped = ma.iter().filter(|m| m.damping_ratio.abs() < 0.1).count();
     say(
@@ -163,7 +164,7 @@ fn brake_m0_band(petsc: &Petsc) -> Result<(), String> {
             mb.len()
         ));
     }
-    if worst > 1e-8 || worst_eta > 1e-10 {
+    if exceeds(worst, 1e-8) || exceeds(worst_eta, 1e-10) {
         return Err(format!(
             "eigenvalues differ by {worst:e} between settings; backward error {worst_eta:e}"
         ));
@@ -227,7 +228,7 @@ fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
     if full.len() < 10 {
         return Err(format!("only {} full modes below 2.5 kHz", full.len()));
     }
-    let worst_eta = full.iter().map(|m| m.backward_error).fold(0.0f64, f64::max);
+    let worst_eta = full.iter().map(|m| m.backward_error).fold(0.0f64, nan_max);
     // Members of coalesced flutter pairs (see above).
     let coalesced = |m: &squeal::eigen::complex_modes::ComplexMode| {
         full.iter().any(|o| {
@@ -279,7 +280,7 @@ fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
             full.iter().filter(|m| m.unstable).count()
         ),
     );
-    if worst_eta > 1e-10 {
+    if exceeds(worst_eta, 1e-10) {
         return Err(format!("full route backward error {worst_eta:e}"));
     }
     // NaN-aware: every comparison must hold.
@@ -495,10 +496,10 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
             rel(s.1, model.omega_c())
         ),
     );
-    if rel(found, exact) > 1e-8 {
+    if exceeds(rel(found, exact), 1e-8) {
         return Err(format!("mu_crit {found} vs closed form {exact}"));
     }
-    if rel(s.1, model.omega_c()) > 1e-8 {
+    if exceeds(rel(s.1, model.omega_c()), 1e-8) {
         return Err(format!(
             "coalescence frequency {} vs closed form {}",
             s.1,
@@ -533,14 +534,14 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
             let nearest = projected
                 .iter()
                 .map(|p| (p.0 - s.0).hypot(p.1 - s.1) / s.0.hypot(s.1))
-                .fold(f64::INFINITY, f64::min);
-            d = d.max(nearest);
+                .fold(f64::INFINITY, nan_min);
+            d = nan_max(d, nearest);
         }
         let worst_eta = modes
             .modes
             .iter()
             .map(|m| m.backward_error)
-            .fold(0.0f64, f64::max);
+            .fold(0.0f64, nan_max);
         say(
             petsc,
             &format!(
@@ -552,7 +553,7 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
                 modes.modes.iter().filter(|m| m.unstable).count()
             ),
         );
-        if modes.modes.len() != 2 || d > 1e-8 || worst_eta > 1e-12 {
+        if modes.modes.len() != 2 || exceeds(d, 1e-8) || exceeds(worst_eta, 1e-12) {
             return Err(format!(
                 "mu = {factor} mu_crit: {} full modes, off the projected ones by {d:e}, backward error {worst_eta:e}",
                 modes.modes.len()

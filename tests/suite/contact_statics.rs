@@ -22,6 +22,7 @@ use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
 use squeal::fem::shape::ElementKind;
 use squeal::la::fem_assembly::{assemble_system_as, AssembledSystem};
 use squeal::la::{MatrixFormat, Petsc};
+use squeal::measure::{exceeds, nan_max};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
 use squeal::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
@@ -69,12 +70,12 @@ fn contact_patch_test(petsc: &Petsc) -> Result<(), String> {
             "max |p - p_applied| / p_applied: 6x6 on 3x3 cells {nested:.2e}; 4x5 on 3x3: 2x2 Gauss {straddling_2:.2e}, 4x4 Gauss {straddling_4:.2e}"
         ),
     );
-    if nested > 1e-8 {
+    if exceeds(nested, 1e-8) {
         return Err(format!(
             "nested non-matching meshes: pressure not uniform ({nested:e})"
         ));
     }
-    if straddling_2 > 1e-2 || straddling_4 > 1e-2 {
+    if exceeds(straddling_2, 1e-2) || exceeds(straddling_4, 1e-2) {
         return Err(format!(
             "straddling meshes: error {straddling_2:e} (2x2), {straddling_4:e} (4x4)"
         ));
@@ -170,10 +171,10 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         .response
         .iter()
         .map(|r| rel(r.pressure, p_applied))
-        .fold(0.0f64, f64::max);
+        .fold(0.0f64, nan_max);
     let worst = squeal::parallel::max(petsc.world(), worst);
     let force = state.summaries[0].normal_force;
-    if rel(force, p_applied) > 1e-10 {
+    if exceeds(rel(force, p_applied), 1e-10) {
         return Err(format!(
             "total contact force {force} N, applied {p_applied} N"
         ));
@@ -213,8 +214,8 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     let mut worst_torque: f64 = 0.0;
     for (itf, s) in contact.interfaces.iter().zip(&state.summaries) {
         if itf.friction.is_sliding() {
-            worst_force = worst_force.max(rel(s.normal_force, piston));
-            worst_torque = worst_torque.max(rel(s.torque, s.coulomb_torque));
+            worst_force = nan_max(worst_force, rel(s.normal_force, piston));
+            worst_torque = nan_max(worst_torque, rel(s.torque, s.coulomb_torque));
             if s.stick != 0 {
                 return Err(format!("{}: {} points stick", itf.name, s.stick));
             }
@@ -227,7 +228,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             );
         }
     }
-    if worst_force > 1e-8 || worst_torque > 1e-8 {
+    if exceeds(worst_force, 1e-8) || exceeds(worst_torque, 1e-8) {
         return Err(format!(
             "pad force vs piston {worst_force:e}, torque vs mu F r {worst_torque:e}"
         ));
@@ -257,11 +258,11 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             one.len()
         ));
     }
-    let pmax = one.iter().fold(0.0f64, |m, p| m.max(p.abs()));
+    let pmax = one.iter().fold(0.0f64, |m, p| nan_max(m, p.abs()));
     let diff = one
         .iter()
         .zip(&pressures)
-        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+        .fold(0.0f64, |m, (a, b)| nan_max(m, (a - b).abs()))
         / pmax;
     say(
         petsc,
@@ -270,7 +271,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             petsc.size()
         ),
     );
-    if diff > 1e-8 {
+    if exceeds(diff, 1e-8) {
         return Err(format!("pressures differ by {diff:e} of the largest"));
     }
     Ok(())

@@ -14,6 +14,7 @@
 //! compared with the 1-rank run's over the whole growth phase.
 
 use squeal::la::Petsc;
+use squeal::measure::nan_max;
 
 use super::common::{rel, say};
 
@@ -150,12 +151,12 @@ fn growth_same_on_one_and_two_ranks(petsc: &Petsc, out: &std::path::Path) -> Res
     let Some(one) = super::common::one_rank_values(petsc, "growth-torque", &torque)? else {
         return Ok(());
     };
-    let scale = one.iter().map(|x| (x - one[0]).abs()).fold(0.0, f64::max);
+    let scale = one.iter().map(|x| (x - one[0]).abs()).fold(0.0, nan_max);
     let diff = one
         .iter()
         .zip(&torque)
         .map(|(a, b)| (a - b).abs())
-        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) })
+        .fold(0.0f64, nan_max)
         / scale;
     say(
         petsc,

@@ -32,6 +32,7 @@
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
 use squeal::la::{Petsc, Vector};
+use squeal::measure::{nan_max, nan_min};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
 use squeal::post::modal_energy::{modal_energy, ModalEnergySettings, ModalSensors};
@@ -105,18 +106,18 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
         let frozen = [K_S[0][0], K_S[1][0], K_S[0][1] + MU * kc, K_S[1][1] + kc];
         let exact = frozen_roots(&frozen, C);
         let found: Vec<Cx> = pairs.iter().map(|p| p.0).filter(|s| s.1 > 0.0).collect();
-        let scale = exact.iter().map(|s| s.0.hypot(s.1)).fold(0.0, f64::max);
+        let scale = exact.iter().map(|s| s.0.hypot(s.1)).fold(0.0, nan_max);
         // As sets: a flutter pair shares its imaginary part.
         let nearest = |x: &Cx, to: &[Cx]| {
             to.iter()
                 .map(|e| (x.0 - e.0).hypot(x.1 - e.1) / scale)
-                .fold(f64::INFINITY, f64::min)
+                .fold(f64::INFINITY, nan_min)
         };
         let error = found
             .iter()
             .map(|f| nearest(f, &exact))
             .chain(exact.iter().map(|e| nearest(e, &found)))
-            .fold(0.0, f64::max);
+            .fold(0.0, nan_max);
         if found.len() != 2 || exact.len() != 2 || error.is_nan() || error > 1e-10 {
             return Err(format!(
                 "at q = {q:?}: linearization {found:?} vs closed form {exact:?} ({error:.1e})"
@@ -193,9 +194,9 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
         k.mult(phi, &mut y).map_err(e)?;
         for (i, psi) in modes.shapes.iter().enumerate() {
             let eye = f64::from(u8::from(i == j));
-            d = d.max((psi.dot(&w).map_err(e)? - eye).abs());
+            d = nan_max(d, (psi.dot(&w).map_err(e)? - eye).abs());
             let kij = psi.dot(&y).map_err(e)? - eye * omega[j].powi(2);
-            d = d.max(kij.abs() / omega[n - 1].powi(2));
+            d = nan_max(d, kij.abs() / omega[n - 1].powi(2));
         }
         mass_shapes.push(w);
     }
@@ -251,7 +252,7 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     for (i, &t) in times.iter().enumerate() {
         for (k, ek) in out.energy.iter().enumerate() {
             let exact = 0.5 * (a[k] * omega[k]).powi(2);
-            worst_mode = worst_mode.max((ek[i] - exact).abs() / exact_total);
+            worst_mode = nan_max(worst_mode, (ek[i] - exact).abs() / exact_total);
         }
         state_at(t, &mut q, &mut v)?;
         dq.copy_from(&q).map_err(e)?;
@@ -261,8 +262,8 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
         let energy = 0.5 * v.dot(&mv).map_err(e)? + 0.5 * dq.dot(&kdq).map_err(e)?;
         let terms = k_norm * dq.norm2().map_err(e)?.powi(2);
         let unknowns = q.global_len() as f64;
-        roundoff = roundoff.max(f64::EPSILON * unknowns.sqrt() * terms / energy);
-        worst_total = worst_total.max((out.total(i) - energy).abs() / energy);
+        roundoff = nan_max(roundoff, f64::EPSILON * unknowns.sqrt() * terms / energy);
+        worst_total = nan_max(worst_total, (out.total(i) - energy).abs() / energy);
         worst_kinetic =
             worst_kinetic.max((out.kinetic_in_basis[i] - out.kinetic[i]).abs() / exact_total);
         if !(out.total(i).is_finite() && (t - out.times[i]).abs() < 1e-15) {
@@ -283,7 +284,7 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
             100.0 * out.ranked[0].share
         ),
     );
-    let modal = worst_mode.max(worst_kinetic);
+    let modal = nan_max(worst_mode, worst_kinetic);
     if modal.is_nan() || worst_total.is_nan() || modal > modal_bound || worst_total > bound {
         return Err(format!(
             "modal energies off by {worst_mode:e} (closed form), {worst_kinetic:e} (kinetic), bound {modal_bound:e}; {worst_total:e} (identity), bound {bound:e}"
@@ -333,7 +334,7 @@ fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
             .ok_or(format!("track {} is no nominal mode", t.name))?;
         let r = reference.eigenvalue;
         for &x in &t.eigenvalue {
-            worst = worst.max((x.0 - r.0).hypot(x.1 - r.1) / r.0.hypot(r.1));
+            worst = nan_max(worst, (x.0 - r.0).hypot(x.1 - r.1) / r.0.hypot(r.1));
         }
     }
     say(
@@ -388,7 +389,7 @@ fn same_on_one_and_two_ranks(
         .iter()
         .zip(&values)
         .map(|(a, b)| (a.0 - b.0).hypot(a.1 - b.1) / a.0.hypot(a.1))
-        .fold(0.0f64, |m, d| if d.is_nan() { d } else { m.max(d) });
+        .fold(0.0f64, nan_max);
     say(
         petsc,
         &format!(

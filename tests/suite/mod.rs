@@ -16,6 +16,8 @@ pub mod static_solve;
 pub mod stick_slip;
 pub mod time_integration;
 
+use std::time::Duration;
+
 use squeal::la::Petsc;
 
 /// A test: its name and a function that returns Ok or what went wrong.
@@ -39,3 +41,17 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(pseudo_trajectory::tests());
     v
 }
+
+/// How long a test may run before the suite's watchdog aborts it: about 5x its time measured on
+/// 2 cores (1 and 2 ranks, the slower), at least 60 s; 3x that on more ranks than the 2 cores
+/// (oversubscribed, every rank then gets part of a core).
+pub fn time_limit(name: &str, ranks: i32) -> Duration {
+    let seconds = LONG_TESTS
+        .iter()
+        .find(|(long, _)| *long == name)
+        .map_or(60, |&(_, s)| s);
+    Duration::from_secs(if ranks > 2 { 3 * seconds } else { seconds })
+}
+
+/// The tests that take longer than 12 s on 1 or 2 ranks, with their limit in seconds.
+const LONG_TESTS: &[(&str, u64)] = &[];

@@ -36,6 +36,7 @@ use squeal::la::{
     DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, Preallocation,
     SparseMatrix, Vector,
 };
+use squeal::measure::{nan_max, nan_min};
 use squeal::time::newmark::{
     initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Damping, Jacobian,
     NewmarkSettings, State, StepControl, StepReport, TimeError,
@@ -249,11 +250,11 @@ impl LimitCycle {
             let min = r.q[lo..hi]
                 .iter()
                 .map(|q| q[1])
-                .fold(f64::INFINITY, f64::min);
+                .fold(f64::INFINITY, nan_min);
             amplitudes.push(r.q[lo][1].max(r.q[hi][1]) - min);
         }
-        let max = amplitudes.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let min = amplitudes.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = amplitudes.iter().copied().fold(f64::NEG_INFINITY, nan_max);
+        let min = amplitudes.iter().copied().fold(f64::INFINITY, nan_min);
         let mean = amplitudes.iter().sum::<f64>() / CYCLES as f64;
         let (first, end) = (last[0], last[CYCLES]);
         let period = (interpolated_peak(r, end) - interpolated_peak(r, first)) / CYCLES as f64;

@@ -33,6 +33,7 @@
 use squeal::contact::kernel::{respond, Observed, Status};
 use squeal::eigen::complex_modes::{solve_dense, Complex};
 use squeal::la::Petsc;
+use squeal::measure::{nan_max, nan_min};
 use squeal::post::pseudo_trajectory::{
     pseudo_trajectory, Linearized, OrbitFit, PseudoSystem, PseudoTrajectorySettings,
 };
@@ -163,7 +164,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     if std::env::var_os("SQUEAL_DEBUG_PSEUDO").is_some() {
         for p in a.sweep.iter().chain(&b.sweep) {
             let f = p.frequencies_hz();
-            println!("alpha {:.4e} mean zeta {:+.4e} unstable {:.2} minmac {:.3} f {:.4}..{:.4} open {:.2}", p.alpha, p.mean_damping_ratio, p.unstable_fraction, p.min_mac, f.iter().cloned().fold(f64::INFINITY, f64::min), f.iter().cloned().fold(0.0, f64::max), p.fractions.iter().map(|x| x[0]).sum::<f64>() / p.fractions.len() as f64);
+            println!("alpha {:.4e} mean zeta {:+.4e} unstable {:.2} minmac {:.3} f {:.4}..{:.4} open {:.2}", p.alpha, p.mean_damping_ratio, p.unstable_fraction, p.min_mac, f.iter().cloned().fold(f64::INFINITY, nan_min), f.iter().cloned().fold(0.0, nan_max), p.fractions.iter().map(|x| x[0]).sum::<f64>() / p.fractions.len() as f64);
         }
     }
     let (Some(sat), Some(sat_b), Some(crit)) = (
@@ -192,7 +193,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         .iter()
         .zip(&a.psi)
         .map(|(p, q)| (p.0 - q.0).hypot(p.1 - q.1))
-        .fold(0.0f64, |a, b| if b.is_nan() { b } else { a.max(b) });
+        .fold(0.0f64, nan_max);
     let sat_t = t.alpha_sat.alpha().unwrap_or(f64::NAN);
     say(
         petsc,
@@ -375,7 +376,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         .iter()
         .flat_map(|p| p.eigenvalue.iter())
         .map(|s| (s.0 - nominal.0).hypot(s.1 - nominal.1) / nominal.0.hypot(nominal.1))
-        .fold(0.0f64, |a, b| if b.is_nan() { b } else { a.max(b) });
+        .fold(0.0f64, nan_max);
     say(
         petsc,
         &format!("brake C35 at alpha = 1e-16 m: every phase vs the complex-modes stage {worst:.1e} (asserted 1e-9)"),
@@ -410,7 +411,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     let zeta = super::common::max_scaled_difference(&one[2..], &values[2..]);
     let amplitudes = (0..2)
         .map(|k| (one[k] - values[k]).abs() / one[k])
-        .fold(zeta, |a, b| if b.is_nan() { b } else { a.max(b) });
+        .fold(zeta, nan_max);
     let diff = if zeta.is_nan() { f64::NAN } else { amplitudes };
     say(
         petsc,

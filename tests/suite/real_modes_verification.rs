@@ -12,6 +12,7 @@
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
 use squeal::la::Petsc;
+use squeal::measure::{exceeds, nan_max};
 use squeal::mesh::structured::{annulus, block};
 use squeal::mesh::Clamp;
 
@@ -74,10 +75,10 @@ fn cantilever_euler_bernoulli(petsc: &Petsc) -> Result<(), String> {
             kind.name(), f[0], f[1], f[2], f_z, f_y, f_z2, errs[0], errs[1], errs[2]
         ));
         // Tolerance: 3D effects of a clamped solid end (Poisson) and shear, about 0.5%.
-        if errs.iter().any(|&e| e > 0.01) {
+        if errs.iter().any(|&e| exceeds(e, 0.01)) {
             return Err(format!("{kind:?}: frequencies {f:?} vs {f_z} {f_y} {f_z2}"));
         }
-        if let Some(r) = modes.backward_errors.iter().find(|&&r| r > 1e-8) {
+        if let Some(r) = modes.backward_errors.iter().find(|&&r| exceeds(r, 1e-8)) {
             return Err(format!("{kind:?}: backward error {r:e}"));
         }
     }
@@ -140,14 +141,14 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
                 return Err(format!("mode {i} has {nd} nodal diameters, expected 0..4"));
             }
             let err = rel(modes.frequencies_hz[i], to_hz(LAMBDA2[nd]));
-            worst = worst.max(err);
+            worst = nan_max(worst, err);
             line += &format!(" n={nd}:{:.2e}", err);
         }
         say(
             petsc,
             &format!("{:6} rel. errors vs Leissa:{line}", kind.name()),
         );
-        if worst > tol {
+        if exceeds(worst, tol) {
             return Err(format!("{kind:?}: worst relative error {worst:.3e}"));
         }
     }

@@ -3,6 +3,7 @@
 //! full model's.
 
 use squeal::la::Petsc;
+use squeal::measure::{exceeds, nan_max};
 
 use super::common::say;
 
@@ -67,11 +68,11 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
     let largest_velocity = reference_velocity
         .iter()
         .map(|v| v.abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, nan_max);
     let fluctuation = reference
         .iter()
         .map(|t| (t - reference[0]).abs())
-        .fold(0.0, f64::max);
+        .fold(0.0, nan_max);
     let mut errors = Vec::new();
     let mut velocity_errors = Vec::new();
     for modes in [60, 120] {
@@ -81,14 +82,14 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
             .iter()
             .zip(&reference_velocity)
             .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, nan_max)
             / largest_velocity;
         let r = reduced.reduction.as_ref().ok_or("no reduction summary")?;
         let error = torque
             .iter()
             .zip(&reference)
             .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, nan_max)
             / fluctuation;
         say(
             petsc,
@@ -104,14 +105,14 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
                 r.orthonormality
             ),
         );
-        if r.mode_check.len() != modes || r.mode_error > 1e-9 {
+        if r.mode_check.len() != modes || exceeds(r.mode_error, 1e-9) {
             return Err(format!(
                 "{modes} modes: reduced real modes differ from the full ones by {:e} ({} compared)",
                 r.mode_error,
                 r.mode_check.len()
             ));
         }
-        if r.static_error > 1e-10 || r.orthonormality > 1e-8 {
+        if exceeds(r.static_error, 1e-10) || exceeds(r.orthonormality, 1e-8) {
             return Err(format!(
                 "static state represented to {:e}, orthonormality {:e}",
                 r.static_error, r.orthonormality

@@ -26,6 +26,8 @@ use squeal::time::newmark::{
     NewmarkSettings, State,
 };
 
+use squeal::measure::{exceeds, largest, largest_abs, max_abs_difference, nan_max};
+
 use super::common::{rel, say};
 
 pub fn tests() -> Vec<super::NamedTest> {
@@ -336,10 +338,11 @@ fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
     for s in &signals {
         let v = read(s)?;
         let scale = v[0].abs().max(1.0);
-        worst = worst.max(
+        worst = nan_max(
+            worst,
             v.iter()
                 .map(|x| (x - v[0]).abs() / scale)
-                .fold(0.0, f64::max),
+                .fold(0.0, nan_max),
         );
     }
     say(
@@ -352,7 +355,7 @@ fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
             1e3 * t.seconds_per_step
         ),
     );
-    if worst > 1e-8 || t.max_iterations > 2 || t.steps != 200 {
+    if exceeds(worst, 1e-8) || t.max_iterations > 2 || t.steps != 200 {
         return Err(format!(
             "signals drift by {worst:e}; max iterations {}; steps {}",
             t.max_iterations, t.steps
@@ -519,7 +522,7 @@ fn linear_oscillator_period(petsc: &Petsc) -> Result<(), String> {
         &mut *no_force(),
         |s| {
             let q = first(petsc, &s.q)?;
-            worst = worst.max((q - (n as f64 * theta).cos()).abs());
+            worst = nan_max(worst, (q - (n as f64 * theta).cos()).abs());
             n += 1;
             Ok(())
         },
@@ -532,7 +535,7 @@ fn linear_oscillator_period(petsc: &Petsc) -> Result<(), String> {
             omega * h / theta
         ),
     );
-    if worst > 1e-12 {
+    if exceeds(worst, 1e-12) {
         return Err(format!("discrete solution off cos(n theta) by {worst:e}"));
     }
     Ok(())
@@ -578,7 +581,7 @@ fn second_order_convergence(petsc: &Petsc) -> Result<(), String> {
                 .join(", ")
         ),
     );
-    if rates.iter().any(|r| (r - 2.0).abs() > 0.05) {
+    if rates.iter().any(|r| exceeds((r - 2.0).abs(), 0.05)) {
         return Err(format!("convergence rates {rates:?}, expected 2"));
     }
     Ok(())
@@ -647,7 +650,7 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
         |s| {
             let e = energy(s)?;
             let e0 = *e0.get_or_insert(e);
-            drift = drift.max(rel(e, e0));
+            drift = nan_max(drift, rel(e, e0));
             Ok(())
         },
     )?;
@@ -655,7 +658,7 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
         petsc,
         &format!("12-DOF chain, 10,000 steps: max relative energy change {drift:.1e}"),
     );
-    if drift > 1e-10 {
+    if exceeds(drift, 1e-10) {
         return Err(format!("energy drift {drift:e}"));
     }
     Ok(())
@@ -767,13 +770,13 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
             rel(measured, zeta)
         ),
     );
-    if at_periods.len() < 4 || rel(measured, zeta) > 1e-4 {
+    if at_periods.len() < 4 || exceeds(rel(measured, zeta), 1e-4) {
         return Err(format!(
             "mode 1 decays at zeta {measured} over {} periods (expected {zeta})",
             at_periods.len()
         ));
     }
-    if kept > 1e-8 {
+    if exceeds(kept, 1e-8) {
         return Err(format!("undamped mode 5 lost {kept:e} of its energy"));
     }
     Ok(())
@@ -879,7 +882,7 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             "g0 = {g0}: T = {period:.8} (ref. {reference}, rel. {:.1e}), energy {energy_error:.1e}, <= {iterations} iterations/step",
             rel(period, reference)
         ));
-        if rel(period, reference) > 1e-5 || energy_error > 1e-5 {
+        if exceeds(rel(period, reference), 1e-5) || exceeds(energy_error, 1e-5) {
             return Err(report.join("; "));
         }
     }
@@ -954,13 +957,13 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         let scale = a
             .iter()
             .map(|x| x.abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, nan_max)
             .max(f64::MIN_POSITIVE);
         let diff = a
             .iter()
             .zip(&b)
             .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, nan_max)
             / scale;
         let identical = a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits());
         report.push(format!(
@@ -983,7 +986,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         } else {
             1e-9
         };
-        if diff > bound {
+        if exceeds(diff, bound) {
             failures.push(format!("{name} differs by {diff:e} (bound {bound:e})"));
         }
     }
@@ -1052,13 +1055,13 @@ fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
         .0
         .iter()
         .map(|q| (q - full.0[0]).abs())
-        .fold(0.0, f64::max);
-    let vmax = full.1.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        .fold(0.0, nan_max);
+    let vmax = full.1.iter().map(|v| v.abs()).fold(0.0, nan_max);
     let diff = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
             .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
+            .fold(0.0, nan_max)
     };
     let torque_error = diff(&fixed.0, &full.0) / fluctuation;
     let velocity_error = diff(&fixed.1, &full.1) / vmax;
@@ -1069,7 +1072,7 @@ fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
             fixed.2, fixed.3, full.2, full.3
         ),
     );
-    if torque_error > 1e-5 || velocity_error > 1e-5 || full.3 <= fixed.3 {
+    if exceeds(torque_error, 1e-5) || exceeds(velocity_error, 1e-5) || full.3 <= fixed.3 {
         return Err(format!(
             "fixed vs full Newton: torque {torque_error:e}, velocity {velocity_error:e}"
         ));
@@ -1121,10 +1124,6 @@ fn run_series(
         .collect()
 }
 
-fn largest(x: &[f64]) -> f64 {
-    x.iter().map(|v| v.abs()).fold(0.0, f64::max)
-}
-
 /// 1 and 2 ranks over a short run: the reduced 6k brake started from a seeded random
 /// combination of its 40 real modes (0.01 um), 100 steps of 2 us. The 1-rank run writes its
 /// braking torque and pad velocity; the 2-rank run compares. They cannot agree bit for bit
@@ -1144,68 +1143,33 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
         &format!("random-start-{}", petsc.size()),
         &["braking_torque", "sensors/pad/velocity"],
     )?;
-    let file = super::common::suite_dir().join("random-start-1-rank.txt");
-    let flat: Vec<String> = series
-        .iter()
-        .map(|s| {
-            s.iter()
-                .map(|x| format!("{x:e}"))
-                .collect::<Vec<_>>()
-                .join(" ")
-        })
-        .collect();
-    if petsc.size() == 1 {
-        if petsc.rank() == 0 {
-            std::fs::write(&file, flat.join("\n")).map_err(|e| e.to_string())?;
-        }
-        let t = &series[0];
-        let fluctuation = t.iter().map(|x| (x - t[0]).abs()).fold(0.0, f64::max);
-        say(
-            petsc,
-            &format!(
-                "random start (seed 7): torque fluctuation {fluctuation:.3e} N m, pad velocity up to {:.3e} m/s",
-                largest(&series[1])
-            ),
-        );
+    let t = &series[0];
+    let fluctuation = largest(t.iter().map(|x| (x - t[0]).abs()));
+    say(
+        petsc,
+        &format!(
+            "random start (seed 7): torque fluctuation {fluctuation:.3e} N m, pad velocity up to {:.3e} m/s",
+            largest_abs(&series[1])
+        ),
+    );
+    let Some(one) = super::common::one_rank_rows(petsc, "random-start", &series)? else {
         return Ok(());
-    }
-    let text = std::fs::read_to_string(&file)
-        .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
-    let one: Vec<Vec<f64>> = text
-        .lines()
-        .map(|l| {
-            l.split(' ')
-                .map(|x| x.parse().unwrap_or(f64::NAN))
-                .collect()
-        })
-        .collect();
+    };
     let mut report = Vec::new();
     for (k, (name, bound)) in [("torque", 1e-6), ("pad velocity", 1e-6)]
         .iter()
         .enumerate()
     {
         let (a, b) = (&one[k], &series[k]);
-        if a.len() != b.len() {
-            return Err(format!(
-                "{name}: {} values on 1 rank, {} here",
-                a.len(),
-                b.len()
-            ));
-        }
         // The torque against its fluctuation (the preload's torque is 10^4 times larger).
         let scale = if k == 0 {
-            a.iter().map(|x| (x - a[0]).abs()).fold(0.0, f64::max)
+            largest(a.iter().map(|x| (x - a[0]).abs()))
         } else {
-            largest(a)
+            largest_abs(a)
         };
-        let diff = a
-            .iter()
-            .zip(b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max)
-            / scale;
+        let diff = max_abs_difference(a, b) / scale;
         report.push(format!("{name} {diff:.1e}"));
-        if diff.is_nan() || diff > *bound {
+        if exceeds(diff, *bound) {
             return Err(format!(
                 "{name}: {} ranks differ from 1 by {diff:e} of its scale (bound {bound:e})",
                 petsc.size()
@@ -1246,18 +1210,18 @@ fn impulse_start(petsc: &Petsc) -> Result<(), String> {
     let once = run(1.0, "impulse-1")?;
     let twice = run(2.0, "impulse-2")?;
     let along = once[1] * 0.5e-5 + once[2] * 1.0e-5;
-    let scale = largest(&twice);
+    let scale = largest_abs(&twice);
     let nonlinearity = once
         .iter()
         .zip(&twice)
         .map(|(a, b)| (2.0 * a - b).abs())
-        .fold(0.0, f64::max)
+        .fold(0.0, nan_max)
         / scale;
     say(
         petsc,
         &format!(
             "impulse start: v0 . I = {along:.3e} W s (> 0), pad velocity up to {:.3e} m/s; 2 I vs 2 x I: {nonlinearity:.1e} of the largest",
-            largest(&once)
+            largest_abs(&once)
         ),
     );
     if along.is_nan() || along <= 0.0 {

@@ -409,9 +409,10 @@ mod tests {
         let d = decimated(&points);
         assert_eq!(d.len(), LINE_BUCKETS);
         let extreme = |v: &[(f64, f64)], max: bool| {
+            use crate::measure::nan_max;
             v.iter()
                 .map(|p| if max { p.1 } else { -p.1 })
-                .fold(f64::NEG_INFINITY, f64::max)
+                .fold(f64::NEG_INFINITY, nan_max)
         };
         assert_eq!(extreme(&d, true), extreme(&points, true));
         assert_eq!(extreme(&d, false), extreme(&points, false));

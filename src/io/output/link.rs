@@ -1,6 +1,7 @@
 //! Writers of the time/frequency link: /post/modal_energy with modal_energy.png, and
 //! /post/dynamic_stability with dynamic_stability.png and dynamic_stability_time.png.
 
+use crate::measure::nan_max;
 use std::path::Path;
 
 use super::WriteError;
@@ -398,7 +399,7 @@ fn plot_contact_cycle(
     let Some(map) = plane_map(context, pad.interface) else {
         return Ok(());
     };
-    let top = map.cells.iter().map(|&(_, j)| max[j]).fold(0.0, f64::max);
+    let top = map.cells.iter().map(|&(_, j)| max[j]).fold(0.0, nan_max);
     let stiffness = "contact stiffness (Pa/m)";
     let panels = [
         map_figure(

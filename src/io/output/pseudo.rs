@@ -8,6 +8,7 @@ use super::WriteError;
 use crate::io::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
+use crate::measure::{nan_max, nan_min};
 use crate::post::pseudo_trajectory::{Found, Period};
 use crate::stages::pseudo::{PseudoReport, PseudoStudy};
 
@@ -43,9 +44,9 @@ fn write_study(file: &ResultsFile, g: &str, s: &PseudoStudy) -> Result<(), Write
     let span = |p: &Period, highest: bool| {
         let f = p.frequencies_hz().into_iter().filter(|x| x.is_finite());
         if highest {
-            f.fold(f64::NEG_INFINITY, f64::max)
+            f.fold(f64::NEG_INFINITY, nan_max)
         } else {
-            f.fold(f64::INFINITY, f64::min)
+            f.fold(f64::INFINITY, nan_min)
         }
     };
     let tables: [(&str, Vec<f64>, &str); 8] = [

@@ -516,9 +516,16 @@ pub fn read(path: &Path) -> Result<InpModel, InpError> {
     }
     if let Mode::Element { pending, .. } = &mode {
         if !pending.is_empty() {
-            return Err(InpError::Model {
-                file: path.to_path_buf(),
-                message: "the last element line is incomplete".into(),
+            let (file, line) = lines
+                .last()
+                .map_or((path.to_path_buf(), 0), |(f, l, _)| (f.clone(), *l));
+            return Err(InpError::Syntax {
+                file,
+                line,
+                message: format!(
+                    "the last element line is incomplete (element {} ends with a comma)",
+                    pending[0]
+                ),
             });
         }
     }
@@ -593,7 +600,12 @@ pub fn read(path: &Path) -> Result<InpModel, InpError> {
             })?;
             let entry = by_material.entry(m).or_default();
             for &n in &conn[e * nn..(e + 1) * nn] {
-                entry.0.push(map_node(n)?);
+                let node = node_index.get(&n).copied().ok_or_else(|| {
+                    model_err(format!(
+                        "element {id} uses node {n}, which no *NODE line defines"
+                    ))
+                })?;
+                entry.0.push(node);
             }
             entry.1.push(*id);
         }

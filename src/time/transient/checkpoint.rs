@@ -4,6 +4,7 @@
 use super::{io_error, Transient, TransientFiles, TransientInputs, TransientSettings};
 use crate::io::series::SeriesFile;
 use crate::la::{LaError, Petsc, Vector};
+use crate::measure::nan_max;
 use crate::time::newmark::{State, StepControl, TimeError};
 
 /// w^T K w and w^T M w of the integrated operators for a fixed w (w_i = sin(0.7 i + 0.3) over
@@ -288,7 +289,7 @@ impl<'p> Checkpoint<'p> {
             let size = full.norm2()?;
             recovered.axpy(-1.0, &full)?;
             if size > 0.0 {
-                worst = worst.max(recovered.norm2()? / size);
+                worst = nan_max(worst, recovered.norm2()? / size);
             }
             Ok(x)
         };
