@@ -140,7 +140,8 @@ pub enum ModelSource {
 pub struct Output {
     #[serde(default = "default_directory")]
     pub directory: PathBuf,
-    /// Export the assembled K and M: any of "mtx" (Matrix Market), "petsc" (PETSc binary).
+    /// Export the assembled K and M (and, with complex modes, the tangent K_tangent and the
+    /// damping C of the static state): any of "mtx" (Matrix Market), "petsc" (PETSc binary).
     #[serde(default)]
     pub export_matrices: Vec<String>,
     /// Also write the model as an Abaqus input file (`model.inp`), to open it in other tools.

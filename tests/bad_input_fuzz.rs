@@ -184,7 +184,7 @@ fn word_spans(text: &str) -> Vec<(usize, usize)> {
 }
 
 /// An error message is useful when it names the file and where in it: a line (`file:12`,
-/// "line 12"), a key or keyword (quoted), a numbered node or element, or, for what is missing
+/// "line 12"), a key or keyword (quoted, or a table path), a numbered node or element, or, for what is missing
 /// from the whole file, what is missing ("no elements", "no $MeshFormat section").
 fn names_file_and_place(message: &str, file: &str) -> bool {
     let numbered = |word: &str| {
@@ -200,8 +200,17 @@ fn names_file_and_place(message: &str, file: &str) -> bool {
         || message.contains("key")
         || message.contains('\'')
         || message.contains('`')
-        || message.contains(": no ");
+        || message.contains(": no ")
+        || message.split(": ").any(is_dotted_key);
     message.contains(file) && place
+}
+
+/// A scene key path such as `model.geometry`, as the validation names a table.
+fn is_dotted_key(word: &str) -> bool {
+    word.contains('.')
+        && word
+            .split('.')
+            .all(|p| !p.is_empty() && p.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
 }
 
 /// Runs `cases` mutations of `seed` through `read` (which gets the path of the mutated file and

@@ -14,6 +14,7 @@ pub mod low_rank;
 pub mod matrix;
 pub mod observation;
 pub mod quadratic;
+pub mod qz;
 pub mod solver;
 pub mod vector;
 

@@ -123,7 +123,7 @@ pub fn complex_modes<'p>(
 /// at the static state, or the user's (full stiffness, damping).
 ///
 /// # Collective
-fn quadratic_operators<'p>(
+pub fn quadratic_operators<'p>(
     petsc: &'p Petsc,
     damping: &DampingSettings,
     ops: &Operators<'p>,

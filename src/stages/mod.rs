@@ -153,8 +153,12 @@ impl Timings {
     pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
         let start = Instant::now();
         let out = f();
-        self.stages
-            .push((name.to_string(), start.elapsed().as_secs_f64()));
+        let seconds = start.elapsed().as_secs_f64();
+        // A stage run more than once (an export per format) is one entry: its total time.
+        match self.stages.iter_mut().find(|(n, _)| n == name) {
+            Some((_, total)) => *total += seconds,
+            None => self.stages.push((name.to_string(), seconds)),
+        }
         out
     }
 }
@@ -198,6 +202,23 @@ pub fn analyses<'p>(
         })?),
         None => None,
     };
+    // With complex modes, also the linearization they solve: the tangent stiffness
+    // K0 + K_c + K_stick + K_f (unsymmetric) and the damping C, for a cross-check elsewhere.
+    if scene.complex_modes.is_some() && !scene.output.export_matrices.is_empty() {
+        let (kt, c) = timings.stage("linearization for export", || {
+            complex::quadratic_operators(petsc, &damping, &ops, preload.as_ref())
+        })?;
+        for format in &scene.output.export_matrices {
+            timings.stage("export linearization", || {
+                crate::io::output::export_named(
+                    petsc,
+                    format,
+                    &[("K_tangent", &kt), ("C", &c)],
+                    output,
+                )
+            })?;
+        }
+    }
     let complex = match &scene.complex_modes {
         Some(settings) => {
             let (p, m) = (preload.as_ref(), modes.as_ref());

@@ -12,7 +12,7 @@
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::fem::shape::ElementKind;
 use squeal::la::Petsc;
-use squeal::measure::{exceeds, nan_max};
+use squeal::measure::{exceeds, nan_max, nan_min};
 use squeal::mesh::structured::{annulus, block};
 use squeal::mesh::Clamp;
 
@@ -112,44 +112,79 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
     let (e, nu, rho) = (2.1e11, 0.3, mat.density);
     let d = e * h.powi(3) / (12.0 * (1.0 - nu * nu));
     let to_hz = |l2: f64| l2 / (a * a) * (d / (rho * h)).sqrt() / (2.0 * std::f64::consts::PI);
-    // Measured (2 ranks): Hex8I [16,192,1] within 1.0e-3 of Leissa for n = 0..4 and [32,384,1]
-    // within 1.3e-3 below it (the 3D solid is slightly softer than Kirchhoff: shear and rotary
-    // inertia); Hex20 [16,192,1] 7.2e-3 above, converging slowly from above (fully integrated
-    // serendipity elements stiffen in thin bending), Tet10 from the six-tet split of these thin
-    // cells is far too stiff (5-30%) and is verified on the cantilever instead.
-    for (kind, n, tol) in [
-        (ElementKind::Hex8I, [16, 192, 1], 3e-3),
-        (ElementKind::Hex20, [16, 192, 1], 1e-2),
+    // The tolerance is the sum of three parts. (1) Leissa's table: 6 significant digits,
+    // 5e-6. (2) The model: a 3D solid is not a Kirchhoff plate. Shear and rotary inertia lower
+    // a frequency by about (k h)^2 / 24 (1 + 2 / (kappa (1 - nu))) (Mindlin; Timoshenko's beam
+    // correction), with k = lambda / a the bending wavenumber: at most 4.7e-4 here (n = 4,
+    // lambda = 5.06, h k = 0.051, kappa = 5/6). The solid's clamp (every node of the inner
+    // face fixed, where Kirchhoff fixes the mid-surface's deflection and slope) differs from
+    // the plate's by an amount no formula here gives: it is taken from a measurement, Hex8I at
+    // [32,384,1] 1.3e-3 below Leissa, with half again as margin, so the model part is 2e-3.
+    // (3) The discretization, from a convergence study on this mesh and the ones two and four
+    // times as coarse in the plane: per mode the observed order p (Richardson) and the error
+    // estimate |f(2h) - f(h)| / (2^p - 1). Hex20 in this thin plate converges at p ~ 1.3, not
+    // its asymptotic 4 (one layer of fully integrated serendipity elements, in-plane size 3x
+    // the thickness: pre-asymptotic, locking), so p is measured, not assumed.
+    const MODEL: f64 = 2e-3 + 5e-6;
+    for (kind, n) in [
+        (ElementKind::Hex8I, [16, 192, 1]),
+        (ElementKind::Hex20, [16, 192, 1]),
     ] {
-        let mesh = annulus(b, a, h, n, kind, mat.clone());
-        let request = RealModeRequest {
-            count: 9,
-            ..Default::default()
-        };
-        let (system, modes) = solve_modes(petsc, &mesh, &[Clamp::all("inner")], &request)?;
-        let outer = mesh.node_set("outer")?;
+        let mut frequencies = Vec::new();
         let mut worst: f64 = 0.0;
         let mut line = String::new();
-        for (i, shape) in modes.shapes.iter().enumerate() {
-            let all = shape.gather_all().map_err(|e| e.to_string())?;
-            let w: Vec<(usize, f64)> = outer
-                .iter()
-                .map(|&node| (node, all[system.dofs.node_dofs[node][2] as usize]))
-                .collect();
-            let nd = nodal_diameters(&mesh, &w);
-            if nd > 4 {
-                return Err(format!("mode {i} has {nd} nodal diameters, expected 0..4"));
+        for cells in [4, 2, 1].map(|k| [n[0] / k, n[1] / k, n[2]]) {
+            let mesh = annulus(b, a, h, cells, kind, mat.clone());
+            let request = RealModeRequest {
+                count: 9,
+                ..Default::default()
+            };
+            let (system, modes) = solve_modes(petsc, &mesh, &[Clamp::all("inner")], &request)?;
+            let outer = mesh.node_set("outer")?;
+            let mut by_diameters = [f64::NAN; 5];
+            worst = 0.0;
+            line.clear();
+            for (i, shape) in modes.shapes.iter().enumerate() {
+                let all = shape.gather_all().map_err(|e| e.to_string())?;
+                let w: Vec<(usize, f64)> = outer
+                    .iter()
+                    .map(|&node| (node, all[system.dofs.node_dofs[node][2] as usize]))
+                    .collect();
+                let nd = nodal_diameters(&mesh, &w);
+                if nd > 4 {
+                    return Err(format!("mode {i} has {nd} nodal diameters, expected 0..4"));
+                }
+                by_diameters[nd] = modes.frequencies_hz[i];
+                let err = rel(modes.frequencies_hz[i], to_hz(LAMBDA2[nd]));
+                worst = nan_max(worst, err);
+                line += &format!(" n={nd}:{:.2e}", err);
             }
-            let err = rel(modes.frequencies_hz[i], to_hz(LAMBDA2[nd]));
-            worst = nan_max(worst, err);
-            line += &format!(" n={nd}:{:.2e}", err);
+            frequencies.push(by_diameters);
         }
+        let (mut discretization, mut lowest_order) = (0.0f64, f64::INFINITY);
+        let per_mesh = |k: usize| frequencies[k].iter().copied();
+        for ((f4, f2), f1) in per_mesh(0).zip(per_mesh(1)).zip(per_mesh(2)) {
+            let order = ((f4 - f2) / (f2 - f1)).abs().log2();
+            lowest_order = nan_min(lowest_order, order);
+            discretization = nan_max(discretization, rel(f2, f1) / (2f64.powf(order) - 1.0));
+        }
+        if exceeds(0.5, lowest_order) {
+            return Err(format!(
+                "{kind:?}: observed order {lowest_order:.2}: the frequencies do not converge"
+            ));
+        }
+        let tol = MODEL + discretization;
         say(
             petsc,
-            &format!("{:6} rel. errors vs Leissa:{line}", kind.name()),
+            &format!(
+                "{:6} rel. errors vs Leissa:{line}; tolerance {tol:.2e} (discretization {discretization:.2e}, lowest observed order {lowest_order:.2})",
+                kind.name()
+            ),
         );
         if exceeds(worst, tol) {
-            return Err(format!("{kind:?}: worst relative error {worst:.3e}"));
+            return Err(format!(
+                "{kind:?}: worst relative error {worst:.3e} > {tol:.3e}"
+            ));
         }
     }
     Ok(())

@@ -1,7 +1,7 @@
 //! The stages called one by one, as a program built on squeal would (DESIGN.md §3): no scene
 //! run, no file written. The preloaded 6k brake of the suite (mu 0.4, 20 bar, disc turning).
 
-use squeal::measure::nan_min;
+use squeal::measure::{nan_max, nan_min};
 use std::path::Path;
 
 use squeal::contact::law::FrictionLaw;
@@ -155,7 +155,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
             .iter()
             .map(|(p, _)| (p.0 - s.0).hypot(p.1 - s.1) / s.0.hypot(s.1))
             .fold(f64::INFINITY, nan_min);
-        worst = if gap.is_nan() { gap } else { worst.max(gap) };
+        worst = nan_max(worst, gap);
     }
     if nominal.is_empty() || worst.is_nan() || worst > 1e-12 {
         return Err(format!(

@@ -1,10 +1,16 @@
 //! Direct solves (MUMPS) in the three storage formats against Euler-Bernoulli statics:
 //! a cantilever of length L under a tip load P deflects by delta = P L^3 / (3 E I)
-//! (e.g. Timoshenko & Gere, "Mechanics of materials"); for L/h = 40 shear adds
-//! (E / G)(h / L)^2 / (4 kappa) = 5e-4 relative, so the solid must agree within 0.5%.
-//! SBAIJ + Cholesky, BAIJ + LU and AIJ + LU must agree with each other to round-off.
-//! Measured: 0.41% below Euler-Bernoulli (Hex8I, 80 x 4 x 2 cells; the clamped face also
-//! restrains the Poisson contraction).
+//! (e.g. Timoshenko & Gere, "Mechanics of materials"). SBAIJ + Cholesky, BAIJ + LU and AIJ + LU
+//! must agree with each other to round-off.
+//!
+//! How far the solid may be from the beam (measured: 0.41% below, Hex8I, 80 x 4 x 2 cells):
+//! - shear makes it softer by (E / G)(h / L)^2 / (4 kappa) = 5e-4 (L/h = 40, kappa = 5/6);
+//! - the clamped face also stops the Poisson contraction: near the clamp the section bends in
+//!   plane strain, stiffer by nu^2 / (1 - nu^2) = 9.9%, over a Saint-Venant boundary layer of
+//!   about the thickness h, where the moment is largest (P L): the tip deflection is smaller
+//!   by about 3 (h / L) nu^2 / (1 - nu^2) = 7.4e-3;
+//! - the discretization, estimated by Richardson from the mesh twice as coarse with order 2
+//!   (trilinear elements): |delta(2h) - delta(h)| / 3.
 
 use squeal::fem::shape::ElementKind;
 use squeal::la::fem_assembly::assemble_system_as;
@@ -28,59 +34,40 @@ fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
     let (e, p): (f64, f64) = (2.1e11, 1000.0);
     let inertia = b * h.powi(3) / 12.0;
     let exact = p * l.powi(3) / (3.0 * e * inertia);
-    let mesh = block([l, b, h], n, ElementKind::Hex8I, steel());
     let mut tips = Vec::new();
     for (format, kind) in [
         (MatrixFormat::Sbaij, Factorization::Cholesky),
         (MatrixFormat::Baij, Factorization::Lu),
         (MatrixFormat::Aij, Factorization::Lu),
     ] {
-        let system = assemble_system_as(petsc, &mesh, &[Clamp::all("u0")], Some(format))
-            .map_err(|e| e.to_string())?;
-        // Consistent nodal forces of a uniform shear traction P / (b h) on the end face:
-        // bilinear faces on a uniform grid give each node its share of the tributary area.
-        let (dy, dz) = (b / n[1] as f64, h / n[2] as f64);
-        let weight = |v: f64, d: f64, len: f64| {
-            if v.abs() < 1e-12 || (v - len).abs() < 1e-12 {
-                0.5 * d
-            } else {
-                d
-            }
-        };
-        let mut f = system.stiffness.new_vector().map_err(|e| e.to_string())?;
-        {
-            let mut local = f.local_mut().map_err(|e| e.to_string())?;
-            let first = system.dofs.owned_dofs().start;
-            for &node in mesh.node_set("u1")? {
-                let d = system.dofs.node_dofs[node][2];
-                if d >= 0 && system.dofs.owned_dofs().contains(&(d as usize)) {
-                    let x = mesh.coords[node];
-                    local[d as usize - first] =
-                        p / (b * h) * weight(x[1], dy, b) * weight(x[2], dz, h);
-                }
-            }
-        }
-        let mut u = f.duplicate().map_err(|e| e.to_string())?;
-        let solver = DirectSolver::factorize(petsc, &system.stiffness, kind, "static_")
-            .map_err(|e| e.to_string())?;
-        solver.solve(&f, &mut u).map_err(|e| e.to_string())?;
-        // Mean vertical deflection of the end face.
-        let all = u.gather_all().map_err(|e| e.to_string())?;
-        let face = mesh.node_set("u1")?;
-        let tip: f64 = face
-            .iter()
-            .map(|&nd| all[system.dofs.node_dofs[nd][2] as usize])
-            .sum::<f64>()
-            / face.len() as f64;
+        let (tip, factor_entries, ordering) = tip_deflection(petsc, n, [l, b, h], p, format, kind)?;
         say(petsc, &format!(
-            "{format:?} + {kind:?}: tip deflection {tip:.6e} m, Euler-Bernoulli {exact:.6e} m (rel. {:.1e}); factor {:.2e} entries, ordering {}",
-            rel(tip, exact), solver.report().factor_entries, solver.report().ordering_name()
+            "{format:?} + {kind:?}: tip deflection {tip:.6e} m, Euler-Bernoulli {exact:.6e} m (rel. {:.1e}); factor {factor_entries:.2e} entries, ordering {ordering}",
+            rel(tip, exact)
         ));
         tips.push(tip);
     }
-    if exceeds(rel(tips[0], exact), 5e-3) {
+    let coarse = n.map(|c| c / 2);
+    let (coarse_tip, _, _) = tip_deflection(
+        petsc,
+        coarse,
+        [l, b, h],
+        p,
+        MatrixFormat::Sbaij,
+        Factorization::Cholesky,
+    )?;
+    let nu: f64 = 0.3;
+    let discretization = rel(coarse_tip, tips[0]) / 3.0;
+    let tol = 5e-4 + 3.0 * (h / l) * nu * nu / (1.0 - nu * nu) + discretization;
+    say(
+        petsc,
+        &format!(
+            "{coarse:?} cells: tip {coarse_tip:.6e} m; tolerance {tol:.2e} (discretization {discretization:.1e})"
+        ),
+    );
+    if exceeds(rel(tips[0], exact), tol) {
         return Err(format!(
-            "tip deflection {} vs Euler-Bernoulli {exact}",
+            "tip deflection {} vs Euler-Bernoulli {exact} (tolerance {tol:.2e})",
             tips[0]
         ));
     }
@@ -92,4 +79,59 @@ fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// The mean vertical deflection of the end face of a cantilever of `size` on `n` Hex8I cells
+/// under the tip load `p`, clamped at x = 0; with the factor's size and ordering.
+fn tip_deflection(
+    petsc: &Petsc,
+    n: [usize; 3],
+    size: [f64; 3],
+    p: f64,
+    format: MatrixFormat,
+    kind: Factorization,
+) -> Result<(f64, f64, String), String> {
+    let [_, b, h] = size;
+    let mesh = block(size, n, ElementKind::Hex8I, steel());
+    let system = assemble_system_as(petsc, &mesh, &[Clamp::all("u0")], Some(format))
+        .map_err(|e| e.to_string())?;
+    // Consistent nodal forces of a uniform shear traction P / (b h) on the end face:
+    // bilinear faces on a uniform grid give each node its share of the tributary area.
+    let (dy, dz) = (b / n[1] as f64, h / n[2] as f64);
+    let weight = |v: f64, d: f64, len: f64| {
+        if v.abs() < 1e-12 || (v - len).abs() < 1e-12 {
+            0.5 * d
+        } else {
+            d
+        }
+    };
+    let mut f = system.stiffness.new_vector().map_err(|e| e.to_string())?;
+    {
+        let mut local = f.local_mut().map_err(|e| e.to_string())?;
+        let first = system.dofs.owned_dofs().start;
+        for &node in mesh.node_set("u1")? {
+            let d = system.dofs.node_dofs[node][2];
+            if d >= 0 && system.dofs.owned_dofs().contains(&(d as usize)) {
+                let x = mesh.coords[node];
+                local[d as usize - first] = p / (b * h) * weight(x[1], dy, b) * weight(x[2], dz, h);
+            }
+        }
+    }
+    let mut u = f.duplicate().map_err(|e| e.to_string())?;
+    let solver = DirectSolver::factorize(petsc, &system.stiffness, kind, "static_")
+        .map_err(|e| e.to_string())?;
+    solver.solve(&f, &mut u).map_err(|e| e.to_string())?;
+    let all = u.gather_all().map_err(|e| e.to_string())?;
+    let face = mesh.node_set("u1")?;
+    let tip: f64 = face
+        .iter()
+        .map(|&nd| all[system.dofs.node_dofs[nd][2] as usize])
+        .sum::<f64>()
+        / face.len() as f64;
+    let report = solver.report();
+    Ok((
+        tip,
+        report.factor_entries,
+        report.ordering_name().to_string(),
+    ))
 }

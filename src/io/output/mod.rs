@@ -205,7 +205,19 @@ pub fn export_matrices(
     m: &crate::la::SparseMatrix,
     output: &Path,
 ) -> Result<(), WriteError> {
-    for (name, a) in [("K", k), ("M", m)] {
+    export_named(petsc, format, &[("K", k), ("M", m)], output)
+}
+
+/// <name>.<format> for each named matrix (`mtx`: Matrix Market, else PETSc binary).
+///
+/// # Collective
+pub fn export_named(
+    petsc: &crate::la::Petsc,
+    format: &str,
+    matrices: &[(&str, &crate::la::SparseMatrix)],
+    output: &Path,
+) -> Result<(), WriteError> {
+    for &(name, a) in matrices {
         if format == "mtx" {
             crate::io::matrix_market::write(petsc.world(), a, &output.join(format!("{name}.mtx")))?;
         } else {
