@@ -4,6 +4,7 @@
 //! PETSc objects are destroyed before PETSc finalizes, and PETSc finalizes before MPI — by
 //! construction, not by convention.
 
+pub mod dense_quadratic;
 pub mod eigen;
 pub(crate) mod error;
 pub mod fem_assembly;
@@ -14,7 +15,7 @@ pub mod low_rank;
 pub mod matrix;
 pub mod observation;
 pub mod quadratic;
-pub mod qz;
+
 pub mod solver;
 pub mod vector;
 

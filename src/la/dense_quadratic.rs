@@ -1,0 +1,233 @@
+//! Every eigenvalue of a dense quadratic eigenproblem (s^2 M + s C + K) x = 0 with M symmetric
+//! positive definite, by LAPACK alone: no shift, no Krylov space, no projection. It is the
+//! independent reference the complex modes of small models are checked against, on the
+//! matrices `[output] export_matrices` writes.
+//!
+//! The companion form is scaled so that its blocks have norm ~1 (s = gamma mu with
+//! gamma = sqrt(||K|| / ||M||), everything divided by ||K||; Fan, Lin & Van Dooren, SIMAX 26,
+//! 2004) and turned into a standard problem with the Cholesky factor of M:
+//! [[0, I], [-M~^-1 K~, -M~^-1 C~]], whose eigenvalues dgeev finds (balancing, Hessenberg QR).
+//! QZ on the pencil (dggev) would not need M^-1 but measured 22x slower here (71.5 s against
+//! 3.2 s at order 2,000; dgeev 22 s at 4,064).
+
+use std::os::raw::{c_char, c_int};
+
+use super::lapack::dim;
+use crate::measure::nan_max;
+
+extern "C" {
+    fn dgeev_(
+        jobvl: *const c_char,
+        jobvr: *const c_char,
+        n: *const c_int,
+        a: *mut f64,
+        lda: *const c_int,
+        wr: *mut f64,
+        wi: *mut f64,
+        vl: *mut f64,
+        ldvl: *const c_int,
+        vr: *mut f64,
+        ldvr: *const c_int,
+        work: *mut f64,
+        lwork: *const c_int,
+        info: *mut c_int,
+    );
+    fn dpotrf_(
+        uplo: *const c_char,
+        n: *const c_int,
+        a: *mut f64,
+        lda: *const c_int,
+        info: *mut c_int,
+    );
+    fn dpotrs_(
+        uplo: *const c_char,
+        n: *const c_int,
+        nrhs: *const c_int,
+        a: *const f64,
+        lda: *const c_int,
+        b: *mut f64,
+        ldb: *const c_int,
+        info: *mut c_int,
+    );
+}
+
+/// The eigenvalues `(re, im)` of the n x n column-major matrix `a` (consumed) by LAPACK's
+/// dgeev (balancing, Hessenberg QR), without eigenvectors.
+pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, String> {
+    if a.len() != n * n {
+        return Err(format!("dgeev: {} entries for order {n}", a.len()));
+    }
+    if a.iter().any(|x| !x.is_finite()) {
+        return Err("dgeev: the matrix has NaN or infinite entries".into());
+    }
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let ni = dim(n)?;
+    let (mut wr, mut wi) = (vec![0.0; n], vec![0.0; n]);
+    let mut unused = [0.0f64; 1];
+    let no = b'N' as c_char;
+    let one: c_int = 1;
+    let mut info: c_int = 0;
+    let mut call = |work: &mut [f64], lwork: c_int, info: &mut c_int| {
+        // SAFETY: a holds n x n entries, wr and wi n each, work lwork (1 for the workspace
+        // query, lwork = -1); no eigenvectors are asked for (ldv = 1).
+        unsafe {
+            dgeev_(
+                &no,
+                &no,
+                &ni,
+                a.as_mut_ptr(),
+                &ni,
+                wr.as_mut_ptr(),
+                wi.as_mut_ptr(),
+                unused.as_mut_ptr(),
+                &one,
+                unused.as_mut_ptr(),
+                &one,
+                work.as_mut_ptr(),
+                &lwork,
+                info,
+            );
+        }
+    };
+    let mut query = [0.0f64];
+    call(&mut query, -1, &mut info);
+    if info != 0 {
+        return Err(format!("dgeev workspace query failed (info {info})"));
+    }
+    let lwork = (query[0] as usize).max(3 * n);
+    let mut work = vec![0.0; lwork];
+    call(&mut work, dim(lwork)?, &mut info);
+    if info != 0 {
+        return Err(format!(
+            "dgeev did not converge (info {info}) for order {n}"
+        ));
+    }
+    Ok(wr.into_iter().zip(wi).collect())
+}
+
+/// Solves M X = B in place for the symmetric positive definite n x n column-major `m`
+/// (consumed; Cholesky, dpotrf + dpotrs) and the n x nrhs column-major `b`.
+pub fn solve_spd(n: usize, mut m: Vec<f64>, b: &mut [f64]) -> Result<(), String> {
+    if m.len() != n * n || n == 0 || !b.len().is_multiple_of(n) {
+        return Err(format!(
+            "Cholesky solve: {} entries for order {n}, {} right-hand side entries",
+            m.len(),
+            b.len()
+        ));
+    }
+    let (ni, nrhs) = (dim(n)?, dim(b.len() / n)?);
+    let lower = b'L' as c_char;
+    let mut info: c_int = 0;
+    // SAFETY: m holds n x n entries (leading dimension n).
+    unsafe { dpotrf_(&lower, &ni, m.as_mut_ptr(), &ni, &mut info) };
+    if info != 0 {
+        return Err(format!(
+            "Cholesky factorization failed (info {info}): the matrix is not positive definite"
+        ));
+    }
+    // SAFETY: m is the factor (n x n), b holds n x nrhs entries (leading dimension n).
+    unsafe {
+        dpotrs_(
+            &lower,
+            &ni,
+            &nrhs,
+            m.as_ptr(),
+            &ni,
+            b.as_mut_ptr(),
+            &ni,
+            &mut info,
+        )
+    };
+    if info != 0 {
+        return Err(format!("Cholesky solve failed (info {info})"));
+    }
+    Ok(())
+}
+
+/// The eigenvalues `(re, im)` of (s^2 M + s C + K) x = 0 for dense n x n column-major K, C and
+/// M (M symmetric positive definite), conjugate pairs included.
+pub fn quadratic_eigenvalues(
+    n: usize,
+    k: &[f64],
+    c: &[f64],
+    m: &[f64],
+) -> Result<Vec<(f64, f64)>, String> {
+    if [k.len(), c.len(), m.len()].iter().any(|&l| l != n * n) {
+        return Err(format!(
+            "quadratic eigenproblem: matrices of the wrong size for order {n}"
+        ));
+    }
+    let inf_norm = |a: &[f64]| {
+        (0..n)
+            .map(|i| (0..n).map(|j| a[i + n * j].abs()).sum::<f64>())
+            .fold(0.0, nan_max)
+    };
+    let (norm_k, norm_m) = (inf_norm(k), inf_norm(m));
+    let gamma = (norm_k / norm_m).sqrt();
+    // [K~ C~] = ([K C gamma] / ||K||), solved with M~ = M gamma^2 / ||K||: M~^-1 [K~ C~].
+    let mut rhs: Vec<f64> = k
+        .iter()
+        .map(|x| x / norm_k)
+        .chain(c.iter().map(|x| x * gamma / norm_k))
+        .collect();
+    let scaled_m: Vec<f64> = m.iter().map(|x| x * gamma * gamma / norm_k).collect();
+    solve_spd(n, scaled_m, &mut rhs)?;
+    let two = 2 * n;
+    let mut a = vec![0.0; two * two];
+    for i in 0..n {
+        a[i + two * (n + i)] = 1.0;
+        for j in 0..n {
+            a[(n + i) + two * j] = -rhs[i + n * j];
+            a[(n + i) + two * (n + j)] = -rhs[n * n + i + n * j];
+        }
+    }
+    Ok(eigenvalues(two, a)?
+        .into_iter()
+        .map(|(re, im)| (re * gamma, im * gamma))
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn damped_oscillators_give_their_closed_form_roots() {
+        // Two uncoupled oscillators m s^2 + c s + k = 0: s = (-c +- sqrt(c^2 - 4 m k)) / (2 m),
+        // one underdamped, one overdamped, with stiffness and mass of brake-like scales.
+        let (m, c, k) = ([2e-3, 1e-3], [0.4, 30.0], [8e7, 1e5]);
+        let diag = |v: [f64; 2]| vec![v[0], 0.0, 0.0, v[1]];
+        let mut s = quadratic_eigenvalues(2, &diag(k), &diag(c), &diag(m)).unwrap();
+        s.sort_by(|a, b| (a.0, a.1).partial_cmp(&(b.0, b.1)).unwrap());
+        let mut exact = Vec::new();
+        for i in 0..2 {
+            let disc = c[i] * c[i] - 4.0 * m[i] * k[i];
+            let (re, im) = if disc < 0.0 {
+                (-c[i] / (2.0 * m[i]), (-disc).sqrt() / (2.0 * m[i]))
+            } else {
+                (disc.sqrt() / (2.0 * m[i]), 0.0)
+            };
+            let centre = if disc < 0.0 { re } else { -c[i] / (2.0 * m[i]) };
+            if disc < 0.0 {
+                exact.extend([(centre, -im), (centre, im)]);
+            } else {
+                exact.extend([(centre - re, 0.0), (centre + re, 0.0)]);
+            }
+        }
+        exact.sort_by(|a, b| (a.0, a.1).partial_cmp(&(b.0, b.1)).unwrap());
+        for (got, want) in s.iter().zip(&exact) {
+            let scale = want.0.hypot(want.1);
+            assert!(
+                (got.0 - want.0).hypot(got.1 - want.1) <= 1e-12 * scale,
+                "{got:?} vs {want:?}"
+            );
+        }
+        assert!(eigenvalues(1, vec![f64::NAN]).is_err());
+        assert!(
+            quadratic_eigenvalues(1, &[1.0], &[0.0], &[-1.0]).is_err(),
+            "M not SPD"
+        );
+    }
+}
