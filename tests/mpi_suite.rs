@@ -7,7 +7,10 @@
 //! non-zero instead of hanging. The first line says how many tests were selected, the last how
 //! many ran, so a crash in between is visible to scripts/test.
 //!
-//! Usage: `mpirun -n N target/release/deps/mpi_suite-* [name-substring...]`.
+//! Usage: `mpirun -n N target/release/deps/mpi_suite-* [--shard=K/S] [name-substring...]`.
+//! `--shard=K/S` runs the K-th (0-based) of S parts of the selected tests, balanced by their
+//! expected times: scripts/test runs the 1-rank pass as two 1-rank shards side by side, one per
+//! core.
 
 mod suite;
 
@@ -38,13 +41,23 @@ fn main() {
         .skip(1)
         .filter(|a| !a.starts_with('-'))
         .collect();
-    let tests: Vec<_> = suite::all()
+    let selected: Vec<_> = suite::all()
         .into_iter()
         .filter(|(name, _)| filters.is_empty() || filters.iter().any(|f| name.contains(f.as_str())))
         .collect();
+    let shard = std::env::args().find_map(|a| {
+        let (k, s) = a.strip_prefix("--shard=")?.split_once('/')?;
+        Some((k.parse::<usize>().ok()?, s.parse::<usize>().ok()?))
+    });
     let (rank, size) = (petsc.rank(), petsc.size());
+    let tests = match shard {
+        Some((k, s)) if k < s => suite::shard(selected, k, s),
+        Some(_) => panic!("--shard=K/S needs K < S"),
+        None => selected,
+    };
     if rank == 0 {
-        println!("mpi suite: {} tests on {size} rank(s)", tests.len());
+        let part = shard.map_or(String::new(), |(k, s)| format!(" (shard {k} of {s})"));
+        println!("mpi suite: {} tests on {size} rank(s){part}", tests.len());
     }
     let watchdog = Watchdog::start(rank);
     let (mut passed, mut failed, mut skipped) = (0, 0, 0);

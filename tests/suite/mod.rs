@@ -55,6 +55,33 @@ pub fn time_limit(name: &str, ranks: i32) -> Duration {
     Duration::from_secs(if ranks > 2 { 3 * seconds } else { seconds })
 }
 
+/// Part `k` of `parts` of `tests`, balanced by expected time (longest first, each to the part
+/// with the least so far; a test not in LONG_TESTS counts as 2 s). Deterministic, so every
+/// part's run knows the same split.
+pub fn shard(tests: Vec<NamedTest>, k: usize, parts: usize) -> Vec<NamedTest> {
+    let weight = |name: &str| {
+        LONG_TESTS
+            .iter()
+            .find(|(long, _)| *long == name)
+            .map_or(2, |&(_, limit)| limit / 5)
+    };
+    let mut order: Vec<usize> = (0..tests.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(weight(tests[i].0)));
+    let mut load = vec![0u64; parts];
+    let mut part_of = vec![0; tests.len()];
+    for i in order {
+        let lightest = (0..parts).min_by_key(|&p| (load[p], p)).unwrap_or(0);
+        load[lightest] += weight(tests[i].0);
+        part_of[i] = lightest;
+    }
+    tests
+        .into_iter()
+        .zip(part_of)
+        .filter(|&(_, p)| p == k)
+        .map(|(t, _)| t)
+        .collect()
+}
+
 /// The tests that took longer than 12 s on 1 or 2 ranks, with their limit in seconds and, in
 /// the comment, the slowest time measured (some with a build running on the same 2 cores).
 const LONG_TESTS: &[(&str, u64)] = &[

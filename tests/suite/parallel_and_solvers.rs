@@ -404,7 +404,7 @@ fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Resul
         term("KR.mtx.gz", 1.0),
     ];
     let j = load_sum(petsc, &terms, &data_dir()).map_err(|e| e.to_string())?;
-    if j.asymmetry < 1e-12 {
+    if j.asymmetry.is_nan() || j.asymmetry < 1e-12 {
         return Err(format!(
             "J should be unsymmetric (friction), asymmetry {:e}",
             j.asymmetry
