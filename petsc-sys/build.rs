@@ -160,8 +160,10 @@ fn main() {
     check_configuration(&include_dirs);
 
     let out = PathBuf::from(env::var("OUT_DIR").unwrap());
-    let header = out.join("petsc_sys_wrapper.h");
-    std::fs::copy("wrapper.h", &header).unwrap();
+    // The header is read where it lies: a copy into OUT_DIR, newer than the build script's
+    // own output, made every later cargo call see petsc-sys as stale and rebuild it and
+    // everything above it (bindgen's callbacks track every header it reads).
+    let header = PathBuf::from(env::var("CARGO_MANIFEST_DIR").unwrap()).join("wrapper.h");
 
     let prefixes = "(Petsc|Vec|Mat|KSP|PC|EPS|ST|BV|DS|RG|PEP|SVD|IS|Slepc|PETSC|SLEPC|MAT|VEC|NORM_|INSERT_|ADD_)";
     let shim = out.join("static_fns");
