@@ -12,26 +12,10 @@
 
 use std::os::raw::{c_char, c_int};
 
-use super::lapack::dim;
+use super::lapack::{dim, eigenvalues};
 use crate::measure::nan_max;
 
 extern "C" {
-    fn dgeev_(
-        jobvl: *const c_char,
-        jobvr: *const c_char,
-        n: *const c_int,
-        a: *mut f64,
-        lda: *const c_int,
-        wr: *mut f64,
-        wi: *mut f64,
-        vl: *mut f64,
-        ldvl: *const c_int,
-        vr: *mut f64,
-        ldvr: *const c_int,
-        work: *mut f64,
-        lwork: *const c_int,
-        info: *mut c_int,
-    );
     fn dpotrf_(
         uplo: *const c_char,
         n: *const c_int,
@@ -49,62 +33,6 @@ extern "C" {
         ldb: *const c_int,
         info: *mut c_int,
     );
-}
-
-/// The eigenvalues `(re, im)` of the n x n column-major matrix `a` (consumed) by LAPACK's
-/// dgeev (balancing, Hessenberg QR), without eigenvectors.
-pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, String> {
-    if a.len() != n * n {
-        return Err(format!("dgeev: {} entries for order {n}", a.len()));
-    }
-    if a.iter().any(|x| !x.is_finite()) {
-        return Err("dgeev: the matrix has NaN or infinite entries".into());
-    }
-    if n == 0 {
-        return Ok(Vec::new());
-    }
-    let ni = dim(n)?;
-    let (mut wr, mut wi) = (vec![0.0; n], vec![0.0; n]);
-    let mut unused = [0.0f64; 1];
-    let no = b'N' as c_char;
-    let one: c_int = 1;
-    let mut info: c_int = 0;
-    let mut call = |work: &mut [f64], lwork: c_int, info: &mut c_int| {
-        // SAFETY: a holds n x n entries, wr and wi n each, work lwork (1 for the workspace
-        // query, lwork = -1); no eigenvectors are asked for (ldv = 1).
-        unsafe {
-            dgeev_(
-                &no,
-                &no,
-                &ni,
-                a.as_mut_ptr(),
-                &ni,
-                wr.as_mut_ptr(),
-                wi.as_mut_ptr(),
-                unused.as_mut_ptr(),
-                &one,
-                unused.as_mut_ptr(),
-                &one,
-                work.as_mut_ptr(),
-                &lwork,
-                info,
-            );
-        }
-    };
-    let mut query = [0.0f64];
-    call(&mut query, -1, &mut info);
-    if info != 0 {
-        return Err(format!("dgeev workspace query failed (info {info})"));
-    }
-    let lwork = (query[0] as usize).max(3 * n);
-    let mut work = vec![0.0; lwork];
-    call(&mut work, dim(lwork)?, &mut info);
-    if info != 0 {
-        return Err(format!(
-            "dgeev did not converge (info {info}) for order {n}"
-        ));
-    }
-    Ok(wr.into_iter().zip(wi).collect())
 }
 
 /// Solves M X = B in place for the symmetric positive definite n x n column-major `m`

@@ -1,7 +1,8 @@
 //! Dense LAPACK/BLAS (the library PETSc links, OpenBLAS here) for the small dense problems of
 //! the projected complex modes and the reduction: the general eigenproblem of the companion
-//! matrix (dgeev, with its balancing), the symmetric one of a Gram matrix (dsyev) and matrix
-//! products (dgemm, and dsyrk for symmetric ones). Column-major storage throughout.
+//! matrix (dgeev, with its balancing; also without eigenvectors), the symmetric one of a Gram
+//! matrix (dsyev) and matrix products (dgemm, and dsyrk for symmetric ones). Column-major
+//! storage throughout.
 
 use std::os::raw::{c_char, c_int};
 
@@ -171,6 +172,62 @@ pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
         values: wr.into_iter().zip(wi).collect(),
         vectors,
     })
+}
+
+/// The eigenvalues `(re, im)` of the n x n column-major matrix `a` (consumed) by LAPACK's
+/// dgeev (balancing, Hessenberg QR), without eigenvectors.
+pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, String> {
+    if a.len() != n * n {
+        return Err(format!("dgeev: {} entries for order {n}", a.len()));
+    }
+    if a.iter().any(|x| !x.is_finite()) {
+        return Err("dgeev: the matrix has NaN or infinite entries".into());
+    }
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let ni = dim(n)?;
+    let (mut wr, mut wi) = (vec![0.0; n], vec![0.0; n]);
+    let mut unused = [0.0f64; 1];
+    let no = b'N' as c_char;
+    let one: c_int = 1;
+    let mut info: c_int = 0;
+    let mut call = |work: &mut [f64], lwork: c_int, info: &mut c_int| {
+        // SAFETY: a holds n x n entries, wr and wi n each, work lwork (1 for the workspace
+        // query, lwork = -1); no eigenvectors are asked for (ldv = 1).
+        unsafe {
+            dgeev_(
+                &no,
+                &no,
+                &ni,
+                a.as_mut_ptr(),
+                &ni,
+                wr.as_mut_ptr(),
+                wi.as_mut_ptr(),
+                unused.as_mut_ptr(),
+                &one,
+                unused.as_mut_ptr(),
+                &one,
+                work.as_mut_ptr(),
+                &lwork,
+                info,
+            );
+        }
+    };
+    let mut query = [0.0f64];
+    call(&mut query, -1, &mut info);
+    if info != 0 {
+        return Err(format!("dgeev workspace query failed (info {info})"));
+    }
+    let lwork = (query[0] as usize).max(3 * n);
+    let mut work = vec![0.0; lwork];
+    call(&mut work, dim(lwork)?, &mut info);
+    if info != 0 {
+        return Err(format!(
+            "dgeev did not converge (info {info}) for order {n}"
+        ));
+    }
+    Ok(wr.into_iter().zip(wi).collect())
 }
 
 /// Eigenvalues (ascending) and orthonormal eigenvectors (column-major, n x n) of the
