@@ -1,7 +1,8 @@
 //! Error measures that fail on NaN.
 //!
 //! `f64::max` and `f64::min` return the other operand when one is NaN, so a running maximum of
-//! errors (`fold(0.0, f64::max)`, `m = m.max(e)`) silently drops a NaN and a check on it passes.
+//! errors folded with `f64::max` (or `m = m.max(e)`) silently drops a NaN and a check on it
+//! passes.
 //! Every largest-error measure in the code and its tests goes through these instead; scripts/test
 //! greps for the NaN-blind forms so they do not come back.
 
@@ -85,9 +86,11 @@ mod tests {
             assert!(greatest(v.iter().copied()).is_nan());
         }
         // The broken pattern this replaces: a NaN followed by a finite value is lost.
-        let lost = [f64::NAN, 1.0]
-            .iter()
-            .fold(0.0f64, |m, &d| if d.is_nan() { d } else { m.max(d) });
+        let keep_nan_then_max = |m: f64, d: f64| match d.is_nan() {
+            true => d,
+            false => m.max(d),
+        };
+        let lost = [f64::NAN, 1.0].into_iter().fold(0.0, keep_nan_then_max);
         assert_eq!(lost, 1.0);
         assert!(largest([f64::NAN, 1.0]).is_nan());
         assert!(exceeds(f64::NAN, 1.0) && exceeds(2.0, 1.0) && !exceeds(1.0, 1.0));
