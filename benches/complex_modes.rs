@@ -223,7 +223,7 @@ fn main() {
             world,
             modes.eigenvalues[..m].to_vec(),
             contact.observe_shapes(shapes).expect("observe"),
-            contact.local.len(),
+            contact.local().len(),
             &terms(&[Part::Normal, Part::Stick]),
         );
         let (kp, cp) = projection.operators(

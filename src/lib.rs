@@ -19,6 +19,7 @@ pub mod pipeline;
 pub mod post;
 pub mod progress;
 pub mod reduce;
+pub mod report;
 pub mod scene;
 pub mod stages;
 pub mod statics;

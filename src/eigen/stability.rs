@@ -204,7 +204,7 @@ impl ProjectedStability {
             comm,
             modes.eigenvalues.clone(),
             contact.observe_shapes(&modes.shapes)?,
-            contact.local.len(),
+            contact.local().len(),
             &contact.tangent_terms(nominal, &[Part::Normal, Part::Stick]),
         );
         Ok(ProjectedStability {

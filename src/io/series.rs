@@ -3,6 +3,7 @@
 //! restart truncates them back to its checkpoint. Small signals are written by rank 0; state
 //! rows by every rank (its own columns). Every dataset carries its units.
 
+use std::ops::Range;
 use std::path::Path;
 
 use hdf5::types::VarLenUnicode;
@@ -11,6 +12,7 @@ use mpi::traits::*;
 use ndarray::{s, Array1, Array2};
 
 use super::results::ResultsError;
+use crate::time::store::{Series, Storage, StoreError, StoreResult};
 
 pub struct SeriesFile {
     file: hdf5::File,
@@ -256,5 +258,105 @@ impl SeriesFile {
 
     pub fn has(&self, path: &str) -> bool {
         self.file.link_exists(path)
+    }
+}
+
+/// A [`SeriesFile`] failure as the integrator's storage error (the message names the file).
+fn store(e: ResultsError) -> StoreError {
+    StoreError(Box::new(e))
+}
+
+impl Series for SeriesFile {
+    fn create_series(&self, path: &str, columns: usize, units: &str) -> StoreResult<()> {
+        SeriesFile::create_series(self, path, columns, units).map_err(store)
+    }
+    fn columns(&self, path: &str) -> StoreResult<usize> {
+        SeriesFile::columns(self, path).map_err(store)
+    }
+    fn rows(&self, path: &str) -> StoreResult<usize> {
+        SeriesFile::rows(self, path).map_err(store)
+    }
+    fn append(&self, path: &str, values: &[f64]) -> StoreResult<()> {
+        SeriesFile::append(self, path, values).map_err(store)
+    }
+    fn append_distributed(
+        &self,
+        path: &str,
+        local: &[f64],
+        columns: Range<usize>,
+    ) -> StoreResult<()> {
+        SeriesFile::append_distributed(self, path, local, columns).map_err(store)
+    }
+    fn truncate(&self, path: &str, rows: usize) -> StoreResult<()> {
+        SeriesFile::truncate(self, path, rows).map_err(store)
+    }
+    fn read(&self, path: &str) -> StoreResult<Vec<f64>> {
+        SeriesFile::read(self, path).map_err(store)
+    }
+    fn read_row_part(
+        &self,
+        path: &str,
+        row: usize,
+        columns: Range<usize>,
+    ) -> StoreResult<Vec<f64>> {
+        SeriesFile::read_row_part(self, path, row, columns).map_err(store)
+    }
+    fn write_vector(
+        &self,
+        path: &str,
+        local: &[f64],
+        columns: Range<usize>,
+        global: usize,
+    ) -> StoreResult<()> {
+        SeriesFile::write_vector(self, path, local, columns, global).map_err(store)
+    }
+    fn read_vector(&self, path: &str, columns: Range<usize>) -> StoreResult<Vec<f64>> {
+        SeriesFile::read_vector(self, path, columns).map_err(store)
+    }
+    fn set_number(&self, name: &str, value: f64) -> StoreResult<()> {
+        SeriesFile::set_number(self, name, value).map_err(store)
+    }
+    fn number(&self, name: &str) -> StoreResult<f64> {
+        SeriesFile::number(self, name).map_err(store)
+    }
+    fn has(&self, path: &str) -> bool {
+        SeriesFile::has(self, path)
+    }
+    fn flush(&self) -> StoreResult<()> {
+        SeriesFile::flush(self).map_err(store)
+    }
+}
+
+/// Parallel HDF5 files of series on a communicator: the integrator's [`Storage`].
+pub struct Hdf5Storage<'c> {
+    pub comm: &'c SimpleCommunicator,
+}
+
+impl Storage for Hdf5Storage<'_> {
+    fn create(&self, path: &Path) -> StoreResult<Box<dyn Series>> {
+        Ok(Box::new(
+            SeriesFile::create(self.comm, path).map_err(store)?,
+        ))
+    }
+    fn open(&self, path: &Path) -> StoreResult<Box<dyn Series>> {
+        Ok(Box::new(SeriesFile::open(self.comm, path).map_err(store)?))
+    }
+}
+
+impl crate::post::states::StateSource for SeriesFile {
+    fn read(&self, path: &str) -> Result<Vec<f64>, crate::post::states::SourceError> {
+        SeriesFile::read(self, path).map_err(|e| crate::post::states::SourceError(Box::new(e)))
+    }
+    fn columns(&self, path: &str) -> Result<usize, crate::post::states::SourceError> {
+        SeriesFile::columns(self, path).map_err(|e| crate::post::states::SourceError(Box::new(e)))
+    }
+    fn read_row_part(
+        &self,
+        path: &str,
+        row: usize,
+        columns: Range<usize>,
+    ) -> Result<Vec<f64>, crate::post::states::SourceError> {
+        SeriesFile::read_row_part(self, path, row, columns)
+            .map_err(|e| crate::post::states::SourceError(Box::new(e)))
     }
 }

@@ -138,8 +138,8 @@ pub fn contact_cycle(
     let pads = pads
         .iter()
         .map(|(index, name)| {
-            let mine: Vec<usize> = (0..contact.points.len())
-                .filter(|&j| contact.points[j].interface == *index)
+            let mine: Vec<usize> = (0..contact.points().len())
+                .filter(|&j| contact.points()[j].interface == *index)
                 .collect();
             let largest: Vec<f64> = stiffness
                 .iter()

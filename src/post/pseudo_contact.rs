@@ -70,10 +70,10 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
         let tied = |r: f64| r >= (1.0 - 1e-9) * largest[0];
         let mine = (0..relative.len())
             .filter(|&k| tied(relative[k]))
-            .min_by_key(|&k| self.contact.local[k]);
-        let mut lowest = [mine.map_or(f64::NEG_INFINITY, |k| -(self.contact.local[k] as f64))];
+            .min_by_key(|&k| self.contact.local()[k]);
+        let mut lowest = [mine.map_or(f64::NEG_INFINITY, |k| -(self.contact.local()[k] as f64))];
         max_in_place(self.comm, &mut lowest);
-        let owned = mine.filter(|&k| -(self.contact.local[k] as f64) == lowest[0]);
+        let owned = mine.filter(|&k| -(self.contact.local()[k] as f64) == lowest[0]);
         (largest[0], owned)
     }
 
@@ -142,8 +142,8 @@ impl PseudoSystem for ContactPseudoSystem<'_, '_> {
         // Statuses over the sliding interfaces (the pads), and the sample point's.
         let mut counts = [0.0; 4];
         for (k, r) in state.response.iter().enumerate() {
-            let id = self.contact.local[k];
-            if self.contact.interfaces[self.contact.points[id].interface]
+            let id = self.contact.local()[k];
+            if self.contact.interfaces()[self.contact.points()[id].interface]
                 .friction
                 .is_sliding()
             {
@@ -168,8 +168,8 @@ impl PseudoSystem for ContactPseudoSystem<'_, '_> {
         // Sum of p * (p / k_c) and of p over the sliding interfaces' points in contact.
         let mut sums = [0.0; 2];
         for (k, r) in self.nominal.response.iter().enumerate() {
-            let id = self.contact.local[k];
-            let sliding = self.contact.interfaces[self.contact.points[id].interface]
+            let id = self.contact.local()[k];
+            let sliding = self.contact.interfaces()[self.contact.points()[id].interface]
                 .friction
                 .is_sliding();
             if sliding && r.status != Status::Open && r.pressure > 0.0 && r.stiffness > 0.0 {

@@ -2,20 +2,40 @@
 //! `transient.state_interval`), read back one at a time in the integrated unknowns' layout:
 //! what the analyses of a trajectory work on. Reading them back rather than keeping them in
 //! memory lets the analyses run again on a finished run (`--restart` after the last step).
+//! The analyses read through [`StateSource`], which `crate::io::series` implements for HDF5.
 
-use std::path::Path;
+use std::ops::Range;
 
 use crate::contact::{ContactModel, ContactState};
-use crate::io::results::ResultsError;
-use crate::io::series::SeriesFile;
 use crate::la::{LaError, Petsc, Vector};
 use crate::reduce::Reduction;
+
+/// A failure of the source, with the backend's error (which names the file) as its source.
+#[derive(Debug, thiserror::Error)]
+#[error(transparent)]
+pub struct SourceError(pub Box<dyn std::error::Error + Send + Sync>);
+
+/// Where the stored states are read from: series of rows by name (`states/time`,
+/// `states/displacement`, ...).
+pub trait StateSource {
+    /// A whole series, row-major.
+    fn read(&self, path: &str) -> Result<Vec<f64>, SourceError>;
+    /// Values per row of a series.
+    fn columns(&self, path: &str) -> Result<usize, SourceError>;
+    /// `columns` of row `row` (collective for a parallel file).
+    fn read_row_part(
+        &self,
+        path: &str,
+        row: usize,
+        columns: Range<usize>,
+    ) -> Result<Vec<f64>, SourceError>;
+}
 
 /// Why the stored states cannot be analysed.
 #[derive(Debug, thiserror::Error)]
 pub enum StatesError {
     #[error("{0}")]
-    File(#[from] ResultsError),
+    Source(#[from] SourceError),
     #[error("{0}")]
     La(#[from] LaError),
     #[error(
@@ -36,20 +56,23 @@ pub enum StatesError {
     },
 }
 
-pub struct StoredStates {
-    file: SeriesFile,
+pub struct StoredStates<'s> {
+    file: Box<dyn StateSource + 's>,
     path: String,
     pub times: Vec<f64>,
 }
 
-impl StoredStates {
-    /// Opens the states of `path` (transient.h5), with at least `needed` of them.
+impl<'s> StoredStates<'s> {
+    /// The states of `file` (named `name` in messages: transient.h5's path), with at least
+    /// `needed` of them.
     ///
     /// # Collective
-    pub fn open(petsc: &Petsc, path: &Path, needed: usize) -> Result<Self, StatesError> {
-        let file = SeriesFile::open(petsc.world(), path)?;
+    pub fn new(
+        file: Box<dyn StateSource + 's>,
+        name: String,
+        needed: usize,
+    ) -> Result<Self, StatesError> {
         let times = file.read("states/time")?;
-        let name = path.display().to_string();
         if times.len() < needed {
             return Err(StatesError::TooFew {
                 path: name,

@@ -6,10 +6,9 @@
 //! [`reduce::Reduced`] -> [`transient::Trajectory`]
 //!
 //! [`analyses`] runs the stages before the transient in chain order; `crate::pipeline` is the
-//! driver of a whole run; writers of each stage's output live in `crate::io::output`; the
+//! driver of a whole run; writers of each stage's output live in `crate::report`; the
 //! run's summary is [`summary::RunSummary`].
 
-pub mod answer;
 pub mod complex;
 pub mod link;
 pub mod model;
@@ -19,19 +18,16 @@ pub mod post;
 pub mod pseudo;
 pub mod reduce;
 pub mod statics;
-pub mod summary;
 pub mod sweep;
 pub mod transient;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::io::matrix_market::MatrixMarketError;
-use crate::io::output::WriteError;
 use crate::io::results::ResultsError;
 use crate::la::fem_assembly::SystemError;
-use crate::la::{LaError, Petsc};
-use crate::scene::Scene;
+use crate::la::LaError;
 
 /// Why a run stopped; every variant names the stage (and the key or file where one applies).
 #[derive(Debug, thiserror::Error)]
@@ -78,7 +74,7 @@ pub enum RunError {
     #[error("transient: {0}")]
     Time(#[from] crate::time::newmark::TimeError),
     #[error("output: {0}")]
-    Output(#[from] WriteError),
+    Output(#[from] crate::io::WriteError),
     #[error("{0}")]
     Injected(#[from] crate::fault::InjectedFault),
     #[error("{path}: {source}")]
@@ -121,7 +117,7 @@ impl Analyses<'_> {
     pub fn interface_names(&self) -> Vec<String> {
         self.preload.as_ref().map_or(Vec::new(), |p| {
             p.contact
-                .interfaces
+                .interfaces()
                 .iter()
                 .map(|i| i.name.clone())
                 .collect()
@@ -161,107 +157,4 @@ impl Timings {
         }
         out
     }
-}
-
-/// A stage's prerequisite (the scene's validation already asked for it).
-pub(crate) fn need<T>(x: Option<T>, key: &'static str, what: &str) -> Result<T, RunError> {
-    x.ok_or_else(|| RunError::scene(key, format!("needs {what}")))
-}
-
-/// The stages before the transient, as the scene asks: model and operators, preload, real
-/// modes, complex modes, sweep, reduction.
-///
-/// # Collective
-pub fn analyses<'p>(
-    petsc: &'p Petsc,
-    scene: &Scene,
-    scene_dir: &Path,
-    output: &Path,
-    timings: &mut Timings,
-) -> Result<Analyses<'p>, RunError> {
-    let damping = scene.damping.unwrap_or_default();
-    let (model, quality, ops) = operators::from_scene(petsc, scene, scene_dir, timings)?;
-    let mut preload = match (&scene.statics, &model) {
-        (Some(settings), Some(model)) => {
-            let contact = scene.contact.clone().unwrap_or_default();
-            let p = statics::preload(petsc, model, &ops, &contact, settings, timings)?;
-            Some(p)
-        }
-        (Some(_), None) => return Err(RunError::scene("statics", "needs a mesh model")),
-        _ => None,
-    };
-    for format in &scene.output.export_matrices {
-        let k = modes::symmetric_stiffness(&ops, preload.as_ref());
-        timings.stage("export matrices", || {
-            crate::io::output::export_matrices(petsc, format, k, &ops.m, output)
-        })?;
-    }
-    let modes = match &scene.real_modes {
-        Some(request) => Some(timings.stage("real modes", || {
-            modes::real_modes(petsc, &ops, preload.as_ref(), request)
-        })?),
-        None => None,
-    };
-    // With complex modes, also the linearization they solve: the tangent stiffness
-    // K0 + K_c + K_stick + K_f (unsymmetric) and the damping C, for a cross-check elsewhere.
-    if scene.complex_modes.is_some() && !scene.output.export_matrices.is_empty() {
-        let (kt, c) = timings.stage("linearization for export", || {
-            complex::quadratic_operators(petsc, &damping, &ops, preload.as_ref())
-        })?;
-        for format in &scene.output.export_matrices {
-            timings.stage("export linearization", || {
-                crate::io::output::export_named(
-                    petsc,
-                    format,
-                    &[("K_tangent", &kt), ("C", &c)],
-                    output,
-                )
-            })?;
-        }
-    }
-    let complex = match &scene.complex_modes {
-        Some(settings) => {
-            let (p, m) = (preload.as_ref(), modes.as_ref());
-            complex::complex_modes(petsc, settings, &damping, &ops, p, m, timings)?
-        }
-        None => Vec::new(),
-    };
-    let sweep = match &scene.sweep {
-        Some(sweep) => {
-            let input = sweep::SweepInputs {
-                k0: &ops.k0,
-                dofs: need(ops.dofs.as_ref(), "sweep", "a mesh model")?,
-                modes: need(modes.as_ref(), "sweep", "[real_modes]")?,
-                pressure_bar: model.as_ref().map_or(0.0, |m| m.pressure / 1e5),
-            };
-            let preload = need(preload.as_mut(), "sweep", "[statics]")?;
-            let statics = need(scene.statics.as_ref(), "sweep", "[statics]")?;
-            let settings = scene.complex_modes.clone().unwrap_or_default();
-            Some(timings.stage("sweep", || {
-                sweep::sweep(petsc, sweep, &settings, &damping, statics, preload, input)
-            })?)
-        }
-        None => None,
-    };
-    let reduced = match &scene.reduction {
-        Some(settings) => {
-            let model = need(model.as_ref(), "reduction", "a mesh model")?;
-            let preload = need(preload.as_ref(), "reduction", "[statics]")?;
-            let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
-            Some(timings.stage("reduction", || {
-                reduce::reduce(petsc, settings, model, &ops, preload, modes)
-            })?)
-        }
-        None => None,
-    };
-    Ok(Analyses {
-        model,
-        quality,
-        ops,
-        preload,
-        modes,
-        complex,
-        sweep,
-        reduced,
-    })
 }

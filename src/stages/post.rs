@@ -5,7 +5,6 @@
 use super::transient::Trajectory;
 use crate::eigen::complex_modes::ComplexModes;
 use crate::post::limit_cycle::{characterize, LimitCycle, LimitCycleSettings};
-use crate::time::transient::TransientSettings;
 
 /// The limit cycle with what the frequency analysis predicted for it.
 #[derive(Debug, Clone)]
@@ -42,13 +41,12 @@ fn phase_cost(tr: &crate::time::transient::Transient, from: usize, to: usize) ->
 /// Characterizes the braking torque of the run.
 pub fn limit_cycle(
     trajectory: &Trajectory,
-    transient: &TransientSettings,
     settings: &LimitCycleSettings,
     complex: &[ComplexModes],
     interfaces: &[String],
 ) -> LimitCycleReport {
     let tr = &trajectory.signals;
-    let cycle = characterize(&tr.time, &tr.braking_torque(), transient.step, settings);
+    let cycle = characterize(&tr.time, &tr.braking_torque(), trajectory.step, settings);
     let predicted = complex
         .iter()
         .flat_map(|c| {

@@ -3,12 +3,10 @@
 //! its last cycles next to the predicted alpha_sat.
 
 use crate::measure::nan_max;
-use std::path::Path;
 
-use super::{Analyses, RunError};
-use crate::eigen::complex_modes::{
-    damping_ratio, projected_coordinates, DampingSettings, DenseEigenpair,
-};
+use super::link::{LinearizationSettings, Nominal};
+use super::RunError;
+use crate::eigen::complex_modes::{damping_ratio, projected_coordinates, DenseEigenpair};
 use crate::eigen::stability::ProjectedStability;
 use crate::la::Petsc;
 use crate::post::limit_cycle::LimitCycle;
@@ -51,14 +49,14 @@ pub struct PseudoReport {
 }
 
 /// What the comparison with a transient needs: its stored states, its cycle and its cost.
-pub struct Comparison<'a> {
-    pub stream: &'a Path,
+pub struct Comparison<'a, 's> {
+    pub states: &'a StoredStates<'s>,
     pub cycle: &'a LimitCycle,
     pub transient_seconds: f64,
 }
 
 /// Periods of the run's cycle over which a mode's amplitude in the transient is averaged.
-const CYCLES: f64 = 3.0;
+pub const CYCLES: f64 = 3.0;
 
 /// The modes unstable beyond `margin` (damping ratio < -margin) in the order of the pairs,
 /// or only the `limit` with the largest Re(s) (in that order).
@@ -79,15 +77,14 @@ fn most_unstable(pairs: &[DenseEigenpair], margin: f64, limit: Option<usize>) ->
 /// # Collective
 pub fn pseudo_trajectories<'p>(
     petsc: &'p Petsc,
-    a: &Analyses<'p>,
-    damping: DampingSettings,
+    basis: Nominal<'_, 'p>,
+    linearization: LinearizationSettings,
     settings: &PseudoTrajectorySettings,
-    margin: f64,
     comparison: Option<Comparison>,
 ) -> Result<PseudoReport, RunError> {
     let key = "post.pseudo_trajectory";
-    let modes = super::need(a.modes.as_ref(), key, "[real_modes]")?;
-    let preload = super::need(a.preload.as_ref(), key, "[statics]")?;
+    let (modes, preload) = (basis.modes, basis.preload);
+    let LinearizationSettings { damping, margin } = linearization;
     let (contact, nominal) = (&preload.contact, &preload.state.contact);
     let comm = petsc.world();
     let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
@@ -114,7 +111,7 @@ pub fn pseudo_trajectories<'p>(
     let system = ContactPseudoSystem::new(comm, contact, nominal, &stability);
     // The contact zone's relative motion over the transient's last cycles, read once.
     let motion = match &comparison {
-        Some(c) => Some(observed_motion(petsc, a, preload, c)?),
+        Some(c) => Some(observed_motion(petsc, basis, c)?),
         None => None,
     };
     let sum = |x: &mut [f64]| crate::parallel::sum_in_place(comm, x);
@@ -177,17 +174,16 @@ struct ObservedMotion {
 /// # Collective
 fn observed_motion<'p>(
     petsc: &'p Petsc,
-    a: &Analyses<'p>,
-    preload: &super::statics::Preloaded<'p>,
+    nominal: Nominal<'_, 'p>,
     c: &Comparison,
 ) -> Result<ObservedMotion, RunError> {
-    let states = StoredStates::open(petsc, c.stream, 2)?;
+    let states = c.states;
     let end = states.window_end(&c.cycle.cycle_starts);
     let from = end - CYCLES * super::link::period_of(c.cycle);
-    let at = super::link::contact_at(petsc, a, preload);
+    let at = nominal.contact_at(petsc);
     let mut out = Vec::new();
     for i in states.between(from, end) {
-        let state = at.state(&states, i)?;
+        let state = at.state(states, i)?;
         out.push(
             state
                 .observed
@@ -222,104 +218,6 @@ fn observed_motion<'p>(
         window: (from, end),
         largest: largest[0],
     })
-}
-
-/// The summary's lines.
-pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-    use crate::post::pseudo_trajectory::Found;
-    let Some(first) = r.studies.first() else {
-        return writeln!(
-            f,
-            "pseudo trajectories: no complex mode is unstable at the static state (margin {:.1e})",
-            r.margin
-        );
-    };
-    let t = &first.trajectory;
-    let (a0, a1) = (t.sweep[0].alpha, t.sweep[t.sweep.len() - 1].alpha);
-    writeln!(
-        f,
-        "pseudo trajectories (alpha: the largest relative displacement at a contact point; swept {:.2e}..{:.2e} m, {} amplitudes x {} phases; static gap scale {:.3e} m):",
-        a0,
-        a1,
-        t.sweep.len(),
-        t.diagram.eigenvalue.len(),
-        r.gap_scale
-    )?;
-    let show = |x: &Found| match x {
-        Found::At { alpha, .. } => format!("{alpha:.3e} m"),
-        Found::BelowRange => format!("below {a0:.2e} m"),
-        Found::AboveRange => format!("above {a1:.2e} m (not reached)"),
-    };
-    for s in &r.studies {
-        let t = &s.trajectory;
-        let f_hz = crate::eigen::complex_modes::frequency_hz(t.nominal);
-        let fr = t.diagram.frequencies_hz();
-        let span = fr
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        write!(
-            f,
-            "    {:5} {:.1} Hz, zeta {:.2e}: alpha_crit {}, alpha_sat {} (there {:.1}..{:.1} Hz over the period); {} linearizations ({} between phases, where the tracking halved the step), {:.2} s ({:.2} s linearizing, {:.2} s near the pair, {:.2} s in {} full dense solves)",
-            t.name,
-            f_hz,
-            damping_ratio(t.nominal),
-            show(&t.alpha_crit),
-            show(&t.alpha_sat),
-            span.0,
-            span.1,
-            t.linearizations,
-            t.cost.between_phases,
-            t.seconds,
-            t.cost.linearize_seconds,
-            t.cost.near_shift_seconds,
-            t.cost.dense_seconds,
-            t.cost.dense_solves
-        )?;
-        if t.alpha_stable.alpha() != t.alpha_sat.alpha() {
-            let above = match &t.alpha_stable {
-                Found::AboveRange => format!("unstable on average again at {a1:.2e} m"),
-                x => format!("stable on average for every alpha from {}", show(x)),
-            };
-            write!(
-                f,
-                "; the mean damping changes sign {} times on the grid: {above}",
-                t.sign_changes
-            )?;
-        }
-        let open: Vec<f64> = t
-            .sweep
-            .iter()
-            .filter(|p| !p.closed)
-            .map(|p| p.alpha)
-            .collect();
-        if let Some(&first) = open.first() {
-            let sat_beyond = t.alpha_sat.alpha().is_some_and(|a| a > first);
-            write!(
-                f,
-                "; at {} of {} amplitudes (the first {first:.2e} m{}) the pair followed over the period does not come back to its start: there the statistics depend on the phase where the period starts, and are not resolved (raise phases)",
-                open.len(),
-                t.sweep.len(),
-                if sat_beyond { ", below alpha_sat" } else { "" }
-            )?;
-        }
-        if let (Some(tr), Some(total)) = (&s.transient, r.transient_seconds) {
-            let ratio = t.alpha_sat.alpha().map_or(f64::NAN, |a| a / tr.mean);
-            write!(
-                f,
-                "; in the transient's last {CYCLES} periods (largest relative displacement {:.3e} m): the mode's fit {:.3e} m ({:.2e}..{:.2e}), holding {:.0} % of the contact motion, alpha_sat / that {ratio:.3}; {:.2} % of the transient's time",
-                tr.largest,
-                tr.mean,
-                tr.min,
-                tr.max,
-                100.0 * tr.share,
-                100.0 * t.seconds / total
-            )?;
-        }
-        writeln!(f)?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

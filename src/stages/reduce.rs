@@ -62,13 +62,13 @@ pub fn reduce<'p>(
     let dofs = ops.dofs.as_ref().ok_or(ReductionError::NoMesh)?;
     let (contact, state) = (&preload.contact, &preload.state);
     let surfaces: Vec<&str> = contact
-        .interfaces
+        .interfaces()
         .iter()
         .flat_map(|i| [i.master.as_str(), i.slave.as_str()])
         .collect();
     // The DOFs some contact point couples (every point is known on every rank).
     let mut coupled = vec![false; dofs.global_dofs()];
-    for &d in contact.point_columns.iter().flatten() {
+    for &d in contact.point_columns().iter().flatten() {
         if d >= 0 {
             coupled[d as usize] = true;
         }

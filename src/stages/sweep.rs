@@ -39,6 +39,8 @@ pub enum SweepError {
     },
     #[error(transparent)]
     La(#[from] LaError),
+    #[error(transparent)]
+    Contact(#[from] crate::contact::ContactError),
 }
 
 /// What a sweep needs from the earlier stages.
@@ -63,8 +65,9 @@ pub struct SweepOutput {
     pub margin: f64,
 }
 
-/// Sweeps one parameter from the preloaded state; the nominal laws and disc speed are
-/// restored after (also on failure).
+/// Sweeps one parameter from the preloaded state. Each point evaluates its own copy of the
+/// contact laws ([`crate::contact::ContactModel::with_laws`]): the preloaded state is left as
+/// it was given.
 ///
 /// # Collective
 pub fn sweep<'p>(
@@ -73,11 +76,9 @@ pub fn sweep<'p>(
     settings: &ComplexModeSettings,
     damping: &DampingSettings,
     statics: &StaticSettings,
-    preload: &mut Preloaded<'p>,
+    preload: &Preloaded<'p>,
     input: SweepInputs<'_, 'p>,
 ) -> Result<SweepOutput, SweepError> {
-    let nominal_laws = preload.contact.interfaces.clone();
-    let nominal_speed = preload.contact.disc_speed;
     let mut out = SweepOutput {
         parameter: sweep.parameter,
         values: sweep.values(),
@@ -94,8 +95,6 @@ pub fn sweep<'p>(
         petsc, sweep, settings, damping, statics, preload, &input, &mut out, &mut bar,
     );
     bar.finish();
-    preload.contact.interfaces = nominal_laws;
-    preload.contact.disc_speed = nominal_speed;
     let points = result?;
     let mut tracks = track(&points);
     // Every mode is tracked (a mode may cross f_max within the sweep); the tracks reported
@@ -120,14 +119,14 @@ fn sweep_points<'p>(
     settings: &ComplexModeSettings,
     damping: &DampingSettings,
     statics: &StaticSettings,
-    preload: &mut Preloaded<'p>,
+    preload: &Preloaded<'p>,
     input: &SweepInputs<'_, 'p>,
     out: &mut SweepOutput,
     bar: &mut crate::progress::Progress,
 ) -> Result<Vec<Vec<crate::eigen::complex_modes::DenseEigenpair>>, SweepError> {
     let world = petsc.world();
-    let nominal_laws = preload.contact.interfaces.clone();
-    let nominal_speed = preload.contact.disc_speed;
+    let nominal_laws = preload.contact.interfaces().to_vec();
+    let nominal_speed = preload.contact.disc_speed();
     let mut f = preload.load.duplicate()?;
     let mut q = preload.state.displacement.try_clone()?;
     let mut points = Vec::with_capacity(out.values.len());
@@ -140,23 +139,20 @@ fn sweep_points<'p>(
         *damping,
     )?;
     for (i, &v) in out.values.clone().iter().enumerate() {
-        let contact = &mut preload.contact;
-        contact.interfaces = nominal_laws.clone();
-        contact.disc_speed = nominal_speed;
+        let mut laws = nominal_laws.clone();
+        let mut speed = nominal_speed;
         f.copy_from(&preload.load)?;
         match sweep.parameter {
             SweepParameter::PressureBar => f.scale(v / input.pressure_bar)?,
-            SweepParameter::DiscSpeed => contact.disc_speed = v,
-            p => apply_to_laws(p, v, &mut contact.interfaces).map_err(|message| {
-                SweepError::Parameter {
-                    point: i + 1,
-                    parameter: name,
-                    value: v,
-                    message,
-                }
+            SweepParameter::DiscSpeed => speed = v,
+            p => apply_to_laws(p, v, &mut laws).map_err(|message| SweepError::Parameter {
+                point: i + 1,
+                parameter: name,
+                value: v,
+                message,
             })?,
         }
-        let contact = &preload.contact;
+        let contact = &preload.contact.with_laws(laws, speed)?;
         let t = Instant::now();
         let solve = |start| {
             crate::statics::solve(

@@ -62,6 +62,10 @@ pub enum TransientSetupError {
 pub struct Trajectory {
     pub signals: Transient,
     pub failure: Option<TimeError>,
+    /// The nominal step it was run with (s) and the interval of its stored states (s; 0:
+    /// none stored).
+    pub step: f64,
+    pub state_interval: f64,
 }
 
 /// Runs the transient from the preloaded state; `files`: where transient.h5 and the
@@ -181,7 +185,12 @@ pub fn transient<'p>(
         },
         files,
     )?;
-    Ok(Trajectory { signals, failure })
+    Ok(Trajectory {
+        signals,
+        failure,
+        step: settings.step,
+        state_interval: settings.state_interval,
+    })
 }
 
 /// The node nearest to a point and its distance.

@@ -223,10 +223,10 @@ pub fn solve<'p>(
 ) -> Result<StaticState<'p>, StaticError> {
     let start = Instant::now();
     let friction = contact
-        .interfaces
+        .interfaces()
         .iter()
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
-        && contact.disc_speed != 0.0;
+        && contact.disc_speed() != 0.0;
     let mut jac = contact.joined_matrix(petsc, k0)?;
     let mut q = k0.new_vector()?;
     if let Some(start) = start_from {
@@ -470,8 +470,8 @@ fn worst_interface(
 ) -> Result<String, LaError> {
     let own = dofs.owned_dofs();
     let r = residual.local()?;
-    let mut worst = vec![0.0f64; contact.interfaces.len()];
-    for p in &contact.points {
+    let mut worst = vec![0.0f64; contact.interfaces().len()];
+    for p in contact.points() {
         for &n in &p.master_nodes {
             for &d in &dofs.node_dofs[n] {
                 if d >= 0 && own.contains(&(d as usize)) {
@@ -489,6 +489,6 @@ fn worst_interface(
         .iter()
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(b.1))
-        .map(|(i, _)| contact.interfaces[i].name.clone())
+        .map(|(i, _)| contact.interfaces()[i].name.clone())
         .unwrap_or_else(|| "(none)".into()))
 }

@@ -2,4 +2,5 @@
 
 pub mod adaptive;
 pub mod newmark;
+pub mod store;
 pub mod transient;

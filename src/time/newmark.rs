@@ -206,7 +206,18 @@ pub enum TimeError {
         what: &'static str,
     },
     #[error("transient output: {0}")]
-    Output(String),
+    Store(#[from] crate::time::store::StoreError),
+    /// `--restart` refused: the file and why (the reason names it and says what to do).
+    #[error("{reason}")]
+    Restart {
+        file: std::path::PathBuf,
+        reason: String,
+    },
+    #[error("{}: cannot replace the checkpoint: {source}", file.display())]
+    Checkpoint {
+        file: std::path::PathBuf,
+        source: std::io::Error,
+    },
     #[error(transparent)]
     La(#[from] LaError),
 }

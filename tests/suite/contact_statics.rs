@@ -153,8 +153,8 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
     let resolved = settings.resolve(&interfaces)?;
     let contact = ContactModel::new(petsc, &mesh, &system.dofs, resolved, &settings)
         .map_err(|e| e.to_string())?;
-    if contact.misses[0] != 0 {
-        return Err(format!("{} points missed", contact.misses[0]));
+    if contact.misses()[0] != 0 {
+        return Err(format!("{} points missed", contact.misses()[0]));
     }
     let loads = [PressureLoad {
         surface: "upper_top".into(),
@@ -212,7 +212,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     let piston = model.loads[0].area * model.pressure;
     let mut worst_force: f64 = 0.0;
     let mut worst_torque: f64 = 0.0;
-    for (itf, s) in contact.interfaces.iter().zip(&state.summaries) {
+    for (itf, s) in contact.interfaces().iter().zip(&state.summaries) {
         if itf.friction.is_sliding() {
             worst_force = nan_max(worst_force, rel(s.normal_force, piston));
             worst_torque = nan_max(worst_torque, rel(s.torque, s.coulomb_torque));
@@ -382,7 +382,7 @@ fn low_rank_update_of_the_tangent<'p>(
         y.maxpy(&c, &refs)
     };
     let all = tangent
-        .dominant(contact.points.len(), 1.0)
+        .dominant(contact.points().len(), 1.0)
         .map_err(e)?
         .ok_or("the static tangent has no explicit part")?;
     let (mut y, mut z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
@@ -433,7 +433,7 @@ fn low_rank_update_of_the_tangent<'p>(
         &format!(
             "tangent from its explicit columns ({} of {} points): {rebuilt:.1e}; factor updated by 20 points ({} columns, {solves} solves) inverts J0 + their part: {inverted:.1e}",
             all.keys.iter().map(|k| k.0).collect::<std::collections::BTreeSet<_>>().len(),
-            contact.points.len(),
+            contact.points().len(),
             update.rank()
         ),
     );

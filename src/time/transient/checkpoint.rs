@@ -1,11 +1,11 @@
 //! The transient's checkpoint: the state, the step control, the state the Jacobian was built
 //! at and how many rows the stream held, written atomically (temporary file, then rename).
 
-use super::{io_error, Transient, TransientFiles, TransientInputs, TransientSettings};
-use crate::io::series::SeriesFile;
+use super::{Transient, TransientFiles, TransientInputs, TransientSettings};
 use crate::la::{LaError, Petsc, Vector};
 use crate::measure::nan_max;
 use crate::time::newmark::{State, StepControl, TimeError};
+use crate::time::store::Series;
 
 /// w^T K w and w^T M w of the integrated operators for a fixed w (w_i = sin(0.7 i + 0.3) over
 /// global indices): they change when the operators do (another model, or a reduction basis
@@ -65,7 +65,7 @@ impl<'p> Checkpoint<'p> {
         let world = petsc.world();
         let tmp = files.checkpoint.with_extension("h5.tmp");
         {
-            let f = SeriesFile::create(world, &tmp).map_err(io_error)?;
+            let f = files.storage.create(&tmp)?;
             let numbers = [
                 ("ranks", petsc.size() as f64),
                 ("unknowns", s.q.global_len() as f64),
@@ -90,15 +90,14 @@ impl<'p> Checkpoint<'p> {
                 ("linear_state", f64::from(u8::from(s.linear.is_some()))),
             ];
             for (name, value) in numbers {
-                f.set_number(name, value).map_err(io_error)?;
+                f.set_number(name, value)?;
             }
             for (table, hash) in &files.scene {
-                f.set_number(&format!("scene_{table}"), hash_number(*hash))
-                    .map_err(io_error)?;
+                f.set_number(&format!("scene_{table}"), hash_number(*hash))?;
             }
             let [k, m] = operator_fingerprint(input, &s.q)?;
-            f.set_number("operators_k", k).map_err(io_error)?;
-            f.set_number("operators_m", m).map_err(io_error)?;
+            f.set_number("operators_k", k)?;
+            f.set_number("operators_m", m)?;
             // The full-model state as well: what the reduced coordinates mean.
             if let Some(r) = input.reduction {
                 let mut states = vec![("full_q", &s.q), ("full_v", &s.v), ("full_a", &s.a)];
@@ -110,8 +109,7 @@ impl<'p> Checkpoint<'p> {
                 for (name, x) in states {
                     r.recover(petsc, x, &mut full)?;
                     let (range, n) = (full.ownership(), full.global_len());
-                    f.write_vector(name, &full.local()?, range, n)
-                        .map_err(io_error)?;
+                    f.write_vector(name, &full.local()?, range, n)?;
                 }
             }
             let n = s.q.global_len();
@@ -125,18 +123,15 @@ impl<'p> Checkpoint<'p> {
                 vectors.push(("jacobian_v", v));
             }
             for (name, x) in vectors {
-                f.write_vector(name, &x.local()?, range.clone(), n)
-                    .map_err(io_error)?;
+                f.write_vector(name, &x.local()?, range.clone(), n)?;
             }
-            f.flush().map_err(io_error)?;
+            f.flush()?;
         }
         crate::parallel::barrier(world);
         if petsc.rank() == 0 {
-            std::fs::rename(&tmp, &files.checkpoint).map_err(|e| {
-                TimeError::Output(format!(
-                    "{}: cannot replace the checkpoint: {e}",
-                    files.checkpoint.display()
-                ))
+            std::fs::rename(&tmp, &files.checkpoint).map_err(|e| TimeError::Checkpoint {
+                file: files.checkpoint.clone(),
+                source: e,
             })?;
         }
         crate::parallel::barrier(world);
@@ -156,41 +151,53 @@ impl<'p> Checkpoint<'p> {
     ) -> Result<Self, TimeError> {
         let path = &files.checkpoint;
         if !path.exists() || !files.stream.exists() {
-            return Err(TimeError::Output(format!(
+            return Err(TimeError::Restart {
+file: path.to_path_buf(),
+ reason: format!(
                 "--restart: {} or {} is missing; run without --restart to start from the static state",
                 path.display(),
                 files.stream.display()
-            )));
+            ),
+});
         }
-        let f = SeriesFile::open(petsc.world(), path).map_err(io_error)?;
-        let number = |name: &str| f.number(name).map_err(io_error);
+        let f = files.storage.open(path)?;
+        let number = |name: &str| f.number(name);
         let expect = |name: &str, value: f64, what: &str| -> Result<(), TimeError> {
             let stored = number(name)?;
             if stored != value {
-                return Err(TimeError::Output(format!(
+                return Err(TimeError::Restart {
+file: path.to_path_buf(),
+ reason: format!(
                     "--restart: {} was written with {what} = {stored}, this run has {value}; restart with the same {what}",
                     path.display()
-                )));
+                ),
+});
             }
             Ok(())
         };
         if f.number("operators_k").is_err() {
-            return Err(TimeError::Output(format!(
-                "--restart: {} was written by an older squeal (it does not say which scene \
+            return Err(TimeError::Restart {
+                file: path.to_path_buf(),
+                reason: format!(
+                    "--restart: {} was written by an older squeal (it does not say which scene \
                  and model it belongs to); run without --restart",
-                path.display()
-            )));
+                    path.display()
+                ),
+            });
         }
         for (table, hash) in &files.scene {
             let stored = number(&format!("scene_{table}"))?;
             if stored != hash_number(*hash) {
-                return Err(TimeError::Output(format!(
-                    "--restart: the scene's [{table}] differs from the one that wrote {}; \
+                return Err(TimeError::Restart {
+                    file: path.to_path_buf(),
+                    reason: format!(
+                        "--restart: the scene's [{table}] differs from the one that wrote {}; \
                      restart with that scene (only the number of steps, the solver's \
                      controls, outputs, sensors and [post] may change) or run without \
                      --restart",
-                    path.display()
-                )));
+                        path.display()
+                    ),
+                });
             }
         }
         expect("ranks", petsc.size() as f64, "number of MPI ranks")?;
@@ -199,7 +206,7 @@ impl<'p> Checkpoint<'p> {
         let range = like.q.ownership();
         let vector = |name: &str| -> Result<Vector<'p>, TimeError> {
             let mut x = like.q.duplicate()?;
-            let values = f.read_vector(name, range.clone()).map_err(io_error)?;
+            let values = f.read_vector(name, range.clone())?;
             x.local_mut()?.copy_from_slice(&values);
             Ok(x)
         };
@@ -249,15 +256,18 @@ impl<'p> Checkpoint<'p> {
         let same = (0..2).all(|i| (stored[i] - now[i]).abs() <= 1e-10 * now[i].abs());
         if !same {
             let Some(r) = input.reduction else {
-                return Err(TimeError::Output(format!(
-                    "--restart: the model's operators differ from those that wrote {} \
+                return Err(TimeError::Restart {
+                    file: path.to_path_buf(),
+                    reason: format!(
+                        "--restart: the model's operators differ from those that wrote {} \
                      (w'Kw {:.12e} vs {:.12e}); restart with the same scene and model",
-                    path.display(),
-                    now[0],
-                    stored[0]
-                )));
+                        path.display(),
+                        now[0],
+                        stored[0]
+                    ),
+                });
             };
-            checkpoint.note = Some(checkpoint.reproject(petsc, &f, r, stored, now)?);
+            checkpoint.note = Some(checkpoint.reproject(petsc, &*f, r, stored, now, path)?);
         }
         Ok(checkpoint)
     }
@@ -272,17 +282,18 @@ impl<'p> Checkpoint<'p> {
     fn reproject(
         &mut self,
         petsc: &'p Petsc,
-        f: &SeriesFile,
+        f: &dyn Series,
         r: &crate::reduce::Reduction,
         stored: [f64; 2],
         now: [f64; 2],
+        path: &std::path::Path,
     ) -> Result<String, TimeError> {
         let mut full = r.full_vector(petsc)?;
         let range = full.ownership();
         let mut recovered = full.duplicate()?;
         let mut worst = 0.0f64;
         let mut project = |name: &str| -> Result<Vector<'p>, TimeError> {
-            let values = f.read_vector(name, range.clone()).map_err(io_error)?;
+            let values = f.read_vector(name, range.clone())?;
             full.local_mut()?.copy_from_slice(&values);
             let x = r.restrict(petsc, &full)?;
             r.recover(petsc, &x, &mut recovered)?;
@@ -302,11 +313,14 @@ impl<'p> Checkpoint<'p> {
         }
         // The span must hold the state (to the basis' orthonormality, ~1e-9).
         if worst.is_nan() || worst > 1e-6 {
-            return Err(TimeError::Output(format!(
-                "--restart: the reduction basis of this run does not hold the checkpoint's \
+            return Err(TimeError::Restart {
+                file: path.to_path_buf(),
+                reason: format!(
+                    "--restart: the reduction basis of this run does not hold the checkpoint's \
                  state (relative error {worst:.1e}): the model changed; restart with the same \
                  scene or run without --restart"
-            )));
+                ),
+            });
         }
         Ok(format!(
             "the reduced operators differ from the checkpoint's (w'Kw {:.9e} vs {:.9e}, \

@@ -21,6 +21,7 @@ use super::newmark::{
 };
 use crate::contact::{ContactModel, ContactState};
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::time::store::Storage;
 use checkpoint::Checkpoint;
 use jacobian::JacobianBuilder;
 use recorder::Recorder;
@@ -186,11 +187,13 @@ impl Transient {
 /// Where the stream and the checkpoint go, whether to resume from the checkpoint, and what
 /// the run's state depends on in the scene ([`crate::scene::Scene::restart_fingerprint`]; a
 /// restart must match it).
-pub struct TransientFiles {
+pub struct TransientFiles<'s> {
     pub stream: PathBuf,
     pub checkpoint: PathBuf,
     pub restart: bool,
     pub scene: Vec<(&'static str, u64)>,
+    /// What creates and opens the stream and the checkpoint (HDF5: `crate::io::series`).
+    pub storage: &'s dyn Storage,
 }
 
 /// The step control's log (rank 0): every change in `transient.log` beside the stream (a
@@ -246,13 +249,14 @@ impl StepLog {
     }
 }
 
-impl TransientFiles {
-    pub fn in_directory(dir: &Path, restart: bool) -> Self {
+impl<'s> TransientFiles<'s> {
+    pub fn in_directory(storage: &'s dyn Storage, dir: &Path, restart: bool) -> Self {
         TransientFiles {
             stream: dir.join("transient.h5"),
             checkpoint: dir.join("checkpoint.h5"),
             restart,
             scene: Vec::new(),
+            storage,
         }
     }
 
@@ -261,10 +265,6 @@ impl TransientFiles {
         self.scene = scene;
         self
     }
-}
-
-fn io_error(e: crate::io::results::ResultsError) -> TimeError {
-    TimeError::Output(e.to_string())
 }
 
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
@@ -368,7 +368,7 @@ pub fn run<'p>(
                 if let Err(e) =
                     Checkpoint::write(petsc, files, settings, &input, s, c, j, &recorder.out)
                 {
-                    checkpoint_failure = Some(e.to_string());
+                    checkpoint_failure = Some(e);
                 }
             }
             if recorder.out.time.len().is_multiple_of(50) || at_end {
@@ -433,7 +433,7 @@ pub fn run<'p>(
         )?;
     }
     if let Some(e) = checkpoint_failure {
-        return Err(TimeError::Output(e));
+        return Err(e);
     }
     let mut out = recorder.out;
     out.seconds_stepping = t.elapsed().as_secs_f64();
@@ -455,7 +455,7 @@ fn open_record<'a, 'p>(
 ) -> Result<(Recorder<'a, 'p>, Option<(Vector<'p>, Vector<'p>)>), TimeError> {
     let contact = input.contact;
     let sensor_names = input.sensors.map(|s| s.names.clone()).unwrap_or_default();
-    let out = Transient::empty(settings.steps, contact.interfaces.len(), sensor_names);
+    let out = Transient::empty(settings.steps, contact.interfaces().len(), sensor_names);
     let interval = settings.state_interval;
     if files.restart {
         let checkpoint = Checkpoint::read(petsc, files, settings, input, state)?;

@@ -3,12 +3,12 @@
 //! the states every `state_interval` of simulated time.
 
 use super::checkpoint::Checkpoint;
-use super::{io_error, Sensors, Transient, TransientFiles, TransientInputs};
+use super::{Sensors, Transient, TransientFiles, TransientInputs};
 use crate::contact::{ContactModel, ContactState, InterfaceSummary};
-use crate::io::series::SeriesFile;
 use crate::la::{LaError, Petsc, Vector};
 use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{State, TimeError};
+use crate::time::store::Series;
 
 /// Signal rows buffered before they are appended to the file.
 const FLUSH_ROWS: usize = 1000;
@@ -66,7 +66,7 @@ pub(super) struct Recorder<'a, 'p> {
     sensors: Option<&'a Sensors<'p>>,
     modal: Option<&'a ModalSensors<'a, 'p>>,
     sensor_buffer: Option<Vector<'p>>,
-    stream: SeriesFile,
+    stream: Box<dyn Series>,
     names: Vec<String>,
     /// Signal rows already in the stream.
     written: usize,
@@ -87,7 +87,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         out: Transient,
         start: &State<'p>,
     ) -> Result<Self, TimeError> {
-        let stream = SeriesFile::create(petsc.world(), &files.stream).map_err(io_error)?;
+        let stream = files.storage.create(&files.stream)?;
         let mut r = Self::new(petsc, input, interval, out, stream)?;
         for path in signal_paths(&r.names) {
             let units = match path.rsplit('/').next().unwrap_or("") {
@@ -97,11 +97,11 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 "open_points" | "stick_points" | "slip_points" => "1",
                 _ => "N",
             };
-            r.stream.create_series(&path, 1, units).map_err(io_error)?;
+            r.stream.create_series(&path, 1, units)?;
         }
         for (k, path) in sensor_paths(&r.out.sensor_names).iter().enumerate() {
             let units = ["m", "m/s", "m/s^2"][k % 3];
-            r.stream.create_series(path, 3, units).map_err(io_error)?;
+            r.stream.create_series(path, 3, units)?;
         }
         let n = start.q.global_len();
         for (path, width, units) in [
@@ -109,9 +109,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             ("states/displacement", n, "m"),
             ("states/velocity", n, "m/s"),
         ] {
-            r.stream
-                .create_series(path, width, units)
-                .map_err(io_error)?;
+            r.stream.create_series(path, width, units)?;
         }
         if let Some(modal) = r.modal {
             let m = modal.mass_shapes.len();
@@ -121,9 +119,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
                 .zip(["m kg^0.5", "m kg^0.5/s", "J"])
                 .map(|((p, w), u)| (p, w, u))
             {
-                r.stream
-                    .create_series(path, width, units)
-                    .map_err(io_error)?;
+                r.stream.create_series(path, width, units)?;
             }
         }
         r.record(start, 0.0, 0, 0.0, None)?;
@@ -146,19 +142,22 @@ impl<'a, 'p> Recorder<'a, 'p> {
         out: Transient,
         checkpoint: &Checkpoint<'p>,
     ) -> Result<Self, TimeError> {
-        let stream = SeriesFile::open(petsc.world(), &files.stream).map_err(io_error)?;
+        let stream = files.storage.open(&files.stream)?;
         let mut r = Self::new(petsc, input, interval, out, stream)?;
         let modal_missing = r.modal.is_some() && !r.stream.has(MODAL_PATHS[0]);
         if !r.stream.has("wall_seconds") || modal_missing {
-            return Err(TimeError::Output(format!(
+            return Err(TimeError::Restart {
+file: files.stream.clone(),
+ reason: format!(
                 "--restart: {} was written by an older squeal (it has no wall_seconds or modal coordinate series); run without --restart to start afresh",
                 files.stream.display()
-            )));
+            ),
+});
         }
         let rows = checkpoint.signal_rows;
         let sensor_series = sensor_paths(&r.out.sensor_names);
         for path in signal_paths(&r.names).iter().chain(&sensor_series) {
-            r.stream.truncate(path, rows).map_err(io_error)?;
+            r.stream.truncate(path, rows)?;
         }
         let modal_paths = if r.modal.is_some() {
             &MODAL_PATHS[..]
@@ -166,12 +165,10 @@ impl<'a, 'p> Recorder<'a, 'p> {
             &[]
         };
         for path in STATE_PATHS.iter().chain(modal_paths) {
-            r.stream
-                .truncate(path, checkpoint.state_rows)
-                .map_err(io_error)?;
+            r.stream.truncate(path, checkpoint.state_rows)?;
         }
-        r.stream.flush().map_err(io_error)?;
-        let read = |p: &str| r.stream.read(p).map_err(io_error);
+        r.stream.flush()?;
+        let read = |p: &str| r.stream.read(p);
         let out = &mut r.out;
         out.time = read("time")?;
         out.step_size = read("step_size")?;
@@ -195,7 +192,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         }
         out.states = checkpoint.state_rows;
         out.resumed_at = Some(checkpoint.state_time);
-        r.written = r.stream.rows("time").map_err(io_error)?;
+        r.written = r.stream.rows("time")?;
         Ok(r)
     }
 
@@ -204,7 +201,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
         input: &TransientInputs<'a, 'p>,
         interval: f64,
         out: Transient,
-        stream: SeriesFile,
+        stream: Box<dyn Series>,
     ) -> Result<Self, TimeError> {
         let (contact, sensors) = (input.contact, input.sensors);
         let sensor_buffer = match sensors {
@@ -218,7 +215,11 @@ impl<'a, 'p> Recorder<'a, 'p> {
             modal: input.modal_sensors.filter(|_| interval > 0.0),
             sensor_buffer,
             stream,
-            names: contact.interfaces.iter().map(|i| i.name.clone()).collect(),
+            names: contact
+                .interfaces()
+                .iter()
+                .map(|i| i.name.clone())
+                .collect(),
             written: 0,
             interval,
             out,
@@ -289,13 +290,9 @@ impl<'a, 'p> Recorder<'a, 'p> {
     fn write_state(&self, s: &State<'p>) -> Result<(), TimeError> {
         let range = s.q.ownership();
         let stream = &self.stream;
-        stream.append("states/time", &[s.time]).map_err(io_error)?;
-        stream
-            .append_distributed("states/displacement", &s.q.local()?, range.clone())
-            .map_err(io_error)?;
-        stream
-            .append_distributed("states/velocity", &s.v.local()?, range)
-            .map_err(io_error)?;
+        stream.append("states/time", &[s.time])?;
+        stream.append_distributed("states/displacement", &s.q.local()?, range.clone())?;
+        stream.append_distributed("states/velocity", &s.v.local()?, range)?;
         if let Some(modal) = self.modal {
             let sample = modal.sample(&s.q, &s.v)?;
             for (path, values) in
@@ -303,7 +300,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
                     .iter()
                     .zip([&sample.eta, &sample.eta_dot, &vec![sample.kinetic]])
             {
-                stream.append(path, values).map_err(io_error)?;
+                stream.append(path, values)?;
             }
         }
         Ok(())
@@ -347,16 +344,16 @@ impl<'a, 'p> Recorder<'a, 'p> {
             }
         }
         for (path, values) in series {
-            self.stream.append(&path, values).map_err(io_error)?;
+            self.stream.append(&path, values)?;
         }
         let sensor_series = sensor_paths(&out.sensor_names);
         for (i, chunk) in sensor_series.chunks(3).enumerate() {
             for (kind, path) in chunk.iter().enumerate() {
                 let v = &out.sensor_values[i][kind];
-                self.stream.append(path, &v[3 * from..]).map_err(io_error)?;
+                self.stream.append(path, &v[3 * from..])?;
             }
         }
-        self.stream.flush().map_err(io_error)?;
+        self.stream.flush()?;
         self.written = out.time.len();
         Ok(())
     }

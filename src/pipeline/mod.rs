@@ -1,5 +1,5 @@
 //! The driver: runs the stages a scene asks for (`crate::stages`, in order), times them and
-//! hands each output to its writer (`crate::io::output`). No physics and no output code here.
+//! hands each output to its writer (`crate::report`). No physics and no output code here.
 //! Every failure is agreed on by all ranks where it happens (`crate::fault::checked`), before
 //! collective objects (HDF5 files, MUMPS factors) are dropped: a rank that fails alone ends
 //! the run instead of hanging the others.
@@ -7,16 +7,22 @@
 use std::path::Path;
 use std::time::Instant;
 
+mod after;
+mod front;
+
 use crate::fault::checked;
-use crate::io::output;
 use crate::io::results::ResultsFile;
+use crate::io::series::Hdf5Storage;
 use crate::la::Petsc;
+use crate::report::{self, contact_map::MapContext};
 use crate::scene::Scene;
 use crate::stages::{self, RunError, Timings};
+use crate::time::store::Storage;
 use crate::time::transient::TransientFiles;
+use after::after_transient;
 
+pub use crate::report::summary::RunSummary;
 pub use crate::stages::model::build_model;
-pub use crate::stages::summary::RunSummary;
 
 /// How to run beyond the scene.
 #[derive(Debug, Clone, Default)]
@@ -77,7 +83,7 @@ pub fn run_with(
     }
     crate::parallel::barrier(petsc.world());
     let mut timings = Timings::default();
-    let a = stages::analyses(petsc, scene, scene_dir, output, &mut timings)?;
+    let a = front::analyses(petsc, scene, scene_dir, output, &mut timings)?;
 
     // What the stages before the transient found goes to results.h5 before it starts.
     let start = Instant::now();
@@ -87,8 +93,9 @@ pub fn run_with(
     ))?;
     let header = (scene_text, petsc_options);
     let write_inp = scene.output.write_inp;
-    checked(output::write_analyses(
-        petsc, &file, &a, header, write_inp, output,
+    let maps = MapContext::of(&a);
+    checked(report::write_analyses(
+        petsc, &file, &a, maps, header, write_inp, output,
     ))?;
     let seconds_output = start.elapsed().as_secs_f64();
     file.flush()?;
@@ -96,85 +103,55 @@ pub fn run_with(
     // The transient streams into transient.h5 (linked as /transient) while it runs.
     // A transient that fails to start or stops early still gets the summary and report of
     // what the run computed; its error comes last.
+    let storage = Hdf5Storage {
+        comm: petsc.world(),
+    };
     let mut failure = None;
-    let trajectory = transient(petsc, scene, &a, output, options, &mut timings)
+    let trajectory = transient(petsc, scene, &a, &storage, output, options, &mut timings)
         .map_err(|e| failure = Some(e))
         .ok()
         .flatten();
-    let limit_cycle = match (&trajectory, &scene.transient, &scene.post) {
-        (Some(t), Some(settings), Some(post)) => post.limit_cycle.map(|lc| {
+    let limit_cycle = match (&trajectory, &scene.post) {
+        (Some(t), Some(post)) => post.limit_cycle.map(|lc| {
             timings.time("limit cycle", || {
-                stages::post::limit_cycle(t, settings, &lc, &a.complex, &a.interface_names())
+                stages::post::limit_cycle(t, &lc, &a.complex, &a.interface_names())
             })
         }),
         _ => None,
     };
-    // The link analyses read the stored states back; an error there is reported after the
-    // transient's results are written.
-    let link = match &trajectory {
-        Some(t) => stages::link::link(
-            petsc,
-            scene,
-            &a,
-            t,
-            limit_cycle.as_ref().map(|r| &r.cycle),
-            &TransientFiles::in_directory(output, false).stream,
-            &mut timings,
-        ),
-        None => Ok(stages::link::Link::default()),
-    };
-    let pseudo = pseudo_trajectories(
-        petsc,
-        scene,
-        &a,
-        trajectory.as_ref(),
-        &limit_cycle,
-        output,
-        &mut timings,
-    );
+    let after = after_transient(petsc, scene, &a, trajectory.as_ref(), &limit_cycle, output);
+    let (link, pseudo) = after.run(&mut timings);
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         let signals = &t.signals;
-        checked(output::transient::write_transient(
+        checked(report::transient::write_transient(
             petsc, &file, signals, settings, output,
         ))?;
         if let Some(lc) = &limit_cycle {
-            checked(output::post::write_limit_cycle(
+            checked(report::post::write_limit_cycle(
                 petsc, &file, lc, signals, output,
             ))?;
         }
         if let Ok(link) = &link {
-            let maps = match (&a.model, &a.preload) {
-                (Some(model), Some(p)) => {
-                    a.ops.dofs.as_ref().map(|dofs| output::link::MapContext {
-                        dofs,
-                        mesh: &model.mesh,
-                        points: &p.contact.points,
-                        gauss: p.contact_settings.gauss_points,
-                        axis: p.contact_settings.axis(),
-                        disc_speed: p.contact_settings.disc_speed,
-                    })
-                }
-                _ => None,
-            };
-            let written = output::link::write_link(petsc, &file, link, maps.as_ref(), output);
+            let dofs = a.ops.dofs.as_ref();
+            let written = report::link::write_link(petsc, &file, link, maps, dofs, output);
             checked(written)?;
         }
     }
     if let Ok(Some(p)) = &pseudo {
-        checked(output::pseudo::write_pseudo(petsc, &file, p, output))?;
+        checked(report::pseudo::write_pseudo(petsc, &file, p, output))?;
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         let shapes = link
             .as_ref()
-            .map_or(Vec::new(), output::link::tracked_shape_fields);
+            .map_or(Vec::new(), report::link::tracked_shape_fields);
         let (modes, complex) = (a.modes.as_ref(), &a.complex);
-        let written = output::write_xdmf_and_preview(output, model, modes, complex, shapes);
+        let written = report::write_xdmf_and_preview(output, model, modes, complex, shapes);
         checked(written)?;
     }
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
     timings.stages.push(("output".into(), seconds_output));
-    checked(output::write_timings(&file, &timings))?;
+    checked(report::write_timings(&file, &timings))?;
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.
     let link = link?;
@@ -204,6 +181,7 @@ fn transient<'p>(
     petsc: &'p Petsc,
     scene: &Scene,
     a: &stages::Analyses<'p>,
+    storage: &dyn Storage,
     output: &Path,
     options: &RunOptions,
     timings: &mut Timings,
@@ -211,6 +189,13 @@ fn transient<'p>(
     let Some(settings) = &scene.transient else {
         return Ok(None);
     };
+    // Scene::validate asked for both.
+    let (Some(preload), Some(modes)) = (&a.preload, &a.modes) else {
+        let message = "needs [statics] and [real_modes] (its start)";
+        return Err(RunError::scene("transient", message));
+    };
+    let files = TransientFiles::in_directory(storage, output, options.restart)
+        .with_scene(scene.restart_fingerprint());
     timings
         .stage("transient", || {
             stages::transient::transient(
@@ -219,11 +204,10 @@ fn transient<'p>(
                 &scene.damping.unwrap_or_default(),
                 a.model.as_ref(),
                 &a.ops,
-                stages::need(a.preload.as_ref(), "transient", "[statics]")?,
-                stages::need(a.modes.as_ref(), "transient", "[real_modes] (its start)")?,
+                preload,
+                modes,
                 a.reduced.as_ref(),
-                &TransientFiles::in_directory(output, options.restart)
-                    .with_scene(scene.restart_fingerprint()),
+                &files,
             )
         })
         .map(Some)
@@ -238,62 +222,8 @@ fn write_report(
 ) -> Result<(), RunError> {
     if petsc.rank() == 0 {
         let path = output.join("report.html");
-        let written = crate::io::report::write_report(summary, scene_text, output);
+        let written = report::html::write_report(summary, scene_text, output);
         checked(written.map_err(|source| RunError::Io { path, source }))?;
     }
     Ok(())
-}
-
-/// The pseudo trajectories when `[post.pseudo_trajectory]` asks, compared with the transient
-/// when the scene ran one that stored its states.
-///
-/// # Collective
-fn pseudo_trajectories<'p>(
-    petsc: &'p Petsc,
-    scene: &Scene,
-    a: &stages::Analyses<'p>,
-    trajectory: Option<&stages::transient::Trajectory>,
-    limit_cycle: &Option<stages::post::LimitCycleReport>,
-    output: &Path,
-    timings: &mut Timings,
-) -> Result<Option<stages::pseudo::PseudoReport>, RunError> {
-    let Some(settings) = scene
-        .post
-        .as_ref()
-        .and_then(|p| p.pseudo_trajectory.as_ref())
-    else {
-        return Ok(None);
-    };
-    let stream = TransientFiles::in_directory(output, false).stream;
-    let own;
-    let comparison = match (trajectory, &scene.transient) {
-        (Some(t), Some(ts)) if ts.state_interval > 0.0 => {
-            let cycle = match limit_cycle {
-                Some(r) => &r.cycle,
-                None => {
-                    own = stages::link::characterize(t, ts.step);
-                    &own
-                }
-            };
-            // The stepping's wall time summed over restarts (a restart of a finished run
-            // steps nothing).
-            let seconds = t.signals.wall_seconds.last().copied().unwrap_or(f64::NAN);
-            Some(stages::pseudo::Comparison {
-                stream: &stream,
-                cycle,
-                transient_seconds: seconds,
-            })
-        }
-        _ => None,
-    };
-    let margin = scene.complex_modes.as_ref().map_or(
-        crate::eigen::complex_modes::ComplexModeSettings::default().instability_margin,
-        |c| c.instability_margin,
-    );
-    let damping = scene.damping.unwrap_or_default();
-    timings
-        .stage("pseudo trajectories", || {
-            stages::pseudo::pseudo_trajectories(petsc, a, damping, settings, margin, comparison)
-        })
-        .map(Some)
 }

@@ -94,8 +94,12 @@ pub fn write_complex(
             source,
         })?;
         let path = output.join(format!("stability_{route}.png"));
-        crate::io::stability::write_diagram(&path, &c.modes, &format!("complex modes ({route})"))
-            .map_err(|source| WriteError::Io { path, source })?;
+        crate::report::stability::write_diagram(
+            &path,
+            &c.modes,
+            &format!("complex modes ({route})"),
+        )
+        .map_err(|source| WriteError::Io { path, source })?;
     }
     Ok(())
 }

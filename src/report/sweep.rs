@@ -90,7 +90,7 @@ pub fn write_sweep(
         ("sweep_real_part.png", 1, "Re(s) (1/s)"),
     ] {
         let path = output.join(name);
-        crate::io::stability::write_sweep_plot(
+        crate::report::stability::write_sweep_plot(
             &path,
             &sw.values,
             &sw.tracks,

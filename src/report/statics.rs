@@ -7,6 +7,7 @@ use super::WriteError;
 use crate::fem::dofmap::DofMap;
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
+use crate::report::contact_map::MapContext;
 use crate::stages::model::Model;
 use crate::stages::statics::Preloaded;
 use crate::statics::NewtonRecord;
@@ -21,16 +22,16 @@ pub fn write_static<'p>(
     preload: &Preloaded<'p>,
     dofs: &DofMap,
     model: &Model,
+    maps: MapContext,
     output: &Path,
 ) -> Result<(), WriteError> {
     let (contact, state) = (&preload.contact, &preload.state);
-    let settings = &preload.contact_settings;
     let q = state.displacement.local()?;
     file.write_nodal("static/displacement", dofs, &q, "m")?;
     drop(q);
     let c = &state.contact;
     let column =
-        |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..contact.local.len()).map(f).collect() };
+        |f: &dyn Fn(usize) -> f64| -> Vec<f64> { (0..contact.local().len()).map(f).collect() };
     let columns: Vec<(&str, Vec<f64>, &str)> = vec![
         ("gap", column(&|k| c.observed[k].gap), "m"),
         ("pressure", column(&|k| c.response[k].pressure), "Pa"),
@@ -52,22 +53,15 @@ pub fn write_static<'p>(
         file.write_table(&format!("static/contact/{name}"), &all, units)?;
         // Maps of the sliding interfaces (the pads) in the disc plane.
         if petsc.rank() == 0 && (name == "pressure" || name == "contact_stiffness") {
-            for (i, itf) in contact.interfaces.iter().enumerate() {
+            for (i, itf) in contact.interfaces().iter().enumerate() {
                 if !itf.friction.is_sliding() {
                     continue;
                 }
                 let path = output.join(format!("contact_{name}_{}.png", itf.name));
-                let context = crate::io::contact_map::MapContext {
-                    mesh: &model.mesh,
-                    points: &contact.points,
-                    gauss: settings.gauss_points,
-                    axis: settings.axis(),
-                    disc_speed: settings.disc_speed,
-                };
                 let what = name.replace('_', " ");
-                crate::io::contact_map::write_map(
+                crate::report::contact_map::write_map(
                     &path,
-                    context,
+                    maps,
                     &all,
                     i,
                     &format!("static state: {what} on {}", itf.name),
@@ -77,7 +71,7 @@ pub fn write_static<'p>(
             }
         }
     }
-    let pts = &contact.points;
+    let pts = &contact.points();
     for (d, axis) in ["x", "y", "z"].iter().enumerate() {
         let v: Vec<f64> = pts.iter().map(|p| p.position[d]).collect();
         file.write_table(&format!("static/contact/{axis}"), &v, "m")?;
@@ -92,15 +86,20 @@ pub fn write_static<'p>(
     file.write_table("static/contact/weight", &v, "m^2")?;
     let v: Vec<f64> = pts.iter().map(|p| p.radius).collect();
     file.write_table("static/contact/radius", &v, "m")?;
-    for (i, (itf, s)) in contact.interfaces.iter().zip(&state.summaries).enumerate() {
+    for (i, (itf, s)) in contact
+        .interfaces()
+        .iter()
+        .zip(&state.summaries)
+        .enumerate()
+    {
         let g = format!("static/interfaces/{}", itf.name);
         file.set_number(&g, "index", i as f64)?;
         file.set_number(
             &g,
             "points",
-            (contact.candidates[i] - contact.misses[i]) as f64,
+            (contact.candidates()[i] - contact.misses()[i]) as f64,
         )?;
-        file.set_number(&g, "missed_points", contact.misses[i] as f64)?;
+        file.set_number(&g, "missed_points", contact.misses()[i] as f64)?;
         file.set_number(&g, "normal_force_n", s.normal_force)?;
         file.set_number(&g, "friction_force_n", s.friction_force)?;
         file.set_number(&g, "braking_torque_nm", s.torque)?;

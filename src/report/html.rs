@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use base64::Engine as _;
 
-use crate::stages::answer::answer_lines;
-use crate::stages::summary::{Part, RunSummary};
+use crate::report::answer::answer_lines;
+use crate::report::summary::{Part, RunSummary};
 
 /// One section of the report: its anchor, heading and HTML body.
 pub struct Section {
@@ -292,7 +292,7 @@ fn real_modes_table(s: &RunSummary) -> String {
     t + "</table></details>"
 }
 
-fn complex_table(c: &crate::stages::summary::ComplexSummary) -> String {
+fn complex_table(c: &crate::report::summary::ComplexSummary) -> String {
     let row = |m: &crate::eigen::complex_modes::ComplexMode| {
         format!(
             "<tr{}><td>{}</td><td>{:.2}</td><td>{:.3e}</td><td>{:.3e}</td><td>{}</td><td>{:.2e}</td></tr>",

@@ -6,17 +6,17 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use super::complex::route_name;
-use super::model::Model;
-use super::operators::{LoadBalance, Operators};
-use super::reduce::Reduced;
-use super::statics::Preloaded;
-use super::sweep::SweepOutput;
-use super::{Analyses, Timings};
 use crate::eigen::complex_modes::{ComplexMode, ComplexModes};
 use crate::eigen::real_modes::RealModes;
 use crate::la::{LaError, Petsc};
 use crate::mesh::quality::BlockQuality;
+use crate::stages::complex::route_name;
+use crate::stages::model::Model;
+use crate::stages::operators::{LoadBalance, Operators};
+use crate::stages::reduce::Reduced;
+use crate::stages::statics::Preloaded;
+use crate::stages::sweep::SweepOutput;
+use crate::stages::{Analyses, Timings};
 use crate::time::transient::Transient;
 
 /// What a run produced, for the summary.
@@ -45,11 +45,11 @@ pub struct RunSummary {
     pub transient: Option<TransientSummary>,
     pub reduction: Option<ReductionSummary>,
     /// The limit cycle of the transient, when `[post.limit_cycle]` asked for it.
-    pub limit_cycle: Option<super::post::LimitCycleReport>,
+    pub limit_cycle: Option<crate::stages::post::LimitCycleReport>,
     /// Modal energies and dynamic stability along the run, when `[post]` asked for them.
-    pub link: super::link::Link,
+    pub link: crate::stages::link::Link,
     /// The pseudo trajectories, when `[post.pseudo_trajectory]` asked for them.
-    pub pseudo: Option<super::pseudo::PseudoReport>,
+    pub pseudo: Option<crate::stages::pseudo::PseudoReport>,
     /// Why the run stopped early (the transient's error), when it did.
     pub failure: Option<String>,
 }
@@ -240,16 +240,22 @@ impl StaticSummary {
             .last()
             .expect("a converged static state has a Newton log");
         StaticSummary {
-            points: contact.points.len(),
-            points_per_rank: contact.points_per_rank.clone(),
+            points: contact.points().len(),
+            points_per_rank: contact.points_per_rank().to_vec(),
             misses: contact
-                .interfaces
+                .interfaces()
                 .iter()
                 .enumerate()
-                .map(|(i, itf)| (itf.name.clone(), contact.misses[i], contact.candidates[i]))
+                .map(|(i, itf)| {
+                    (
+                        itf.name.clone(),
+                        contact.misses()[i],
+                        contact.candidates()[i],
+                    )
+                })
                 .collect(),
             interfaces: contact
-                .interfaces
+                .interfaces()
                 .iter()
                 .map(|i| i.name.clone())
                 .zip(state.summaries.iter().cloned())
@@ -259,7 +265,7 @@ impl StaticSummary {
             factorizations: state.factorizations,
             solves: state.solves,
             factor_entries: state.factor_entries,
-            pairing_seconds: contact.pairing_seconds,
+            pairing_seconds: contact.pairing_seconds(),
             seconds: state.seconds,
             seconds_factorizing: state.seconds_factorizing,
             piston_force: model.piston_force(),
@@ -418,13 +424,13 @@ impl fmt::Display for SummaryPart<'_> {
             Part::Transient => s.fmt_transient(f),
             Part::Sweep => s.fmt_sweep(f),
             Part::LimitCycle => s.fmt_limit_cycle(f),
-            Part::ModalEnergy => super::link::fmt_modal_energy(&s.link, f),
-            Part::ContactCycle => super::link::fmt_contact_cycle(&s.link, f),
-            Part::DynamicStability => super::link::fmt_dynamic_stability(&s.link, f),
+            Part::ModalEnergy => super::text::fmt_modal_energy(&s.link, f),
+            Part::ContactCycle => super::text::fmt_contact_cycle(&s.link, f),
+            Part::DynamicStability => super::text::fmt_dynamic_stability(&s.link, f),
             Part::Pseudo => s
                 .pseudo
                 .as_ref()
-                .map_or(Ok(()), |p| super::pseudo::fmt_pseudo(p, f)),
+                .map_or(Ok(()), |p| super::text::fmt_pseudo(p, f)),
             Part::Timings => s.fmt_timings(f),
         }
     }

@@ -3,10 +3,10 @@
 
 use std::path::Path;
 
-use super::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::eigen::complex_modes::ComplexMode;
 use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
 use crate::eigen::tracking::Tracks;
+use crate::io::figure::{padded, Figure, BLACK, BLUE, PALETTE, RED};
 use crate::measure::nan_max;
 
 /// Writes the diagram of `modes` as a PNG.

@@ -1,43 +1,36 @@
-//! One writer per stage output (DESIGN.md §5): HDF5 groups of results.h5, CSV, PNG, XDMF.
-//! Writers only write: what they show was computed by the stages or by `post`.
+//! The report wing (DESIGN.md §3): above the stages, it turns their typed outputs into what a
+//! reader gets: one writer per stage output (HDF5 groups of results.h5, CSV, PNG, XDMF; §5),
+//! the run's summary and answer lines, and report.html. Writers only write: what they show was
+//! computed by the stages or by `post`. Storage and drawing backends live in `crate::io`.
 
+pub mod answer;
+pub mod contact_map;
+pub mod html;
 pub mod link;
 pub mod modes;
 pub mod post;
 pub mod pseudo;
 pub mod reduction;
+pub mod stability;
 pub mod statics;
+pub mod summary;
 pub mod sweep;
+pub mod text;
 pub mod transient;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::eigen::complex_modes::ComplexModes;
 use crate::eigen::real_modes::RealModes;
-use crate::io::results::{ResultsError, ResultsFile};
+use crate::io::results::ResultsFile;
 use crate::io::xdmf::{self, NodalField};
-use crate::la::LaError;
+pub use crate::io::WriteError;
 use crate::mesh::quality::BlockQuality;
+use crate::report::summary::ReductionSummary;
 use crate::stages::complex::route_name;
 use crate::stages::model::Model;
 use crate::stages::operators::LoadBalance;
-use crate::stages::summary::ReductionSummary;
 use crate::stages::{Analyses, Timings};
-
-#[derive(Debug, thiserror::Error)]
-pub enum WriteError {
-    #[error(transparent)]
-    Results(#[from] ResultsError),
-    #[error(transparent)]
-    La(#[from] LaError),
-    #[error(transparent)]
-    MatrixMarket(#[from] crate::io::matrix_market::MatrixMarketError),
-    #[error("{path}: {source}")]
-    Io {
-        path: PathBuf,
-        source: std::io::Error,
-    },
-}
 
 /// The run's identity at the root of results.h5: the scene, the PETSc options, the version,
 /// the ranks and the model size (for reproducibility).
@@ -66,6 +59,7 @@ pub fn write_analyses<'p>(
     petsc: &'p crate::la::Petsc,
     file: &ResultsFile,
     a: &Analyses<'p>,
+    maps: Option<contact_map::MapContext>,
     (scene_text, petsc_options): (&str, &[String]),
     write_inp_file: bool,
     output: &Path,
@@ -78,8 +72,10 @@ pub fn write_analyses<'p>(
             write_inp(output, model)?;
         }
     }
-    if let (Some(p), Some(model), Some(dofs)) = (&a.preload, &a.model, &a.ops.dofs) {
-        statics::write_static(petsc, file, p, dofs, model, output)?;
+    if let (Some(p), Some(model), Some(maps), Some(dofs)) =
+        (&a.preload, &a.model, maps, &a.ops.dofs)
+    {
+        statics::write_static(petsc, file, p, dofs, model, maps, output)?;
     }
     if let Some(modes) = &a.modes {
         file.write_real_modes(modes, a.ops.dofs.as_ref())?;

@@ -2,8 +2,8 @@
 
 use super::WriteError;
 use crate::io::results::ResultsFile;
+use crate::report::summary::ReductionSummary;
 use crate::stages::reduce::Reduced;
-use crate::stages::summary::ReductionSummary;
 
 /// Writes /reduced: sizes, checks, the real modes of the reduced vs the full model.
 ///

@@ -11,6 +11,9 @@ use crate::contact::surface::{cross, dot, sub, Face};
 use crate::fem::quadrature::gauss_legendre;
 use crate::io::figure::{Figure, BLACK, RED};
 use crate::mesh::Mesh;
+use crate::stages::model::Model;
+use crate::stages::statics::Preloaded;
+use crate::stages::Analyses;
 
 /// Where the points of one interface are: the mesh, the points, their quadrature and the disc.
 #[derive(Clone, Copy)]
@@ -21,6 +24,25 @@ pub struct MapContext<'a> {
     pub axis: Axis,
     /// rad/s, sign by the right-hand rule about the axis.
     pub disc_speed: f64,
+}
+
+impl<'a> MapContext<'a> {
+    /// The contact points of a preloaded model (built once per run; every map uses it).
+    pub fn new(model: &'a Model, preload: &'a Preloaded) -> Self {
+        let settings = &preload.contact_settings;
+        MapContext {
+            mesh: &model.mesh,
+            points: preload.contact.points(),
+            gauss: settings.gauss_points,
+            axis: settings.axis(),
+            disc_speed: settings.disc_speed,
+        }
+    }
+
+    /// The run's contact points, when it has a mesh model and a static state.
+    pub fn of(a: &'a Analyses) -> Option<Self> {
+        Some(Self::new(a.model.as_ref()?, a.preload.as_ref()?))
+    }
 }
 
 /// One interface in the disc plane (mm): a polygon per point, the boundary edges of its

@@ -5,32 +5,22 @@ use crate::measure::nan_max;
 use std::path::Path;
 
 use super::WriteError;
-use crate::contact::pairing::{Axis, ContactPoint};
-use crate::io::contact_map::{map_figure, plane_map};
+use crate::fem::dofmap::DofMap;
 use crate::io::figure::{padded, Figure, BLACK, BLUE, GREY, PALETTE, RED};
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
-use crate::mesh::Mesh;
 use crate::post::contact_cycle::{ContactCycle, PadCycle};
 use crate::post::dynamic_stability::TrackedMode;
+use crate::report::contact_map::{map_figure, plane_map, MapContext};
 use crate::stages::link::{ContactCycleReport, DynamicStabilityReport, Link, ModalEnergyReport};
-
-/// What the contact maps are drawn on (and the DOF map of the tracked shapes).
-pub struct MapContext<'a> {
-    pub dofs: &'a crate::fem::dofmap::DofMap,
-    pub mesh: &'a Mesh,
-    pub points: &'a [ContactPoint],
-    pub gauss: usize,
-    pub axis: Axis,
-    pub disc_speed: f64,
-}
 
 /// # Collective
 pub fn write_link(
     petsc: &Petsc,
     file: &ResultsFile,
     link: &Link,
-    maps: Option<&MapContext>,
+    maps: Option<MapContext>,
+    dofs: Option<&DofMap>,
     output: &Path,
 ) -> Result<(), WriteError> {
     if let Some(r) = &link.contact_cycle {
@@ -49,11 +39,11 @@ pub fn write_link(
     }
     if let Some(r) = &link.dynamic_stability {
         write_dynamic_stability(file, r)?;
-        if let Some(maps) = maps {
+        if let Some(dofs) = dofs {
             for shape in &r.shapes {
                 for (part, values) in ["re", "im"].iter().zip(&shape.parts) {
                     let name = format!("{}_{part}", shape.dataset);
-                    file.write_nodal(&name, maps.dofs, values, "m")?;
+                    file.write_nodal(&name, dofs, values, "m")?;
                 }
             }
         }
@@ -383,20 +373,13 @@ fn write_contact_cycle(file: &ResultsFile, r: &ContactCycleReport) -> Result<(),
 fn plot_contact_cycle(
     r: &ContactCycleReport,
     pad: &PadCycle,
-    maps: &MapContext,
+    maps: MapContext,
     output: &Path,
 ) -> Result<(), WriteError> {
     let c = &r.cycle;
     let (hi, lo) = pad.extreme_phases;
     let [_, max, variation] = ContactCycle::spread(&c.stiffness);
-    let context = crate::io::contact_map::MapContext {
-        mesh: maps.mesh,
-        points: maps.points,
-        gauss: maps.gauss,
-        axis: maps.axis,
-        disc_speed: maps.disc_speed,
-    };
-    let Some(map) = plane_map(context, pad.interface) else {
+    let Some(map) = plane_map(maps, pad.interface) else {
         return Ok(());
     };
     let top = map.cells.iter().map(|&(_, j)| max[j]).fold(0.0, nan_max);

@@ -1,0 +1,171 @@
+//! The analyses after the transient that `[post]` asks for: the time/frequency link on the
+//! stored states and the pseudo trajectories (compared with the transient when it stored
+//! states). The stored states are opened once, here, and handed to the stages.
+
+use std::path::{Path, PathBuf};
+
+use crate::eigen::complex_modes::ComplexModeSettings;
+use crate::io::series::SeriesFile;
+use crate::la::Petsc;
+use crate::post::limit_cycle::LimitCycle;
+use crate::post::states::StoredStates;
+use crate::scene::Scene;
+use crate::stages::link::{self, LinearizationSettings, Link, Nominal};
+use crate::stages::post::LimitCycleReport;
+use crate::stages::pseudo::{self, PseudoReport};
+use crate::stages::transient::Trajectory;
+use crate::stages::{Analyses, RunError, Timings};
+
+/// What the analyses after the transient work on.
+pub(super) struct AfterTransient<'a, 'p> {
+    petsc: &'p Petsc<'p>,
+    scene: &'a Scene,
+    nominal: Option<Nominal<'a, 'p>>,
+    trajectory: Option<&'a Trajectory>,
+    /// The run's characterization: `[post.limit_cycle]`'s, else the torque's with the
+    /// default settings (the analyses need the run's period).
+    cycle: Option<std::borrow::Cow<'a, LimitCycle>>,
+    stream: PathBuf,
+}
+
+pub(super) fn after_transient<'a, 'p>(
+    petsc: &'p Petsc<'p>,
+    scene: &'a Scene,
+    a: &'a Analyses<'p>,
+    trajectory: Option<&'a Trajectory>,
+    limit_cycle: &'a Option<LimitCycleReport>,
+    output: &Path,
+) -> AfterTransient<'a, 'p> {
+    let nominal = match (&a.preload, &a.modes) {
+        (Some(preload), Some(modes)) => Some(Nominal {
+            preload,
+            modes,
+            reduced: a.reduced.as_ref(),
+        }),
+        _ => None,
+    };
+    let cycle = trajectory.map(|t| match limit_cycle {
+        Some(r) => std::borrow::Cow::Borrowed(&r.cycle),
+        None => std::borrow::Cow::Owned(link::characterize(t)),
+    });
+    AfterTransient {
+        petsc,
+        scene,
+        nominal,
+        trajectory,
+        cycle,
+        stream: output.join("transient.h5"),
+    }
+}
+
+impl AfterTransient<'_, '_> {
+    /// The link analyses and the pseudo trajectories; each failure is kept for after the
+    /// results are written.
+    ///
+    /// # Collective
+    pub fn run(
+        &self,
+        timings: &mut Timings,
+    ) -> (
+        Result<Link, RunError>,
+        Result<Option<PseudoReport>, RunError>,
+    ) {
+        let post = self.scene.post.as_ref();
+        let wants_link = post.is_some_and(|p| p.uses_states()) && self.trajectory.is_some();
+        let stored = self
+            .trajectory
+            .is_some_and(|t| t.state_interval > 0.0 && self.scene.transient.is_some());
+        let wants_pseudo = post.is_some_and(|p| p.pseudo_trajectory.is_some());
+        let opened = match (wants_link || (wants_pseudo && stored), self.nominal) {
+            (true, Some(_)) => Some(self.open_states()),
+            _ => None,
+        };
+        // A failure to read the states goes to the first analysis that needed them.
+        let (states, mut failure) = match opened {
+            Some(Ok(s)) => (Some(s), None),
+            Some(Err(e)) => (None, Some(e)),
+            None => (None, None),
+        };
+        let link = match (&states, wants_link) {
+            (_, false) => Ok(Link::default()),
+            (Some(s), true) => self.link(s, timings),
+            (None, true) => failure.take().map_or(Ok(Link::default()), Err),
+        };
+        let pseudo = match failure {
+            Some(e) => Err(e),
+            None => self.pseudo(states.as_ref().filter(|_| stored), timings),
+        };
+        (link, pseudo)
+    }
+
+    /// # Collective
+    fn open_states(&self) -> Result<StoredStates<'static>, RunError> {
+        let open = || -> Result<StoredStates<'static>, RunError> {
+            let file = SeriesFile::open(self.petsc.world(), &self.stream)?;
+            let name = self.stream.display().to_string();
+            Ok(StoredStates::new(Box::new(file), name, 2)?)
+        };
+        crate::fault::checked(open())
+    }
+
+    fn linearization(&self) -> LinearizationSettings {
+        let margin = self
+            .scene
+            .complex_modes
+            .as_ref()
+            .map_or(ComplexModeSettings::default().instability_margin, |c| {
+                c.instability_margin
+            });
+        LinearizationSettings {
+            damping: self.scene.damping.unwrap_or_default(),
+            margin,
+        }
+    }
+
+    /// # Collective
+    fn link(&self, states: &StoredStates, timings: &mut Timings) -> Result<Link, RunError> {
+        let (Some(post), Some(nominal), Some(t), Some(cycle)) =
+            (&self.scene.post, self.nominal, self.trajectory, &self.cycle)
+        else {
+            return Ok(Link::default());
+        };
+        let lin = self.linearization();
+        link::link(self.petsc, post, lin, nominal, t, states, cycle, timings)
+    }
+
+    /// # Collective
+    fn pseudo(
+        &self,
+        states: Option<&StoredStates>,
+        timings: &mut Timings,
+    ) -> Result<Option<PseudoReport>, RunError> {
+        let Some(settings) = self
+            .scene
+            .post
+            .as_ref()
+            .and_then(|p| p.pseudo_trajectory.as_ref())
+        else {
+            return Ok(None);
+        };
+        let Some(nominal) = self.nominal else {
+            let message = "needs [statics] and [real_modes]";
+            return Err(RunError::scene("post.pseudo_trajectory", message));
+        };
+        let comparison = match (states, self.trajectory, &self.cycle) {
+            (Some(states), Some(t), Some(cycle)) => Some(pseudo::Comparison {
+                states,
+                cycle,
+                // The stepping's wall time summed over restarts (a restart of a finished
+                // run steps nothing).
+                transient_seconds: t.signals.wall_seconds.last().copied().unwrap_or(f64::NAN),
+            }),
+            _ => None,
+        };
+        let lin = self.linearization();
+        timings
+            .stage("pseudo trajectories", || {
+                pseudo::pseudo_trajectories(self.petsc, nominal, lin, settings, comparison)
+            })
+            .map(Some)
+    }
+}
