@@ -3,9 +3,10 @@
 //! with line search) before it is cut, and the step control a checkpoint carries.
 
 use super::newmark::{
-    Damping, Forces, Jacobian, Newmark, NewmarkSettings, State, StepReport, TimeError,
+    Correction, Damping, Factorize, Forces, Linearize, Newmark, NewmarkSettings, State, StepReport,
+    TimeError,
 };
-use crate::la::{LaError, SparseMatrix, TangentChange};
+use crate::la::SparseMatrix;
 
 /// What an adaptive run did besides stepping, and where its step control stands (so a
 /// checkpoint can resume it exactly).
@@ -44,29 +45,6 @@ pub struct Adaptivity {
     pub refresh: bool,
     /// A full Newton (J at every iterate) instead of the fixed Jacobian.
     pub full_newton: bool,
-}
-
-/// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
-/// the tangent of that state.
-pub type Factorize<'f, 'p> =
-    dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<Jacobian<'f, 'p>, LaError> + 'f;
-
-/// The change of the nonlinear forces' tangent between the Jacobian's factor and an iterate,
-/// X(iterate) - extra (X = K_c + K_stick + K_f + gamma/(beta h) C_f for contact: the
-/// consistent Jacobian beyond the linear operators; `extra`: the part J was built with), as an
-/// operator: J + that change is the consistent Jacobian at the iterate.
-pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn TangentChange<'p> + 'f>, LaError>
-    + 'f;
-
-/// How a step's corrections are computed.
-pub enum Correction<'r, 'f, 'p> {
-    /// With the factor of the step's fixed J (modified Newton).
-    Fixed,
-    /// Newton-Krylov: GMRES on the consistent tangent at every iterate, right-preconditioned
-    /// by the fixed factor (a few solves where J differs in a few contact points).
-    Krylov(&'r mut Linearize<'f, 'p>),
-    /// A full Newton: J rebuilt and factorized at every iterate.
-    Full(&'r mut Factorize<'f, 'p>),
 }
 
 /// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's

@@ -37,9 +37,10 @@ use squeal::la::{
     SparseMatrix, Vector,
 };
 use squeal::measure::{nan_max, nan_min};
+use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
 use squeal::time::newmark::{
-    initial_acceleration, integrate_adaptive, jacobian, Adaptivity, Damping, Jacobian,
-    NewmarkSettings, State, StepControl, StepReport, TimeError,
+    initial_acceleration, jacobian, Damping, Jacobian, NewmarkSettings, State, StepReport,
+    TimeError,
 };
 
 use squeal::post::limit_cycle::slope;

@@ -21,9 +21,9 @@
 
 use squeal::contact::law::FrictionLaw;
 use squeal::la::{DirectSolver, Factorization, Petsc, Vector};
+use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
 use squeal::time::newmark::{
-    initial_acceleration, integrate_adaptive, Adaptivity, Damping, NewmarkSettings, State,
-    StepControl, StepReport, TimeError,
+    initial_acceleration, Damping, NewmarkSettings, State, StepReport, TimeError,
 };
 
 use super::common::{rel, say};

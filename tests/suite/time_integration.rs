@@ -85,7 +85,8 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// TimeError::NotFinite, naming that step and time, and without refreshes, retries or cuts
 /// (no smaller step can make a NaN finite). The steps before it are accepted as usual.
 fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
-    use squeal::time::newmark::{integrate_adaptive, Adaptivity, StepControl, TimeError};
+    use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
+    use squeal::time::newmark::TimeError;
     let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
@@ -203,8 +204,8 @@ fn cut_and_restore(
     petsc: &Petsc,
     refresh: bool,
     krylov: bool,
-) -> Result<squeal::time::newmark::StepControl, String> {
-    use squeal::time::newmark::integrate_adaptive;
+) -> Result<squeal::time::adaptive::StepControl, String> {
+    use squeal::time::adaptive::integrate_adaptive;
     let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
@@ -239,7 +240,7 @@ fn cut_and_restore(
     let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State,
                        _r: &squeal::time::newmark::StepReport,
-                       _c: &squeal::time::newmark::StepControl| {
+                       _c: &squeal::time::adaptive::StepControl| {
         let (g, v) = (
             s.q.gather_all()
                 .map_err(squeal::time::newmark::TimeError::La)?[0],
@@ -251,7 +252,7 @@ fn cut_and_restore(
     };
     let mut lines = Vec::new();
     let mut log = |line: &str| lines.push(line.to_string());
-    let mut control = squeal::time::newmark::StepControl::default();
+    let mut control = squeal::time::adaptive::StepControl::default();
     integrate_adaptive(
         settings,
         &m,
@@ -262,7 +263,7 @@ fn cut_and_restore(
         &mut state,
         &mut forces,
         30.0,
-        squeal::time::newmark::Adaptivity {
+        squeal::time::adaptive::Adaptivity {
             max_cuts: 8,
             restore_after: 20,
             refresh,

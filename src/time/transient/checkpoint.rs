@@ -4,7 +4,8 @@
 use super::{Transient, TransientFiles, TransientInputs, TransientSettings};
 use crate::la::{LaError, Petsc, Vector};
 use crate::measure::nan_max;
-use crate::time::newmark::{State, StepControl, TimeError};
+use crate::time::adaptive::StepControl;
+use crate::time::newmark::{State, TimeError};
 use crate::time::store::Series;
 
 /// w^T K w and w^T M w of the integrated operators for a fixed w (w_i = sin(0.7 i + 0.3) over

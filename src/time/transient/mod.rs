@@ -15,9 +15,10 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use super::adaptive::{integrate_adaptive, Adaptivity, StepControl};
 use super::newmark::{
-    initial_acceleration, integrate_adaptive, Adaptivity, Damping, Forces, ModalDamping,
-    NewmarkSettings, State, StepControl, StepReport, TimeError,
+    initial_acceleration, Damping, Forces, ModalDamping, NewmarkSettings, State, StepReport,
+    TimeError,
 };
 use crate::contact::{ContactModel, ContactState};
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};

@@ -24,13 +24,13 @@
 //! one force evaluation, one solve and no product with the model's operators. The identity
 //! holds to the solve's backward error (~1e-16 relative), far below the tolerance.
 //!
-//! Long (~840 lines), on purpose: the step, its three corrections (fixed factor, Newton-Krylov
-//! with its GMRES, full Newton), the line search and the carried linear force work on the same
-//! iterate vectors of one `Newmark`; the adaptive control around it is in `adaptive.rs`.
+//! The step and the carried linear force are here; the step's corrections (modified Newton
+//! with the fixed factor, full Newton) in `correction.rs`, Newton-Krylov with its GMRES and
+//! the Woodbury preconditioner in `krylov.rs`, the residual and the line search in
+//! `line_search.rs`, the damping operators in `damping.rs`; all work on the same iterate vectors
+//! of one `Newmark`. The adaptive control around the step is in `super::adaptive`.
 
-use crate::la::{
-    DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, TangentChange, Vector,
-};
+use crate::la::{DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, Vector};
 
 /// Newmark parameters and the Newton tolerance.
 #[derive(Debug, Clone, Copy)]
@@ -79,94 +79,6 @@ pub struct StepReport {
     /// one more per Newton-Krylov correction), and the time inside them alone.
     pub factor_solves: usize,
     pub factor_solve_seconds: f64,
-}
-
-/// Counts and times solves with a factor.
-#[derive(Debug, Clone, Copy, Default)]
-struct SolveCount {
-    solves: usize,
-    seconds: f64,
-}
-
-impl SolveCount {
-    fn solve<'p>(
-        &mut self,
-        factor: &DirectSolver<'p>,
-        b: &Vector<'p>,
-        x: &mut Vector<'p>,
-    ) -> Result<(), LaError> {
-        let t = std::time::Instant::now();
-        factor.solve(b, x)?;
-        self.solves += 1;
-        self.seconds += t.elapsed().as_secs_f64();
-        Ok(())
-    }
-
-    /// x = P^-1 b with the factor updated by `low_rank` (one solve with the factor).
-    fn precondition<'p>(
-        &mut self,
-        low_rank: &LowRankUpdate<'p>,
-        factor: &DirectSolver<'p>,
-        b: &Vector<'p>,
-        x: &mut Vector<'p>,
-    ) -> Result<(), LaError> {
-        let t = std::time::Instant::now();
-        low_rank.apply(factor, b, x)?;
-        self.solves += 1;
-        self.seconds += t.elapsed().as_secs_f64();
-        Ok(())
-    }
-}
-
-/// The damping operator C.
-#[derive(Clone, Copy)]
-pub enum Damping<'a, 'p> {
-    None,
-    /// C = alpha M + beta K, never assembled: M a + C v + K q = M (a + alpha v) + K (q + beta v).
-    Rayleigh {
-        alpha: f64,
-        beta: f64,
-    },
-    Matrix(&'a SparseMatrix<'p>),
-}
-
-/// Modal damping over a band: C_m = (M Phi) diag(c) (M Phi)^T for M-orthonormal modes Phi,
-/// c_i = 2 zeta omega_i. Low rank and dense, so it is applied as a force (f -= C_m v at every
-/// force evaluation) and kept out of J: its share of J, gamma / (beta h) c_i against the mass
-/// term 1 / (beta h^2), is gamma h c_i ~ 1e-6 for a 1 us step, zeta = 0.01 and 10 kHz, far
-/// below what slows the fixed-Jacobian iterations.
-pub struct ModalDamping<'p> {
-    mass_shapes: Vec<Vector<'p>>,
-    coefficients: Vec<f64>,
-}
-
-impl<'p> ModalDamping<'p> {
-    /// `mass_shapes`: M phi_i of M-orthonormal modes; `coefficients`: 2 zeta_i omega_i.
-    pub fn new(mass_shapes: Vec<Vector<'p>>, coefficients: Vec<f64>) -> Self {
-        debug_assert_eq!(mass_shapes.len(), coefficients.len());
-        ModalDamping {
-            mass_shapes,
-            coefficients,
-        }
-    }
-
-    pub fn modes(&self) -> usize {
-        self.coefficients.len()
-    }
-
-    /// `f -= C_m v`
-    ///
-    /// # Collective
-    pub fn subtract_force(&self, v: &Vector<'p>, f: &mut Vector<'p>) -> Result<(), LaError> {
-        let shapes: Vec<&Vector> = self.mass_shapes.iter().collect();
-        let projections = v.mdot(&shapes)?;
-        let alphas: Vec<f64> = projections
-            .iter()
-            .zip(&self.coefficients)
-            .map(|(p, c)| -p * c)
-            .collect();
-        f.maxpy(&alphas, &shapes)
-    }
 }
 
 /// A factorized J and X = J - L, the part beyond the linear operators (the contact stiffness
@@ -245,9 +157,14 @@ pub const LINEAR_FORCE_REFRESH: usize = 1000;
 /// GMRES iterations at most per Newton-Krylov correction.
 pub const KRYLOV_MAX: usize = 60;
 
-pub use super::adaptive::{
-    integrate_adaptive, Adaptivity, Correction, Factorize, Linearize, StepControl,
-};
+mod correction;
+mod damping;
+mod krylov;
+mod line_search;
+
+use correction::SolveCount;
+pub use correction::{Correction, Factorize, Linearize};
+pub use damping::{Damping, ModalDamping};
 
 /// A Newmark integrator over fixed operators M, C, K and a factor of J.
 pub struct Newmark<'a, 'p> {
@@ -530,219 +447,6 @@ impl<'a, 'p> Newmark<'a, 'p> {
         }
     }
 
-    /// Whether a Newton-Krylov correction of the last step attempt was inexact (GMRES ended
-    /// at its iteration limit): only then can a full Newton do what it did not.
-    pub fn krylov_exhausted(&self) -> bool {
-        self.krylov_exhausted
-    }
-
-    /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to
-    /// the factor's accuracy): -R + X dq.
-    fn linear_change(
-        &mut self,
-        jacobian: &Jacobian<'_, 'p>,
-        report: &mut StepReport,
-    ) -> Result<(), LaError> {
-        self.dz.copy_from(&self.r)?;
-        self.dz.scale(-1.0)?;
-        if let Some(extra) = &jacobian.extra {
-            let clock = std::time::Instant::now();
-            extra.mult_add(&self.dq, &mut self.dz)?;
-            report.product_seconds += clock.elapsed().as_secs_f64();
-        }
-        Ok(())
-    }
-
-    /// dz = -(J - X) dq by products (a Krylov correction does not satisfy J dq = R).
-    fn linear_change_from_matrix(&mut self) -> Result<(), LaError> {
-        let matrix =
-            self.jacobian.matrix.as_ref().ok_or_else(|| {
-                LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into())
-            })?;
-        matrix.mult(&self.dq, &mut self.dz)?;
-        if let Some(extra) = &self.jacobian.extra {
-            self.tmp.set_all(0.0)?;
-            extra.mult_add(&self.dq, &mut self.tmp)?;
-            self.dz.axpy(-1.0, &self.tmp)?;
-        }
-        self.dz.scale(-1.0)
-    }
-
-    /// GMRES on J(state) dq = R, right-preconditioned by the step's factor, from dq = 0, to a
-    /// relative residual of 1e-4 (an inexact Newton step: the outer iteration converges
-    /// linearly at that rate), or to `floor` (a tenth of the step's residual target: a
-    /// smaller linear residual cannot make the Newton step better than converged), or
-    /// KRYLOV_MAX iterations (the best solution then: GMRES
-    /// minimizes the residual, and the line search judges the step). Returns the iterations.
-    ///
-    /// # Collective
-    fn krylov_solve(
-        &mut self,
-        tangent: &dyn TangentChange<'p>,
-        floor: f64,
-    ) -> Result<usize, LaError> {
-        let enough = |beta0: f64| (1e-4 * beta0).max(floor);
-        let m = KRYLOV_MAX;
-        let t = std::time::Instant::now();
-        self.solves.solves += self
-            .low_rank
-            .prepare(&self.jacobian.factor, tangent, &self.q1)?;
-        self.solves.seconds += t.elapsed().as_secs_f64();
-        while self.basis.len() < m + 1 {
-            self.basis.push(self.q1.duplicate()?);
-        }
-        let beta0 = self.r.norm2()?;
-        self.dq.set_all(0.0)?;
-        if beta0 == 0.0 {
-            return Ok(0);
-        }
-        self.basis[0].copy_from(&self.r)?;
-        self.basis[0].scale(1.0 / beta0)?;
-        // Hessenberg columns, Givens rotations, and the rotated right-hand side.
-        let mut h = vec![vec![0.0; m + 1]; m];
-        let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
-        let mut g = vec![0.0; m + 1];
-        g[0] = beta0;
-        let mut k = 0;
-        while k < m {
-            // w = J(state) P^-1 v_k, into basis[k + 1].
-            self.solves.precondition(
-                &self.low_rank,
-                &self.jacobian.factor,
-                &self.basis[k],
-                &mut self.dz,
-            )?;
-            let (head, tail) = self.basis.split_at_mut(k + 1);
-            let w = &mut tail[0];
-            apply_consistent(self.jacobian, tangent, &self.dz, w)?;
-            // Classical Gram-Schmidt twice (CGS2: as orthogonal as modified Gram-Schmidt, in
-            // two reductions over the ranks instead of k + 1).
-            let previous: Vec<&Vector<'p>> = head.iter().collect();
-            for _ in 0..2 {
-                let coefficients = w.mdot(&previous)?;
-                let negated: Vec<f64> = coefficients.iter().map(|c| -c).collect();
-                w.maxpy(&negated, &previous)?;
-                for (hi, c) in h[k].iter_mut().zip(&coefficients) {
-                    *hi += c;
-                }
-            }
-            h[k][k + 1] = w.norm2()?;
-            if h[k][k + 1] > 0.0 {
-                w.scale(1.0 / h[k][k + 1])?;
-            }
-            for i in 0..k {
-                let t = cs[i] * h[k][i] + sn[i] * h[k][i + 1];
-                h[k][i + 1] = -sn[i] * h[k][i] + cs[i] * h[k][i + 1];
-                h[k][i] = t;
-            }
-            let d = h[k][k].hypot(h[k][k + 1]);
-            (cs[k], sn[k]) = if d > 0.0 {
-                (h[k][k] / d, h[k][k + 1] / d)
-            } else {
-                (1.0, 0.0)
-            };
-            h[k][k] = d;
-            h[k][k + 1] = 0.0;
-            g[k + 1] = -sn[k] * g[k];
-            g[k] *= cs[k];
-            k += 1;
-            if g[k].abs() <= enough(beta0) || !g[k].is_finite() {
-                break;
-            }
-        }
-        // (A NaN counts as inexact.)
-        let reached = g[k].abs() <= enough(beta0);
-        self.krylov_exhausted |= !reached;
-        // y from the triangular system, then dq = P^-1 (V y).
-        let mut y = vec![0.0; k];
-        for i in (0..k).rev() {
-            let mut t = g[i];
-            for j in i + 1..k {
-                t -= h[j][i] * y[j];
-            }
-            y[i] = t / h[i][i];
-        }
-        self.tmp.set_all(0.0)?;
-        for (i, yi) in y.iter().enumerate() {
-            self.tmp.axpy(*yi, &self.basis[i])?;
-        }
-        self.solves.precondition(
-            &self.low_rank,
-            &self.jacobian.factor,
-            &self.tmp,
-            &mut self.dq,
-        )?;
-        Ok(k)
-    }
-
-    /// R = z - f at the current iterate (into `r`); returns |R| and the reference force
-    /// max(|f|, |z|).
-    ///
-    /// # Collective
-    fn residual(
-        &mut self,
-        t1: f64,
-        forces: &mut Forces<'_, 'p>,
-        report: &mut StepReport,
-    ) -> Result<(f64, f64), LaError> {
-        let clock = std::time::Instant::now();
-        forces(t1, &self.q1, &self.v1, &mut self.f)?;
-        report.force_seconds += clock.elapsed().as_secs_f64();
-        self.r.copy_from(&self.z)?;
-        self.r.axpy(-1.0, &self.f)?;
-        let reference = self.f.norm2()?.max(self.z.norm2()?);
-        Ok((self.r.norm2()?, reference))
-    }
-
-    /// Moves the iterate by `-alpha dq` (q1, a1, v1 by the Newmark relations, z linearly).
-    fn correct(&mut self, alpha: f64) -> Result<(), LaError> {
-        let NewmarkSettings {
-            beta,
-            gamma,
-            step: h,
-            ..
-        } = self.settings;
-        self.q1.axpy(-alpha, &self.dq)?;
-        self.a1.axpy(-alpha / (beta * h * h), &self.dq)?;
-        self.v1.axpy(-alpha * gamma / (beta * h), &self.dq)?;
-        self.z.axpy(alpha, &self.dz)
-    }
-
-    /// Backtracking on |R| along the correction: the first alpha in 1, 1/2, ... 1/1024 with
-    /// |R(alpha)| <= (1 - 1e-4 alpha) |R(0)|, else the best alpha tried if it lowers |R| at all,
-    /// else the full step (the caller's iteration limit then decides). The iterate is left at
-    /// the chosen alpha with its residual evaluated.
-    ///
-    /// # Collective
-    fn backtrack(
-        &mut self,
-        t1: f64,
-        r0: f64,
-        forces: &mut Forces<'_, 'p>,
-        report: &mut StepReport,
-    ) -> Result<(f64, (f64, f64)), LaError> {
-        let (mut alpha, mut at) = (1.0, 0.0);
-        let mut best: Option<(f64, f64)> = None;
-        loop {
-            self.correct(alpha - at)?;
-            at = alpha;
-            let evaluated = self.residual(t1, forces, report)?;
-            let r = evaluated.0;
-            if r.is_finite() && r <= (1.0 - 1e-4 * alpha) * r0 {
-                return Ok((alpha, evaluated));
-            }
-            if r.is_finite() && best.is_none_or(|b| r < b.1) {
-                best = Some((alpha, r));
-            }
-            if alpha < 1.0 / 1024.0 {
-                let chosen = best.filter(|b| b.1 < r0).map_or(1.0, |b| b.0);
-                self.correct(chosen - at)?;
-                return Ok((chosen, self.residual(t1, forces, report)?));
-            }
-            alpha *= 0.5;
-        }
-    }
-
     /// The state becomes (q1, v1, a1) at t1.
     fn accept(&self, state: &mut State<'p>, t1: f64) -> Result<(), LaError> {
         state.q.copy_from(&self.q1)?;
@@ -756,24 +460,6 @@ impl<'a, 'p> Newmark<'a, 'p> {
         state.step += 1;
         Ok(())
     }
-}
-
-/// y = J(state) x = J x + (X(state) - extra) x, with `change` = X(state) - extra (the
-/// contact tangent's change since J was built, from [`Linearize`]).
-///
-/// # Collective
-fn apply_consistent<'p>(
-    jacobian: &Jacobian<'_, 'p>,
-    change: &dyn Operator<'p>,
-    x: &Vector<'p>,
-    y: &mut Vector<'p>,
-) -> Result<(), LaError> {
-    let matrix = jacobian
-        .matrix
-        .as_ref()
-        .ok_or_else(|| LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into()))?;
-    matrix.mult(x, y)?;
-    change.mult_add(x, y)
 }
 
 /// J = M / (beta h^2) + gamma / (beta h) C + K + mock, assembled into a copy of `k`'s pattern

@@ -1,0 +1,85 @@
+//! How a step's iterate is corrected: modified Newton with the step's fixed factor, a full
+//! Newton with J rebuilt at every iterate, or Newton-Krylov (`krylov.rs`); and what a
+//! correction changes in the carried linear force.
+
+use super::{Jacobian, Newmark, NewmarkSettings, State, StepReport};
+use crate::la::{DirectSolver, LaError, LowRankUpdate, TangentChange, Vector};
+
+/// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
+/// the tangent of that state.
+pub type Factorize<'f, 'p> =
+    dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<Jacobian<'f, 'p>, LaError> + 'f;
+
+/// The change of the nonlinear forces' tangent between the Jacobian's factor and an iterate,
+/// X(iterate) - extra (X = K_c + K_stick + K_f + gamma/(beta h) C_f for contact: the
+/// consistent Jacobian beyond the linear operators; `extra`: the part J was built with), as an
+/// operator: J + that change is the consistent Jacobian at the iterate.
+pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn TangentChange<'p> + 'f>, LaError>
+    + 'f;
+
+/// How a step's corrections are computed.
+pub enum Correction<'r, 'f, 'p> {
+    /// With the factor of the step's fixed J (modified Newton).
+    Fixed,
+    /// Newton-Krylov: GMRES on the consistent tangent at every iterate, right-preconditioned
+    /// by the fixed factor (a few solves where J differs in a few contact points).
+    Krylov(&'r mut Linearize<'f, 'p>),
+    /// A full Newton: J rebuilt and factorized at every iterate.
+    Full(&'r mut Factorize<'f, 'p>),
+}
+
+/// Counts and times solves with a factor.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct SolveCount {
+    pub(super) solves: usize,
+    pub(super) seconds: f64,
+}
+
+impl SolveCount {
+    pub(super) fn solve<'p>(
+        &mut self,
+        factor: &DirectSolver<'p>,
+        b: &Vector<'p>,
+        x: &mut Vector<'p>,
+    ) -> Result<(), LaError> {
+        let t = std::time::Instant::now();
+        factor.solve(b, x)?;
+        self.solves += 1;
+        self.seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// x = P^-1 b with the factor updated by `low_rank` (one solve with the factor).
+    pub(super) fn precondition<'p>(
+        &mut self,
+        low_rank: &LowRankUpdate<'p>,
+        factor: &DirectSolver<'p>,
+        b: &Vector<'p>,
+        x: &mut Vector<'p>,
+    ) -> Result<(), LaError> {
+        let t = std::time::Instant::now();
+        low_rank.apply(factor, b, x)?;
+        self.solves += 1;
+        self.seconds += t.elapsed().as_secs_f64();
+        Ok(())
+    }
+}
+
+impl<'p> Newmark<'_, 'p> {
+    /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to
+    /// the factor's accuracy): -R + X dq.
+    pub(super) fn linear_change(
+        &mut self,
+        jacobian: &Jacobian<'_, 'p>,
+        report: &mut StepReport,
+    ) -> Result<(), LaError> {
+        self.dz.copy_from(&self.r)?;
+        self.dz.scale(-1.0)?;
+        if let Some(extra) = &jacobian.extra {
+            let clock = std::time::Instant::now();
+            extra.mult_add(&self.dq, &mut self.dz)?;
+            report.product_seconds += clock.elapsed().as_secs_f64();
+        }
+        Ok(())
+    }
+}
