@@ -1,0 +1,542 @@
+//! The first pass over an input file: every keyword and data line into raw tables in file
+//! order (Abaqus ids, names as written), with syntax errors naming the file and line. What the
+//! tables mean together (ids to indices, sets to elements, materials to blocks) is decided in
+//! `resolve.rs`.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::PathBuf;
+
+use super::{element_kind, parse_keyword, InpError, Keyword, SAFE_TO_SKIP};
+use crate::fem::material::Elasticity;
+use crate::fem::shape::ElementKind;
+
+/// An *ELEMENT block as read: kind, its ELSET, connectivity by Abaqus node ids, element ids.
+pub(super) struct RawBlock {
+    pub kind: ElementKind,
+    pub elset: Option<String>,
+    pub connectivity: Vec<i64>,
+    pub ids: Vec<i64>,
+}
+
+/// A material as read: name, density, elasticity.
+pub(super) struct RawMaterial {
+    pub name: String,
+    pub density: Option<f64>,
+    pub elasticity: Option<Elasticity>,
+}
+
+/// A *SOLID SECTION: element set, material, line.
+pub(super) struct RawSection {
+    pub elset: String,
+    pub material: String,
+    pub line: usize,
+}
+
+/// A *BOUNDARY line: node set or id, first and last DOF (1-based), line.
+pub(super) struct RawBoundary {
+    pub target: String,
+    pub first: usize,
+    pub last: usize,
+    pub line: usize,
+}
+
+/// One *SURFACE data line: element set or id, face label (S1..S6), line.
+pub(super) struct RawFace {
+    pub target: String,
+    pub face: String,
+    pub line: usize,
+}
+
+/// A *CONTACT PAIR: slave surface, master surface, interaction.
+pub(super) struct RawPair {
+    pub slave: String,
+    pub master: String,
+    pub interaction: String,
+}
+
+/// Every table of the file, in file order.
+#[derive(Default)]
+pub(super) struct RawInp {
+    /// Node ids with their coordinates.
+    pub nodes: Vec<(i64, [f64; 3])>,
+    pub node_index: HashMap<i64, usize>,
+    pub blocks: Vec<RawBlock>,
+    pub elsets: BTreeMap<String, Vec<i64>>,
+    pub nsets: BTreeMap<String, Vec<i64>>,
+    pub materials: Vec<RawMaterial>,
+    pub sections: Vec<RawSection>,
+    pub boundaries: Vec<RawBoundary>,
+    pub surfaces: BTreeMap<String, Vec<RawFace>>,
+    /// Surface interactions with their friction coefficient.
+    pub interactions: HashMap<String, Option<f64>>,
+    pub pairs: Vec<RawPair>,
+    /// Keywords skipped (line, keyword).
+    pub skipped: Vec<(usize, String)>,
+}
+
+/// What the data lines after a keyword are.
+enum Mode {
+    None,
+    Node(Option<String>),
+    Element {
+        block: usize,
+        pending: Vec<i64>,
+    },
+    Set {
+        elements: bool,
+        name: String,
+        generate: bool,
+    },
+    Surface(String),
+    Elastic {
+        material: usize,
+        engineering: bool,
+        values: Vec<f64>,
+    },
+    Density(usize),
+    Section,
+    Boundary,
+    Friction(String),
+    ContactPair(String),
+    Skip,
+}
+
+/// Where a line is, for its errors.
+#[derive(Clone, Copy)]
+struct At<'a> {
+    file: &'a PathBuf,
+    line: usize,
+}
+
+impl At<'_> {
+    fn syntax(&self, message: String) -> InpError {
+        InpError::Syntax {
+            file: self.file.clone(),
+            line: self.line,
+            message,
+        }
+    }
+
+    fn int(&self, s: &str) -> Result<i64, InpError> {
+        s.parse()
+            .map_err(|_| self.syntax(format!("'{s}' is not an integer")))
+    }
+
+    fn num(&self, s: &str) -> Result<f64, InpError> {
+        let v: f64 = s
+            .replace(['d', 'D'], "e")
+            .parse()
+            .map_err(|_| self.syntax(format!("'{s}' is not a number")))?;
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(self.syntax(format!("'{s}' is not finite")))
+        }
+    }
+}
+
+/// The parser's state between lines: the tables and what the next data line is.
+struct Parser {
+    raw: RawInp,
+    mode: Mode,
+    current_material: Option<usize>,
+    current_interaction: Option<String>,
+}
+
+impl RawInp {
+    /// Reads the lines (`*INCLUDE` expanded: file, line number, text) into tables.
+    pub fn parse(
+        lines: &[(PathBuf, usize, String)],
+        path: &std::path::Path,
+    ) -> Result<Self, InpError> {
+        let mut p = Parser {
+            raw: RawInp::default(),
+            mode: Mode::None,
+            current_material: None,
+            current_interaction: None,
+        };
+        for (file, line, text) in lines {
+            let at = At { file, line: *line };
+            let t = text.trim();
+            if t.is_empty() || t.starts_with("**") {
+                continue;
+            }
+            if t.starts_with('*') {
+                if let Mode::Element { pending, .. } = &p.mode {
+                    if !pending.is_empty() {
+                        return Err(at.syntax("the previous element line is incomplete".into()));
+                    }
+                }
+                p.mode = p.keyword(&parse_keyword(t), at)?;
+            } else {
+                p.data(t, at)?;
+            }
+        }
+        if let Mode::Element { pending, .. } = &p.mode {
+            if !pending.is_empty() {
+                let (file, line) = lines
+                    .last()
+                    .map_or((path.to_path_buf(), 0), |(f, l, _)| (f.clone(), *l));
+                return Err(InpError::Syntax {
+                    file,
+                    line,
+                    message: format!(
+                        "the last element line is incomplete (element {} ends with a comma)",
+                        pending[0]
+                    ),
+                });
+            }
+        }
+        Ok(p.raw)
+    }
+}
+
+impl Parser {
+    /// A keyword line: what its data lines will be.
+    fn keyword(&mut self, kw: &Keyword, at: At) -> Result<Mode, InpError> {
+        let param = |k: &str| kw.params.get(k).cloned();
+        let need = |k: &str| param(k).ok_or_else(|| at.syntax(format!("*{} needs {k}=", kw.name)));
+        Ok(match kw.name.as_str() {
+            "NODE" => Mode::Node(param("NSET")),
+            "ELEMENT" => self.element_keyword(&need("TYPE")?, param("ELSET"), at)?,
+            "NSET" | "ELSET" => {
+                let elements = kw.name == "ELSET";
+                Mode::Set {
+                    elements,
+                    name: need(if elements { "ELSET" } else { "NSET" })?,
+                    generate: kw.params.contains_key("GENERATE"),
+                }
+            }
+            "SURFACE" => {
+                let ty = param("TYPE")
+                    .unwrap_or_else(|| "ELEMENT".into())
+                    .to_uppercase();
+                if ty != "ELEMENT" {
+                    return Err(at.syntax(format!(
+                        "*SURFACE TYPE={ty} is not supported: use element-face surfaces (TYPE=ELEMENT)"
+                    )));
+                }
+                Mode::Surface(need("NAME")?)
+            }
+            "MATERIAL" => {
+                self.raw.materials.push(RawMaterial {
+                    name: need("NAME")?,
+                    density: None,
+                    elasticity: None,
+                });
+                self.current_material = Some(self.raw.materials.len() - 1);
+                Mode::None
+            }
+            "ELASTIC" | "DENSITY" => self.material_keyword(kw, at)?,
+            "SOLID SECTION" => {
+                if kw.params.contains_key("ORIENTATION") {
+                    return Err(at.syntax(
+                        "*SOLID SECTION with ORIENTATION is not supported: orthotropic axes are the global axes".into(),
+                    ));
+                }
+                self.raw.sections.push(RawSection {
+                    elset: need("ELSET")?,
+                    material: need("MATERIAL")?,
+                    line: at.line,
+                });
+                Mode::Section
+            }
+            "BOUNDARY" => Mode::Boundary,
+            "SURFACE INTERACTION" => {
+                let name = need("NAME")?;
+                self.raw.interactions.insert(name.clone(), None);
+                self.current_interaction = Some(name);
+                Mode::None
+            }
+            "FRICTION" => Mode::Friction(
+                self.current_interaction
+                    .clone()
+                    .ok_or_else(|| at.syntax("*FRICTION outside a *SURFACE INTERACTION".into()))?,
+            ),
+            "CONTACT PAIR" => Mode::ContactPair(need("INTERACTION")?),
+            name if SAFE_TO_SKIP.contains(&name) => {
+                self.raw.skipped.push((at.line, name.to_string()));
+                Mode::Skip
+            }
+            other => {
+                return Err(InpError::UnsupportedKeyword {
+                    file: at.file.clone(),
+                    line: at.line,
+                    keyword: other.to_string(),
+                    hint: "remove it or flatten the model (parts/instances, orientations, \
+                           shells and beams are not read)"
+                        .into(),
+                })
+            }
+        })
+    }
+
+    fn element_keyword(
+        &mut self,
+        ty: &str,
+        elset: Option<String>,
+        at: At,
+    ) -> Result<Mode, InpError> {
+        let ty = ty.to_uppercase();
+        let kind = element_kind(&ty).ok_or_else(|| {
+            at.syntax(format!(
+                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10 or C3D4)"
+            ))
+        })?;
+        self.raw.blocks.push(RawBlock {
+            kind,
+            elset,
+            connectivity: Vec::new(),
+            ids: Vec::new(),
+        });
+        Ok(Mode::Element {
+            block: self.raw.blocks.len() - 1,
+            pending: Vec::new(),
+        })
+    }
+
+    /// *ELASTIC or *DENSITY of the current material.
+    fn material_keyword(&mut self, kw: &Keyword, at: At) -> Result<Mode, InpError> {
+        let m = self
+            .current_material
+            .ok_or_else(|| at.syntax(format!("*{} outside a *MATERIAL", kw.name)))?;
+        if kw.name == "DENSITY" {
+            return Ok(Mode::Density(m));
+        }
+        let ty = kw
+            .params
+            .get("TYPE")
+            .cloned()
+            .unwrap_or_else(|| "ISOTROPIC".into())
+            .to_uppercase();
+        let engineering = match ty.as_str() {
+            "ISOTROPIC" => false,
+            "ENGINEERING CONSTANTS" => true,
+            other => {
+                return Err(at.syntax(format!(
+                    "*ELASTIC TYPE={other} is not supported (ISOTROPIC or ENGINEERING CONSTANTS)"
+                )))
+            }
+        };
+        Ok(Mode::Elastic {
+            material: m,
+            engineering,
+            values: Vec::new(),
+        })
+    }
+
+    /// A data line of the current keyword.
+    fn data(&mut self, t: &str, at: At) -> Result<(), InpError> {
+        let fields: Vec<&str> = t
+            .split(',')
+            .map(str::trim)
+            .filter(|f| !f.is_empty())
+            .collect();
+        let raw = &mut self.raw;
+        match &mut self.mode {
+            Mode::None => return Err(at.syntax("data line outside a keyword".into())),
+            Mode::Skip | Mode::Section => {}
+            Mode::Node(nset) => node(raw, nset.as_deref(), &fields, at)?,
+            Mode::Element { block, pending } => element(
+                &mut raw.blocks[*block],
+                pending,
+                &fields,
+                t.ends_with(','),
+                at,
+            )?,
+            Mode::Set {
+                elements,
+                name,
+                generate,
+            } => {
+                let target = if *elements {
+                    &mut raw.elsets
+                } else {
+                    &mut raw.nsets
+                };
+                set(target, name, *generate, &fields, at)?
+            }
+            Mode::Surface(name) => {
+                if fields.len() != 2 {
+                    return Err(at.syntax("expected 'element set or id, S1..S6'".into()));
+                }
+                raw.surfaces.entry(name.clone()).or_default().push(RawFace {
+                    target: fields[0].to_string(),
+                    face: fields[1].to_uppercase(),
+                    line: at.line,
+                });
+            }
+            Mode::Elastic {
+                material,
+                engineering,
+                values,
+            } => {
+                for f in &fields {
+                    values.push(at.num(f)?);
+                }
+                if let Some(e) = elasticity(values, *engineering, at)? {
+                    raw.materials[*material].elasticity = Some(e);
+                    values.clear();
+                }
+            }
+            Mode::Density(m) => {
+                raw.materials[*m].density = Some(at.num(fields.first().copied().unwrap_or(""))?)
+            }
+            Mode::Boundary => raw.boundaries.push(boundary(&fields, at)?),
+            Mode::Friction(name) => {
+                let mu = at.num(fields.first().copied().unwrap_or(""))?;
+                raw.interactions.insert(name.clone(), Some(mu));
+            }
+            Mode::ContactPair(interaction) => {
+                if fields.len() != 2 {
+                    return Err(at.syntax("expected 'slave surface, master surface'".into()));
+                }
+                raw.pairs.push(RawPair {
+                    slave: fields[0].to_string(),
+                    master: fields[1].to_string(),
+                    interaction: interaction.clone(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// `id, x, y, z`
+fn node(raw: &mut RawInp, nset: Option<&str>, fields: &[&str], at: At) -> Result<(), InpError> {
+    if fields.len() < 4 {
+        return Err(at.syntax("expected 'id, x, y, z'".into()));
+    }
+    let id = at.int(fields[0])?;
+    let x = [at.num(fields[1])?, at.num(fields[2])?, at.num(fields[3])?];
+    if raw.node_index.insert(id, raw.nodes.len()).is_some() {
+        return Err(at.syntax(format!("node {id} defined twice")));
+    }
+    raw.nodes.push((id, x));
+    if let Some(s) = nset {
+        raw.nsets.entry(s.to_string()).or_default().push(id);
+    }
+    Ok(())
+}
+
+/// `id, n1, n2, ...`; long elements continue on the next line after a trailing comma.
+fn element(
+    block: &mut RawBlock,
+    pending: &mut Vec<i64>,
+    fields: &[&str],
+    continued: bool,
+    at: At,
+) -> Result<(), InpError> {
+    for f in fields {
+        pending.push(at.int(f)?);
+    }
+    let need = block.kind.nodes() + 1;
+    if pending.len() < need && continued {
+        return Ok(());
+    }
+    if pending.len() != need {
+        return Err(at.syntax(format!(
+            "expected an element id and {} node ids, found {} numbers",
+            block.kind.nodes(),
+            pending.len()
+        )));
+    }
+    block.ids.push(pending[0]);
+    block.connectivity.extend_from_slice(&pending[1..]);
+    pending.clear();
+    Ok(())
+}
+
+/// Ids, names of sets defined above, or with GENERATE `first, last[, step]`.
+fn set(
+    target: &mut BTreeMap<String, Vec<i64>>,
+    name: &str,
+    generate: bool,
+    fields: &[&str],
+    at: At,
+) -> Result<(), InpError> {
+    let mut ids = Vec::new();
+    if generate {
+        if fields.len() < 2 {
+            return Err(at.syntax("GENERATE expects 'first, last[, step]'".into()));
+        }
+        let (a, b) = (at.int(fields[0])?, at.int(fields[1])?);
+        let step = if fields.len() > 2 {
+            at.int(fields[2])?
+        } else {
+            1
+        };
+        if step <= 0 || b < a {
+            return Err(at.syntax(format!("GENERATE range {a}, {b}, {step} is empty")));
+        }
+        ids.extend((a..=b).step_by(step as usize));
+    } else {
+        for f in fields {
+            match f.parse::<i64>() {
+                Ok(id) => ids.push(id),
+                // A set of sets: the named set must be defined above.
+                Err(_) => ids.extend(target.get(*f).cloned().ok_or_else(|| {
+                    at.syntax(format!("'{f}' is neither an id nor a set defined above"))
+                })?),
+            }
+        }
+    }
+    target.entry(name.to_string()).or_default().extend(ids);
+    Ok(())
+}
+
+/// The elasticity once its values are complete (engineering constants take two lines: 8
+/// values, then G23), else None.
+fn elasticity(values: &[f64], engineering: bool, at: At) -> Result<Option<Elasticity>, InpError> {
+    if engineering {
+        if values.len() < 9 {
+            return Ok(None);
+        }
+        return Ok(Some(Elasticity::Orthotropic {
+            e1: values[0],
+            e2: values[1],
+            e3: values[2],
+            nu12: values[3],
+            nu13: values[4],
+            nu23: values[5],
+            g12: values[6],
+            g13: values[7],
+            g23: values[8],
+        }));
+    }
+    if values.len() < 2 {
+        return Err(at.syntax("expected 'E, nu'".into()));
+    }
+    Ok(Some(Elasticity::Isotropic {
+        e: values[0],
+        nu: values[1],
+    }))
+}
+
+/// `node or set, first dof[, last dof[, value]]` with a zero value.
+fn boundary(fields: &[&str], at: At) -> Result<RawBoundary, InpError> {
+    if fields.len() < 2 {
+        return Err(at.syntax("expected 'node or set, first dof[, last dof[, value]]'".into()));
+    }
+    let first = at.int(fields[1])? as usize;
+    let last = if fields.len() > 2 {
+        at.int(fields[2])? as usize
+    } else {
+        first
+    };
+    if fields.len() > 3 && at.num(fields[3])? != 0.0 {
+        return Err(at.syntax(
+            "prescribed non-zero displacements are not supported (constraints are eliminated)"
+                .into(),
+        ));
+    }
+    if !(1..=6).contains(&first) || last < first || last > 6 {
+        return Err(at.syntax(format!("dof range {first}..{last}: use 1..6")));
+    }
+    Ok(RawBoundary {
+        target: fields[0].to_string(),
+        first,
+        last,
+        line: at.line,
+    })
+}
