@@ -10,6 +10,7 @@ pub mod contact;
 pub mod eigen;
 pub mod fault;
 pub mod fem;
+pub mod invalid;
 pub mod io;
 pub mod la;
 pub mod measure;

@@ -1,6 +1,7 @@
 //! The TOML scene: what model to build, which analyses to run, where to write. Unknown keys
 //! are rejected; every error names the file and the key.
 
+use crate::invalid::InvalidSetting;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
@@ -170,8 +171,15 @@ pub enum SceneError {
         file: String,
         source: std::io::Error,
     },
+    /// Not TOML, or not the schema (serde's message names the line and key).
     #[error("{file}: {message}")]
     Invalid { file: String, message: String },
+    /// A key out of range.
+    #[error("{file}: {source}")]
+    Setting {
+        file: String,
+        source: InvalidSetting,
+    },
 }
 
 impl Scene {
@@ -218,9 +226,9 @@ impl Scene {
             file: file.into(),
             message: e.to_string(),
         })?;
-        scene.validate().map_err(|message| SceneError::Invalid {
+        scene.validate().map_err(|source| SceneError::Setting {
             file: file.into(),
-            message,
+            source,
         })?;
         Ok(scene)
     }
@@ -234,19 +242,20 @@ impl Scene {
         Scene::parse(&text, &file)
     }
 
-    fn validate(&self) -> Result<(), String> {
+    fn validate(&self) -> Result<(), InvalidSetting> {
         self.validate_model()?;
         self.validate_analyses()
     }
 
     /// The `[model]` table: dimensions, cells, materials, files, matrix terms.
-    fn validate_model(&self) -> Result<(), String> {
+    fn validate_model(&self) -> Result<(), InvalidSetting> {
         let positive = |key: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(format!(
-                    "key '{key}' = {v}: must be a positive finite length (m)"
+                Err(InvalidSetting::new(
+                    key,
+                    format!(" = {v}: must be a positive finite length (m)"),
                 ))
             }
         };
@@ -254,8 +263,9 @@ impl Scene {
             if cells.iter().all(|&c| c > 0) {
                 Ok(())
             } else {
-                Err(format!(
-                    "key 'model.cells' = {cells:?}: every entry must be at least 1"
+                Err(InvalidSetting::new(
+                    "model.cells",
+                    format!(" = {cells:?}: every entry must be at least 1"),
                 ))
             }
         };
@@ -272,7 +282,7 @@ impl Scene {
                 cells_ok(cells)?;
                 material
                     .validate()
-                    .map_err(|e| format!("key 'model.material': {e}"))?;
+                    .map_err(|e| InvalidSetting::new("model.material", format!(": {e}")))?;
             }
             ModelSource::Annulus {
                 inner_radius,
@@ -286,33 +296,40 @@ impl Scene {
                 positive("model.outer_radius", *outer_radius)?;
                 positive("model.thickness", *thickness)?;
                 if outer_radius <= inner_radius {
-                    return Err(format!(
-                        "key 'model.outer_radius' = {outer_radius}: must exceed model.inner_radius = {inner_radius}"
+                    return Err(InvalidSetting::new(
+                        "model.outer_radius",
+                        format!(
+                            " = {outer_radius}: must exceed model.inner_radius = {inner_radius}"
+                        ),
                     ));
                 }
                 cells_ok(cells)?;
                 if cells[1] < 3 {
-                    return Err("key 'model.cells[1]' (circumferential): at least 3".into());
+                    return Err(InvalidSetting::new(
+                        "model.cells[1]",
+                        " (circumferential): at least 3",
+                    ));
                 }
                 material
                     .validate()
-                    .map_err(|e| format!("key 'model.material': {e}"))?;
+                    .map_err(|e| InvalidSetting::new("model.material", format!(": {e}")))?;
             }
             ModelSource::Brake(spec) => spec.validate()?,
             ModelSource::Gmsh {
                 file, materials, ..
             } => {
                 if file.as_os_str().is_empty() {
-                    return Err("key 'model.file': name the .msh file".into());
+                    return Err(InvalidSetting::new("model.file", ": name the .msh file"));
                 }
                 for (name, m) in materials {
-                    m.validate()
-                        .map_err(|e| format!("key 'model.materials.{name}': {e}"))?;
+                    m.validate().map_err(|e| {
+                        InvalidSetting::new(format!("model.materials.{name}"), format!(": {e}"))
+                    })?;
                 }
             }
             ModelSource::Abaqus { file } => {
                 if file.as_os_str().is_empty() {
-                    return Err("key 'model.file': name the .inp file".into());
+                    return Err(InvalidSetting::new("model.file", ": name the .inp file"));
                 }
             }
             ModelSource::Matrices {
@@ -323,33 +340,40 @@ impl Scene {
                 disc_speed,
             } => {
                 if stiffness.is_empty() || mass.is_empty() {
-                    return Err("keys 'model.stiffness' and 'model.mass' each need at least one { file, coefficient } term".into());
+                    return Err(InvalidSetting::new(
+                        "model.stiffness",
+                        " and key 'model.mass' each need at least one { file, coefficient } term",
+                    ));
                 }
                 if let Some(w) = disc_speed {
                     if !(w.is_finite() && *w > 0.0) {
-                        return Err(format!(
-                            "key 'model.disc_speed' = {w}: must be positive (rad/s)"
+                        return Err(InvalidSetting::new(
+                            "model.disc_speed",
+                            format!(" = {w}: must be positive (rad/s)"),
                         ));
                     }
                 }
-                for t in stiffness
-                    .iter()
-                    .chain(mass)
-                    .chain(circulatory)
-                    .chain(damping)
-                {
-                    if !t.coefficient.is_finite() {
-                        return Err(format!(
-                            "matrix term '{}': coefficient must be finite",
-                            t.file.display()
-                        ));
-                    }
-                    if t.speed_power != 0 && disc_speed.is_none() {
-                        return Err(format!(
-                            "matrix term '{}' has speed_power {}: set key 'model.disc_speed' (rad/s)",
-                            t.file.display(),
-                            t.speed_power
-                        ));
+                let tables = [
+                    ("stiffness", stiffness),
+                    ("mass", mass),
+                    ("circulatory", circulatory),
+                    ("damping", damping),
+                ];
+                for (table, terms) in tables {
+                    let key = format!("model.{table}");
+                    for t in terms {
+                        let file = t.file.display();
+                        if !t.coefficient.is_finite() {
+                            let detail = format!(": term '{file}': coefficient must be finite");
+                            return Err(InvalidSetting::new(key, detail));
+                        }
+                        if t.speed_power != 0 && disc_speed.is_none() {
+                            let detail = format!(
+                                ": term '{file}' has speed_power {}: set key 'model.disc_speed' (rad/s)",
+                                t.speed_power
+                            );
+                            return Err(InvalidSetting::new(key, detail));
+                        }
                     }
                 }
             }
@@ -358,22 +382,26 @@ impl Scene {
     }
 
     /// The analysis tables and what each needs from the others.
-    fn validate_analyses(&self) -> Result<(), String> {
+    fn validate_analyses(&self) -> Result<(), InvalidSetting> {
         if let Some(r) = &self.real_modes {
             if r.count == 0 && r.f_max_hz.is_none() {
-                return Err(
-                    "key 'real_modes.count' must be at least 1 (or set real_modes.f_max_hz)".into(),
-                );
+                return Err(InvalidSetting::new(
+                    "real_modes.count",
+                    " must be at least 1 (or set real_modes.f_max_hz)",
+                ));
             }
             if let Some(f) = r.f_max_hz {
                 if !(f.is_finite() && f > 0.0) {
-                    return Err(format!("key 'real_modes.f_max_hz' = {f}: must be positive"));
+                    return Err(InvalidSetting::new(
+                        "real_modes.f_max_hz",
+                        format!(" = {f}: must be positive"),
+                    ));
                 }
             }
             if !(r.tolerance > 0.0 && r.tolerance < 1.0) {
-                return Err(format!(
-                    "key 'real_modes.tolerance' = {}: must be in (0, 1)",
-                    r.tolerance
+                return Err(InvalidSetting::new(
+                    "real_modes.tolerance",
+                    format!(" = {}: must be in (0, 1)", r.tolerance),
                 ));
             }
         }
@@ -383,23 +411,26 @@ impl Scene {
         if let Some(st) = &self.statics {
             st.validate()?;
             if matches!(self.model, ModelSource::Matrices { .. }) {
-                return Err("key 'statics': a static preload needs a mesh with contact interfaces, not assembled matrices".into());
+                return Err(InvalidSetting::new("statics", ": a static preload needs a mesh with contact interfaces, not assembled matrices"));
             }
         }
         if let Some(d) = &self.damping {
             d.validate()?;
             if d.has_modal() && (self.complex_modes.is_some() || self.sweep.is_some()) {
-                return Err("key 'damping.modal_ratio': modal damping is applied by [transient] only; the complex modes and the sweep use the assembled operators (Rayleigh damping). Run them from a scene without it".into());
+                return Err(InvalidSetting::new("damping.modal_ratio", ": modal damping is applied by [transient] only; the complex modes and the sweep use the assembled operators (Rayleigh damping). Run them from a scene without it"));
             }
             if d.has_modal() && self.transient.is_none() {
-                return Err("key 'damping.modal_ratio': modal damping is applied by [transient]; this scene has none".into());
+                return Err(InvalidSetting::new(
+                    "damping.modal_ratio",
+                    ": modal damping is applied by [transient]; this scene has none",
+                ));
             }
         }
         if let Some(c) = &self.complex_modes {
             c.validate()?;
             let needs_basis = c.method != crate::eigen::complex_modes::Route::Full;
             if needs_basis && self.real_modes.is_none() {
-                return Err("key 'complex_modes.method': the projected route needs a [real_modes] table (its basis); or set method = \"full\"".into());
+                return Err(InvalidSetting::new("complex_modes.method", ": the projected route needs a [real_modes] table (its basis); or set method = \"full\""));
             }
             if let ModelSource::Brake(_)
             | ModelSource::Abaqus { .. }
@@ -408,37 +439,37 @@ impl Scene {
             | ModelSource::Annulus { .. } = &self.model
             {
                 if self.statics.is_none() {
-                    return Err("key 'complex_modes': complex modes of a mesh need the tangent state of a [statics] preload (contact and friction); add [statics]".into());
+                    return Err(InvalidSetting::new("complex_modes", ": complex modes of a mesh need the tangent state of a [statics] preload (contact and friction); add [statics]"));
                 }
             }
         }
         if let Some(t) = &self.transient {
             t.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
-                return Err("key 'transient': the time response starts from the static state plus a real mode: it needs [statics] and [real_modes]".into());
+                return Err(InvalidSetting::new("transient", ": the time response starts from the static state plus a real mode: it needs [statics] and [real_modes]"));
             }
         }
         if let Some(r) = &self.reduction {
             r.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
-                return Err("key 'reduction': the reduction basis is the real modes of the preloaded model plus its static shape: it needs [statics] and [real_modes]".into());
+                return Err(InvalidSetting::new("reduction", ": the reduction basis is the real modes of the preloaded model plus its static shape: it needs [statics] and [real_modes]"));
             }
         }
         if let Some(sw) = &self.sweep {
             sw.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
-                return Err("key 'sweep': a sweep re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]".into());
+                return Err(InvalidSetting::new("sweep", ": a sweep re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]"));
             }
         }
         if let Some(post) = &self.post {
             let only_pseudo = post.limit_cycle.is_none() && !post.uses_states();
             if self.transient.is_none() && !only_pseudo {
-                return Err("key 'post': the analyses of a trajectory need a [transient] (only pseudo_trajectory runs without one)".into());
+                return Err(InvalidSetting::new("post", ": the analyses of a trajectory need a [transient] (only pseudo_trajectory runs without one)"));
             }
             if let Some(pt) = &post.pseudo_trajectory {
                 pt.validate()?;
                 if self.statics.is_none() || self.real_modes.is_none() {
-                    return Err("key 'post.pseudo_trajectory': linearizes the contact of the preloaded model on its real modes: it needs [statics] and [real_modes]".into());
+                    return Err(InvalidSetting::new("post.pseudo_trajectory", ": linearizes the contact of the preloaded model on its real modes: it needs [statics] and [real_modes]"));
                 }
             }
             if let Some(lc) = &post.limit_cycle {
@@ -455,16 +486,17 @@ impl Scene {
             }
             let stored = self.transient.as_ref().map_or(0.0, |t| t.state_interval);
             if post.uses_states() && stored <= 0.0 {
-                return Err("key 'post': modal_energy, dynamic_stability and contact_cycle analyse the stored states: 'transient.state_interval' must be > 0".into());
+                return Err(InvalidSetting::new("post", ": modal_energy, dynamic_stability and contact_cycle analyse the stored states: 'transient.state_interval' must be > 0"));
             }
             if post.uses_states() && (self.statics.is_none() || self.real_modes.is_none()) {
-                return Err("key 'post': modal_energy, dynamic_stability and contact_cycle work on the preloaded model and its real modes: they need [statics] and [real_modes]".into());
+                return Err(InvalidSetting::new("post", ": modal_energy, dynamic_stability and contact_cycle work on the preloaded model and its real modes: they need [statics] and [real_modes]"));
             }
         }
         for e in &self.output.export_matrices {
             if e != "mtx" && e != "petsc" {
-                return Err(format!(
-                    "key 'output.export_matrices': '{e}' is not one of \"mtx\", \"petsc\""
+                return Err(InvalidSetting::new(
+                    "output.export_matrices",
+                    format!(": '{e}' is not one of \"mtx\", \"petsc\""),
                 ));
             }
         }

@@ -2,6 +2,7 @@
 //! positive when open; tractions are per unit area, positive along the point's tangent on the
 //! master (pad) side.
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 /// Normal law p(g) with its contact stiffness k_c = -dp/dg.
@@ -90,7 +91,7 @@ impl NormalLaw {
         }
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         match *self {
             NormalLaw::Exponential {
                 p0,
@@ -101,9 +102,8 @@ impl NormalLaw {
                 positive("lambda", lambda)?;
                 if let Some(g) = linear_below_gap {
                     if !(g.is_finite() && g < 0.0) {
-                        return Err(format!(
-                            "'linear_below_gap' = {g}: must be a negative gap (a penetration)"
-                        ));
+                        let detail = format!(" = {g}: must be a negative gap (a penetration)");
+                        return Err(InvalidSetting::new("linear_below_gap", detail));
                     }
                 }
                 Ok(())
@@ -113,19 +113,21 @@ impl NormalLaw {
     }
 }
 
-fn positive(key: &str, v: f64) -> Result<(), String> {
+fn positive(key: &str, v: f64) -> Result<(), InvalidSetting> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(format!("'{key}' = {v}: must be positive and finite"))
+        let detail = format!(" = {v}: must be positive and finite");
+        Err(InvalidSetting::new(key, detail))
     }
 }
 
-fn non_negative(key: &str, v: f64) -> Result<(), String> {
+fn non_negative(key: &str, v: f64) -> Result<(), InvalidSetting> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
     } else {
-        Err(format!("'{key}' = {v}: must be finite and not negative"))
+        let detail = format!(" = {v}: must be finite and not negative");
+        Err(InvalidSetting::new(key, detail))
     }
 }
 
@@ -309,7 +311,7 @@ impl FrictionLaw {
         }
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         match *self {
             FrictionLaw::Coulomb { mu, slip_speed } | FrictionLaw::Arctan { mu, slip_speed } => {
                 non_negative("mu", mu)?;

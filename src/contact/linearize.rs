@@ -8,9 +8,9 @@ use std::collections::HashMap;
 
 use super::kernel::{self, Channel, Part};
 use super::{ContactModel, ContactState};
+use crate::fem::assembly::Preallocation;
 use crate::la::{
-    ColumnKey, Dominant, LaError, MatrixFormat, Petsc, Preallocation, SparseMatrix, TangentChange,
-    Vector,
+    ColumnKey, Dominant, LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange, Vector,
 };
 
 /// What a linearized matrix starts from: a base operator plus the tangent, or only the

@@ -22,8 +22,28 @@ use crate::la::LaError;
 
 #[derive(Debug, thiserror::Error)]
 pub enum ContactError {
-    #[error("contact: {0}")]
-    Setup(String),
+    #[error("contact: interface '{interface}': {side}: {source}")]
+    Surface {
+        interface: String,
+        side: &'static str,
+        source: crate::mesh::MeshError,
+    },
+    #[error("contact: interface '{interface}': surface '{surface}' is empty")]
+    EmptySurface { interface: String, surface: String },
+    #[error(
+        "contact: interface '{interface}': none of the {candidates} points of surface '{master}' lies within contact.search_distance = {distance} m of surface '{slave}'; check the surfaces or raise the distance"
+    )]
+    NoPoints {
+        interface: String,
+        candidates: usize,
+        master: String,
+        slave: String,
+        distance: f64,
+    },
+    #[error(
+        "contact: interface '{interface}': a contact point couples DOF {dof}, which the reduction does not keep; keep every contact interface's elements"
+    )]
+    NotKept { interface: String, dof: i32 },
     /// A sweep's laws would turn a sliding interface into a sticking one or back.
     #[error("contact: interface '{interface}': a sweep may change a law's parameters, not whether the interface slides")]
     SlidingChanged { interface: String },

@@ -74,15 +74,17 @@ impl<'p> ContactModel<'p> {
             axis,
             settings.gauss_points,
             settings.search_distance,
-        )
-        .map_err(ContactError::Setup)?;
+        )?;
         for (i, itf) in interfaces.iter().enumerate() {
             let found = pairing.candidates[i] - pairing.misses[i];
             if found == 0 {
-                return Err(ContactError::Setup(format!(
-                    "interface '{}': none of the {} points of surface '{}' lies within contact.search_distance = {} m of surface '{}'; check the surfaces or raise the distance",
-                    itf.name, pairing.candidates[i], itf.master, settings.search_distance, itf.slave
-                )));
+                return Err(ContactError::NoPoints {
+                    interface: itf.name.clone(),
+                    candidates: pairing.candidates[i],
+                    master: itf.master.clone(),
+                    slave: itf.slave.clone(),
+                    distance: settings.search_distance,
+                });
             }
         }
         let points = pairing.points;
@@ -161,10 +163,10 @@ impl<'p> ContactModel<'p> {
                     }
                     match map[c as usize] {
                         m if m >= 0 => Ok(m),
-                        _ => Err(ContactError::Setup(format!(
-                            "interface '{}': a contact point couples DOF {c}, which the reduction does not keep; keep every contact interface's elements",
-                            self.interfaces[self.points[id].interface].name
-                        ))),
+                        _ => Err(ContactError::NotKept {
+                            interface: self.interfaces[self.points[id].interface].name.clone(),
+                            dof: c,
+                        }),
                     }
                 })
                 .collect()

@@ -4,6 +4,7 @@
 //! distance, or outside every slave face, miss and are dropped with a count.
 
 use super::surface::{cross, dot, norm, normalize, scale, sub, Face};
+use super::ContactError;
 use super::ResolvedInterface;
 use crate::mesh::Mesh;
 
@@ -73,29 +74,34 @@ pub fn pair(
     axis: Axis,
     gauss: usize,
     search_distance: f64,
-) -> Result<Pairing, String> {
+) -> Result<Pairing, ContactError> {
     let mut out = Pairing {
         points: Vec::new(),
         misses: vec![0; interfaces.len()],
         candidates: vec![0; interfaces.len()],
     };
     for (i, itf) in interfaces.iter().enumerate() {
-        let master = mesh
-            .surface(&itf.master)
-            .map_err(|e| format!("interface '{}': master: {e}", itf.name))?;
-        let slave = mesh
-            .surface(&itf.slave)
-            .map_err(|e| format!("interface '{}': slave: {e}", itf.name))?;
+        let surface = |side: &'static str, name: &str| {
+            mesh.surface(name).map_err(|source| ContactError::Surface {
+                interface: itf.name.clone(),
+                side,
+                source,
+            })
+        };
+        let (master, slave) = (
+            surface("master", &itf.master)?,
+            surface("slave", &itf.slave)?,
+        );
         if master.is_empty() || slave.is_empty() {
-            return Err(format!(
-                "interface '{}': surface '{}' is empty",
-                itf.name,
-                if master.is_empty() {
-                    &itf.master
-                } else {
-                    &itf.slave
-                }
-            ));
+            let empty = if master.is_empty() {
+                &itf.master
+            } else {
+                &itf.slave
+            };
+            return Err(ContactError::EmptySurface {
+                interface: itf.name.clone(),
+                surface: empty.clone(),
+            });
         }
         let slave_faces: Vec<Face> = slave.iter().map(|&(e, f)| Face::new(mesh, e, f)).collect();
         let tree = BoxTree::new(&slave_faces, search_distance);

@@ -1,6 +1,7 @@
 //! The `[contact]` table of a scene (serde schema, defaults, validation) and the laws it
 //! resolves per interface.
 
+use crate::invalid::InvalidSetting;
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
@@ -99,29 +100,29 @@ pub struct InterfaceLaws {
 }
 
 impl ContactSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if !self.disc_speed.is_finite() {
-            return Err(format!(
-                "key 'contact.disc_speed' = {}: must be finite (rad/s)",
-                self.disc_speed
+            return Err(InvalidSetting::new(
+                "contact.disc_speed",
+                format!(" = {}: must be finite (rad/s)", self.disc_speed),
             ));
         }
         if surface::norm(self.axis) < 1e-12 || self.axis.iter().any(|a| !a.is_finite()) {
-            return Err(format!(
-                "key 'contact.axis' = {:?}: must be a non-zero vector",
-                self.axis
+            return Err(InvalidSetting::new(
+                "contact.axis",
+                format!(" = {:?}: must be a non-zero vector", self.axis),
             ));
         }
         if !(1..=4).contains(&self.gauss_points) {
-            return Err(format!(
-                "key 'contact.gauss_points' = {}: must be 1 to 4",
-                self.gauss_points
+            return Err(InvalidSetting::new(
+                "contact.gauss_points",
+                format!(" = {}: must be 1 to 4", self.gauss_points),
             ));
         }
         if !(self.search_distance.is_finite() && self.search_distance > 0.0) {
-            return Err(format!(
-                "key 'contact.search_distance' = {}: must be a positive length (m)",
-                self.search_distance
+            return Err(InvalidSetting::new(
+                "contact.search_distance",
+                format!(" = {}: must be a positive length (m)", self.search_distance),
             ));
         }
         let mut all: Vec<(String, &InterfaceLaws)> = vec![
@@ -134,23 +135,29 @@ impl ContactSettings {
                 .map(|(k, v)| (format!("contact.interfaces.{k}"), v)),
         );
         for (key, laws) in all {
-            laws.normal
-                .validate()
-                .map_err(|e| format!("key '{key}.normal': {e}"))?;
-            laws.friction
-                .validate()
-                .map_err(|e| format!("key '{key}.friction': {e}"))?;
+            let normal = format!("{key}.normal");
+            laws.normal.validate().map_err(|e| e.within(&normal))?;
+            let friction = format!("{key}.friction");
+            laws.friction.validate().map_err(|e| e.within(&friction))?;
         }
         Ok(())
     }
 
     /// Each interface of the model with its laws; an override naming no interface is an error.
-    pub fn resolve(&self, interfaces: &[Interface]) -> Result<Vec<ResolvedInterface>, String> {
+    pub fn resolve(
+        &self,
+        interfaces: &[Interface],
+    ) -> Result<Vec<ResolvedInterface>, InvalidSetting> {
         for name in self.interfaces.keys() {
             if !interfaces.iter().any(|i| &i.name == name) {
-                return Err(format!(
-                    "key 'contact.interfaces.{name}': the model has no interface '{name}' (it has: {})",
-                    interfaces.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", ")
+                let names: Vec<&str> = interfaces.iter().map(|i| i.name.as_str()).collect();
+                let detail = format!(
+                    ": the model has no interface '{name}' (it has: {})",
+                    names.join(", ")
+                );
+                return Err(InvalidSetting::new(
+                    format!("contact.interfaces.{name}"),
+                    detail,
                 ));
             }
         }

@@ -14,6 +14,8 @@
 //! every eigenpair on the full model, ||(s^2 M + s C + K) psi|| / ((|s|^2 ||M|| + |s| ||C|| +
 //! ||K||) ||psi||) (infinity norms of the matrices, 2-norm of the vectors; PEP's definition).
 
+use crate::invalid::InvalidSetting;
+use crate::la::DenseError;
 use crate::measure::nan_max;
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -79,27 +81,31 @@ impl Default for ComplexModeSettings {
 }
 
 impl ComplexModeSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.count == Some(0) {
-            return Err("key 'complex_modes.count' must be at least 1".into());
+            return Err(InvalidSetting::new(
+                "complex_modes.count",
+                " must be at least 1",
+            ));
         }
         if let Some(f) = self.f_max_hz {
             if !(f > 0.0 && f.is_finite()) {
-                return Err(format!(
-                    "key 'complex_modes.f_max_hz' = {f}: must be a positive frequency"
+                return Err(InvalidSetting::new(
+                    "complex_modes.f_max_hz",
+                    format!(" = {f}: must be a positive frequency"),
                 ));
             }
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
-            return Err(format!(
-                "key 'complex_modes.tolerance' = {}: must be in (0, 0.01)",
-                self.tolerance
+            return Err(InvalidSetting::new(
+                "complex_modes.tolerance",
+                format!(" = {}: must be in (0, 0.01)", self.tolerance),
             ));
         }
         if !(self.instability_margin >= 0.0 && self.instability_margin < 0.1) {
-            return Err(format!(
-                "key 'complex_modes.instability_margin' = {}: must be in [0, 0.1)",
-                self.instability_margin
+            return Err(InvalidSetting::new(
+                "complex_modes.instability_margin",
+                format!(" = {}: must be in [0, 0.1)", self.instability_margin),
             ));
         }
         Ok(())
@@ -145,24 +151,28 @@ impl DampingSettings {
         }
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if !(self.modal_ratio >= 0.0 && self.modal_ratio < 1.0) {
-            return Err(format!(
-                "key 'damping.modal_ratio' = {}: must be in [0, 1) (a damping ratio, e.g. 0.01)",
-                self.modal_ratio
+            return Err(InvalidSetting::new(
+                "damping.modal_ratio",
+                format!(
+                    " = {}: must be in [0, 1) (a damping ratio, e.g. 0.01)",
+                    self.modal_ratio
+                ),
             ));
         }
         match self.modal_band_hz {
             Some([low, high]) if !(low >= 0.0 && high > low && high.is_finite()) => {
-                return Err(format!(
-                    "key 'damping.modal_band_hz' = [{low}, {high}]: must be [low, high] in Hz with 0 <= low < high"
+                return Err(InvalidSetting::new(
+                    "damping.modal_band_hz",
+                    format!(" = [{low}, {high}]: must be [low, high] in Hz with 0 <= low < high"),
                 ));
             }
             None if self.has_modal() => {
-                return Err(
-                    "key 'damping.modal_ratio' needs 'damping.modal_band_hz' = [low, high] (Hz): the modes it damps"
-                        .into(),
-                );
+                return Err(InvalidSetting::new(
+                    "damping.modal_ratio",
+                    " needs 'damping.modal_band_hz' = [low, high] (Hz): the modes it damps",
+                ));
             }
             _ => {}
         }
@@ -171,8 +181,9 @@ impl DampingSettings {
             ("rayleigh_beta", self.rayleigh_beta),
         ] {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(format!(
-                    "key 'damping.{key}' = {v}: must be a finite non-negative number"
+                return Err(InvalidSetting::new(
+                    format!("damping.{key}"),
+                    format!(" = {v}: must be a finite non-negative number"),
                 ));
             }
         }
@@ -453,7 +464,7 @@ pub fn coordinates(m: usize, z: &[(f64, f64)]) -> Option<Vec<(f64, f64)>> {
 
 /// Eigenpairs of `(s^2 I + s C_p + K_p) y = 0` (m x m, column-major) with Im(s) >= 0; y has
 /// unit 2-norm. Solved on the scaled companion matrix ([`companion`]).
-pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpair>, String> {
+pub fn solve_dense(m: usize, kp: &[f64], cp: &[f64]) -> Result<Vec<DenseEigenpair>, DenseError> {
     let (a, omega_r) = companion(m, kp, cp);
     let e = lapack::eigen_general(2 * m, a)?;
     let mut out = Vec::new();
@@ -499,7 +510,7 @@ pub fn projected<'p>(
 ) -> Result<ComplexModes<'p>, LaError> {
     let start = Instant::now();
     let m = shapes.len();
-    let pairs = solve_dense(m, kp, cp).map_err(LaError::Invalid)?;
+    let pairs = solve_dense(m, kp, cp)?;
     let solve_seconds = start.elapsed().as_secs_f64();
     let mut modes = Vec::new();
     let mut coords = Vec::new();
@@ -540,7 +551,7 @@ pub fn projected_coordinates(
     m: usize,
     kp: &[f64],
     cp: &[f64],
-) -> Result<Vec<DenseEigenpair>, String> {
+) -> Result<Vec<DenseEigenpair>, DenseError> {
     let mut pairs = solve_dense(m, kp, cp)?;
     pairs.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1).then(a.0 .0.total_cmp(&b.0 .0)));
     Ok(pairs)

@@ -7,6 +7,7 @@
 //! every eigenvalue was found, so a caller can prove that a choice made among these eigenpairs
 //! is the one it would have made among all of them.
 
+use crate::la::DenseError;
 use crate::measure::nan_max;
 use num_complex::Complex64;
 
@@ -113,7 +114,7 @@ pub fn eigenpairs_near(
     start: &[DenseEigenpair],
     tracked: usize,
     beyond: usize,
-) -> Result<Option<NearShift>, String> {
+) -> Result<Option<NearShift>, DenseError> {
     // The tracked modes first, then the hints (e.g. the eigenpairs found near them at the
     // previous state), then random vectors up to six more than the eigenpairs wanted.
     let tracked = tracked.min(start.len());

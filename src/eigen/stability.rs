@@ -3,6 +3,7 @@
 //! (O(points x modes^2), no factorization of size n), and solve the dense complex modes. The
 //! recipe behind the projected route, the parameter sweeps and stability along a trajectory.
 
+use crate::la::DenseError;
 use mpi::topology::SimpleCommunicator;
 
 use super::complex_modes::{solve_dense, DampingSettings, DenseEigenpair, PointTerms};
@@ -239,7 +240,7 @@ impl ProjectedStability {
         comm: &SimpleCommunicator,
         contact: &ContactModel,
         state: &ContactState,
-    ) -> Result<Vec<DenseEigenpair>, String> {
+    ) -> Result<Vec<DenseEigenpair>, DenseError> {
         let (kp, cp) = self.operators_at(comm, contact, state);
         solve_dense(self.projection.size, &kp, &cp)
     }

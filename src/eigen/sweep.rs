@@ -2,6 +2,7 @@
 //! pressure, disc speed, exponential-law p0 or lambda), and mode tracking across the points
 //! by MAC so every track is one physical mode (the coalescence picture).
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use crate::contact::law::{FrictionLaw, NormalLaw};
@@ -59,18 +60,19 @@ pub struct SweepSettings {
 }
 
 impl SweepSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         let values = self.values();
         if values.is_empty() {
-            return Err(
-                "key 'sweep': give 'values = [...]' or 'from', 'to' and 'points' (at least 2)"
-                    .into(),
-            );
+            return Err(InvalidSetting::new(
+                "sweep",
+                ": give 'values = [...]' or 'from', 'to' and 'points' (at least 2)",
+            ));
         }
         if !self.values.is_empty() && (self.from.is_some() || self.to.is_some()) {
-            return Err(
-                "key 'sweep': give either 'values' or 'from'/'to'/'points', not both".into(),
-            );
+            return Err(InvalidSetting::new(
+                "sweep",
+                ": give either 'values' or 'from'/'to'/'points', not both",
+            ));
         }
         for v in &values {
             let ok = v.is_finite()
@@ -79,14 +81,17 @@ impl SweepSettings {
                     _ => *v > 0.0,
                 };
             if !ok {
-                return Err(format!(
-                    "key 'sweep.values': {v} is not a valid {} (finite, {})",
-                    self.parameter.name(),
-                    if self.parameter == SweepParameter::Mu {
-                        "non-negative"
-                    } else {
-                        "positive"
-                    }
+                return Err(InvalidSetting::new(
+                    "sweep.values",
+                    format!(
+                        ": {v} is not a valid {} (finite, {})",
+                        self.parameter.name(),
+                        if self.parameter == SweepParameter::Mu {
+                            "non-negative"
+                        } else {
+                            "positive"
+                        }
+                    ),
                 ));
             }
         }
@@ -106,13 +111,23 @@ impl SweepSettings {
     }
 }
 
+/// A swept parameter that an interface's law does not have.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("sweep over {parameter}: interface '{interface}' has the law {law}; {needs}")]
+pub struct LawMismatch {
+    pub interface: String,
+    pub parameter: &'static str,
+    pub law: String,
+    pub needs: &'static str,
+}
+
 /// Sets a law parameter on the sliding interfaces (mu, p0, lambda); other parameters are not
 /// laws and are left to the caller. Errors name an interface whose law has no such parameter.
 pub fn apply_to_laws(
     parameter: SweepParameter,
     value: f64,
     interfaces: &mut [ResolvedInterface],
-) -> Result<(), String> {
+) -> Result<(), LawMismatch> {
     for i in interfaces.iter_mut().filter(|i| i.friction.is_sliding()) {
         match parameter {
             SweepParameter::Mu => {
@@ -126,10 +141,12 @@ pub fn apply_to_laws(
                         slip_speed,
                     },
                     other => {
-                        return Err(format!(
-                            "sweep over mu: interface '{}' has friction law {other:?}; a mu sweep needs coulomb or arctan",
-                            i.name
-                        ))
+                        return Err(LawMismatch {
+                            interface: i.name.clone(),
+                            parameter: parameter.name(),
+                            law: format!("{other:?}"),
+                            needs: "a mu sweep needs the coulomb or arctan friction law",
+                        })
                     }
                 }
             }
@@ -140,11 +157,12 @@ pub fn apply_to_laws(
                     linear_below_gap,
                 } = i.normal
                 else {
-                    return Err(format!(
-                        "sweep over {}: interface '{}' does not use the exponential law",
-                        parameter.name(),
-                        i.name
-                    ));
+                    return Err(LawMismatch {
+                        interface: i.name.clone(),
+                        parameter: parameter.name(),
+                        law: format!("{:?}", i.normal),
+                        needs: "a sweep over p0 or lambda needs the exponential law",
+                    });
                 };
                 i.normal = if parameter == SweepParameter::P0 {
                     NormalLaw::Exponential {
@@ -189,6 +207,6 @@ mod tests {
             points: None,
             ..s
         };
-        assert!(bad.validate().unwrap_err().contains("sweep.values"));
+        assert_eq!(bad.validate().unwrap_err().key, "sweep.values");
     }
 }

@@ -1,6 +1,7 @@
 //! Mode tracking by MAC (modal assurance criterion) across a sequence of eigen-solutions in
 //! one fixed basis: sweep points, or linearizations along a trajectory.
 
+use crate::la::DenseError;
 use crate::measure::{nan_max, nan_min};
 use std::collections::BTreeMap;
 
@@ -197,7 +198,7 @@ pub fn pairs_near_tracked(
     cp: &[f64],
     current: &[DenseEigenpair],
     hints: &[DenseEigenpair],
-) -> Result<Option<Vec<DenseEigenpair>>, String> {
+) -> Result<Option<Vec<DenseEigenpair>>, DenseError> {
     if m < 4 * (BEYOND[1] + 4) || current.is_empty() {
         return Ok(None);
     }
@@ -299,7 +300,7 @@ pub fn pairs_from_all_eigenvalues(
     kp: &[f64],
     cp: &[f64],
     current: &[DenseEigenpair],
-) -> Result<Vec<DenseEigenpair>, String> {
+) -> Result<Vec<DenseEigenpair>, DenseError> {
     if current.is_empty() {
         return solve_dense(m, kp, cp);
     }

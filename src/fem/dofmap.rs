@@ -4,6 +4,8 @@
 //! DOFs. When every node is either fully free or fully fixed, DOF = 3 x block + component and
 //! the matrices are assembled blockwise (block size 3, SBAIJ); otherwise scalar (AIJ).
 
+use crate::mesh::MeshError;
+
 /// Global DOF numbers per node (-1 where eliminated) and the ownership ranges.
 #[derive(Debug, Clone)]
 pub struct DofMap {
@@ -124,15 +126,12 @@ pub fn dof_map(
     clamps: &[crate::mesh::Clamp],
     ranks: usize,
     rank: usize,
-) -> Result<DofMap, String> {
+) -> Result<DofMap, MeshError> {
     let mut fixed = vec![[false; 3]; mesh.node_count()];
     for clamp in clamps {
         let set = mesh.node_set(&clamp.node_set)?;
         if set.is_empty() {
-            return Err(format!(
-                "node set '{}' is empty: nothing would be clamped",
-                clamp.node_set
-            ));
+            return Err(MeshError::EmptyClamp(clamp.node_set.clone()));
         }
         for &n in set {
             for c in 0..3 {

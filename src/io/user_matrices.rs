@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::matrix_market::{read, MatrixMarketError};
-use crate::la::{LaError, MatrixFormat, Petsc, Preallocation, SparseMatrix};
+use crate::fem::assembly::Preallocation;
+use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
 
 /// One term `coefficient x file` of an operator.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

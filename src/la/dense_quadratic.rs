@@ -10,6 +10,7 @@
 //! QZ on the pencil (dggev) would not need M^-1 but measured 22x slower here (71.5 s against
 //! 3.2 s at order 2,000; dgeev 22 s at 4,064).
 
+use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
 
 use super::lapack::{dim, eigenvalues};
@@ -37,13 +38,13 @@ extern "C" {
 
 /// Solves M X = B in place for the symmetric positive definite n x n column-major `m`
 /// (consumed; Cholesky, dpotrf + dpotrs) and the n x nrhs column-major `b`.
-pub fn solve_spd(n: usize, mut m: Vec<f64>, b: &mut [f64]) -> Result<(), String> {
+pub fn solve_spd(n: usize, mut m: Vec<f64>, b: &mut [f64]) -> Result<(), DenseError> {
     if m.len() != n * n || n == 0 || !b.len().is_multiple_of(n) {
-        return Err(format!(
-            "Cholesky solve: {} entries for order {n}, {} right-hand side entries",
-            m.len(),
-            b.len()
-        ));
+        return Err(DenseError::Shape {
+            what: "Cholesky solve (matrix, then right-hand sides of that order)",
+            found: m.len().max(b.len()),
+            order: n,
+        });
     }
     let (ni, nrhs) = (dim(n)?, dim(b.len() / n)?);
     let lower = b'L' as c_char;
@@ -51,8 +52,11 @@ pub fn solve_spd(n: usize, mut m: Vec<f64>, b: &mut [f64]) -> Result<(), String>
     // SAFETY: m holds n x n entries (leading dimension n).
     unsafe { dpotrf_(&lower, &ni, m.as_mut_ptr(), &ni, &mut info) };
     if info != 0 {
-        return Err(format!(
-            "Cholesky factorization failed (info {info}): the matrix is not positive definite"
+        return Err(super::lapack::lapack(
+            "dpotrf",
+            info,
+            n,
+            "the matrix is not positive definite",
         ));
     }
     // SAFETY: m is the factor (n x n), b holds n x nrhs entries (leading dimension n).
@@ -69,7 +73,7 @@ pub fn solve_spd(n: usize, mut m: Vec<f64>, b: &mut [f64]) -> Result<(), String>
         )
     };
     if info != 0 {
-        return Err(format!("Cholesky solve failed (info {info})"));
+        return Err(super::lapack::lapack("dpotrs", info, n, "bad argument"));
     }
     Ok(())
 }
@@ -81,11 +85,13 @@ pub fn quadratic_eigenvalues(
     k: &[f64],
     c: &[f64],
     m: &[f64],
-) -> Result<Vec<(f64, f64)>, String> {
-    if [k.len(), c.len(), m.len()].iter().any(|&l| l != n * n) {
-        return Err(format!(
-            "quadratic eigenproblem: matrices of the wrong size for order {n}"
-        ));
+) -> Result<Vec<(f64, f64)>, DenseError> {
+    if let Some(&found) = [k.len(), c.len(), m.len()].iter().find(|&&l| l != n * n) {
+        return Err(DenseError::Shape {
+            what: "quadratic eigenproblem (K, C, M)",
+            found,
+            order: n,
+        });
     }
     let inf_norm = |a: &[f64]| {
         (0..n)

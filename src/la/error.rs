@@ -80,6 +80,34 @@ pub enum LaError {
     /// A caller passed inconsistent arguments.
     #[error("{0}")]
     Invalid(String),
+    #[error(transparent)]
+    Dense(#[from] DenseError),
+}
+
+/// A dense (LAPACK) computation that cannot be done or did not succeed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DenseError {
+    /// The arrays do not have the sizes the order implies.
+    #[error("{what}: {found} entries for order {order}")]
+    Shape {
+        what: &'static str,
+        found: usize,
+        order: usize,
+    },
+    #[error("{what}: the matrix has NaN or infinite entries")]
+    NotFinite { what: &'static str },
+    #[error("dense order {0} is too large for LAPACK")]
+    TooLarge(usize),
+    /// LAPACK returned a non-zero info: the routine, its info, the order and what it means.
+    #[error("LAPACK {routine} failed (info {info}) at order {order}: {meaning}")]
+    Lapack {
+        routine: &'static str,
+        info: i32,
+        order: usize,
+        meaning: &'static str,
+    },
+    #[error("eigenvector {index} of an order-{order} problem")]
+    NoEigenvector { index: usize, order: usize },
 }
 
 pub type Result<T, E = LaError> = std::result::Result<T, E>;

@@ -11,7 +11,11 @@ use crate::mesh::{Clamp, Mesh};
 #[derive(Debug, thiserror::Error)]
 pub enum SystemError {
     #[error("constraint: {0}")]
-    Constraint(String),
+    Constraint(crate::mesh::MeshError),
+    #[error("constraint: {0:?} storage needs every node fully free or fully clamped; use AIJ")]
+    BlockStorage(MatrixFormat),
+    #[error("assembly failed on another rank (see its message)")]
+    OtherRank,
     #[error("assembly: {0}")]
     Assembly(#[from] AssemblyError<LaError>),
     #[error(transparent)]
@@ -67,9 +71,7 @@ pub fn assemble_system_as<'p>(
         MatrixFormat::Aij
     });
     if format != MatrixFormat::Aij && !dofs.block_mode {
-        return Err(SystemError::Constraint(format!(
-            "{format:?} storage needs every node fully free or fully clamped; use AIJ"
-        )));
+        return Err(SystemError::BlockStorage(format));
     }
     // In block mode the preallocation counts 3x3 blocks, also for AIJ (PETSc expands them).
     let bs = if dofs.block_mode { 3 } else { 1 };
@@ -80,11 +82,7 @@ pub fn assemble_system_as<'p>(
     let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
     let stats = match local {
         Ok(s) if !failed => s,
-        Ok(_) => {
-            return Err(SystemError::Constraint(
-                "assembly failed on another rank (see its message)".into(),
-            ))
-        }
+        Ok(_) => return Err(SystemError::OtherRank),
         Err(e) => return Err(e.into()),
     };
     k.assemble()?;

@@ -6,9 +6,10 @@
 //! two thirds of dgeev with vectors (order 500: 80 against 117 ms here): the Schur vectors
 //! and all eigenvectors are what it skips; each vector then costs O(n^2).
 
+use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
 
-use super::lapack::dim;
+use super::lapack::{dim, lapack};
 
 extern "C" {
     fn dgebal_(
@@ -99,11 +100,11 @@ extern "C" {
     );
 }
 
-fn check(routine: &str, info: c_int) -> Result<(), String> {
+fn check(routine: &'static str, info: c_int, order: usize) -> Result<(), DenseError> {
     match info {
         0 => Ok(()),
-        i if i < 0 => Err(format!("{routine}: bad argument {}", -i)),
-        i => Err(format!("{routine} did not converge (info {i})")),
+        i if i < 0 => Err(lapack(routine, i, order, "bad argument")),
+        i => Err(lapack(routine, i, order, "did not converge")),
     }
 }
 
@@ -125,15 +126,18 @@ pub struct EigenvaluesFirst {
 
 impl EigenvaluesFirst {
     /// The eigenvalues of the n x n column-major matrix `a` (consumed).
-    pub fn new(n: usize, mut a: Vec<f64>) -> Result<Self, String> {
+    pub fn new(n: usize, mut a: Vec<f64>) -> Result<Self, DenseError> {
         if a.len() != n * n || n == 0 {
-            return Err(format!(
-                "dense eigenproblem: {} entries for order {n}",
-                a.len()
-            ));
+            return Err(DenseError::Shape {
+                what: "dense eigenproblem",
+                found: a.len(),
+                order: n,
+            });
         }
         if a.iter().any(|x| !x.is_finite()) {
-            return Err("dense eigenproblem: the matrix has NaN or infinite entries".into());
+            return Err(DenseError::NotFinite {
+                what: "dense eigenproblem",
+            });
         }
         let ni = dim(n)?;
         let (mut ilo, mut ihi, mut info): (c_int, c_int, c_int) = (0, 0, 0);
@@ -152,7 +156,7 @@ impl EigenvaluesFirst {
                 &mut info,
             )
         };
-        check("dgebal", info)?;
+        check("dgebal", info, n)?;
         let lwork = 64 * n;
         let lw = dim(lwork)?;
         let mut work = vec![0.0; lwork];
@@ -171,7 +175,7 @@ impl EigenvaluesFirst {
                 &mut info,
             )
         };
-        check("dgehrd", info)?;
+        check("dgehrd", info, n)?;
         let mut hessenberg = a.clone();
         for j in 0..n {
             for x in hessenberg[j * n..(j + 1) * n].iter_mut().skip(j + 2) {
@@ -202,7 +206,7 @@ impl EigenvaluesFirst {
                 &mut info,
             )
         };
-        check("dhseqr", info)?;
+        check("dhseqr", info, n)?;
         Ok(EigenvaluesFirst {
             n,
             reduced: a,
@@ -218,7 +222,7 @@ impl EigenvaluesFirst {
     /// The right eigenvectors (Euclidean norm 1, `(re, im)` per entry) of the eigenvalues at
     /// `indices` (for a complex one, either member of its pair: the vector of the member
     /// asked for).
-    pub fn vectors(&self, indices: &[usize]) -> Result<Vec<Vec<(f64, f64)>>, String> {
+    pub fn vectors(&self, indices: &[usize]) -> Result<Vec<Vec<(f64, f64)>>, DenseError> {
         let n = self.n;
         let ni = dim(n)?;
         // The first member of each pair (positive imaginary part) selects it in dhsein.
@@ -232,7 +236,7 @@ impl EigenvaluesFirst {
         let mut select: Vec<c_int> = vec![0; n];
         for &j in indices {
             if j >= n {
-                return Err(format!("eigenvector {j} of an order-{n} problem"));
+                return Err(DenseError::NoEigenvector { index: j, order: n });
             }
             select[first(j)] = 1;
         }
@@ -283,11 +287,14 @@ impl EigenvaluesFirst {
             )
         };
         if info > 0 {
-            return Err(format!(
-                "dhsein: {info} eigenvectors failed to converge by inverse iteration"
+            return Err(lapack(
+                "dhsein",
+                info,
+                n,
+                "eigenvectors failed to converge by inverse iteration",
             ));
         }
-        check("dhsein", info)?;
+        check("dhsein", info, n)?;
         let (left, plain, lwork) = (b'L' as c_char, b'N' as c_char, 64 * columns.max(n));
         let lw = dim(lwork)?;
         let mut work = vec![0.0; lwork];
@@ -311,7 +318,7 @@ impl EigenvaluesFirst {
                 &mut info,
             )
         };
-        check("dormhr", info)?;
+        check("dormhr", info, n)?;
         let both = b'B' as c_char;
         // SAFETY: scale, ilo, ihi from dgebal of order n; vr is n x mm (ldv n).
         unsafe {
@@ -328,7 +335,7 @@ impl EigenvaluesFirst {
                 &mut info,
             )
         };
-        check("dgebak", info)?;
+        check("dgebak", info, n)?;
         let col = |k: usize| &vr[k * n..(k + 1) * n];
         Ok(indices
             .iter()

@@ -4,6 +4,7 @@
 //! matrix (dsyev) and matrix products (dgemm, and dsyrk for symmetric ones). Column-major
 //! storage throughout.
 
+use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
 
 extern "C" {
@@ -71,21 +72,39 @@ pub struct DenseEigen {
     pub vectors: Vec<Vec<(f64, f64)>>,
 }
 
+/// A LAPACK failure: `routine` returned `info` on an order-`order` problem.
+pub(crate) fn lapack(
+    routine: &'static str,
+    info: c_int,
+    order: usize,
+    meaning: &'static str,
+) -> DenseError {
+    DenseError::Lapack {
+        routine,
+        info,
+        order,
+        meaning,
+    }
+}
+
 /// A dimension as LAPACK's integer.
-pub(crate) fn dim(n: usize) -> Result<c_int, String> {
-    c_int::try_from(n).map_err(|_| format!("dense order {n} is too large for LAPACK"))
+pub(crate) fn dim(n: usize) -> Result<c_int, DenseError> {
+    c_int::try_from(n).map_err(|_| DenseError::TooLarge(n))
 }
 
 /// Eigen-decomposition of the n x n column-major matrix `a` (consumed).
-pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
+pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, DenseError> {
     if a.len() != n * n {
-        return Err(format!(
-            "dense eigenproblem: {} entries for order {n}",
-            a.len()
-        ));
+        return Err(DenseError::Shape {
+            what: "dense eigenproblem",
+            found: a.len(),
+            order: n,
+        });
     }
     if a.iter().any(|x| !x.is_finite()) {
-        return Err("dense eigenproblem: the matrix has NaN or infinite entries".into());
+        return Err(DenseError::NotFinite {
+            what: "dense eigenproblem",
+        });
     }
     if n == 0 {
         return Ok(DenseEigen {
@@ -123,7 +142,7 @@ pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
         );
     }
     if info != 0 {
-        return Err(format!("dgeev workspace query failed (info {info})"));
+        return Err(lapack("dgeev", info, n, "workspace query"));
     }
     let lwork = (query as usize).max(4 * n);
     let mut work = vec![0.0; lwork];
@@ -148,9 +167,7 @@ pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
         );
     }
     if info != 0 {
-        return Err(format!(
-            "dgeev did not converge (info {info}): the dense eigenproblem of order {n} failed"
-        ));
+        return Err(lapack("dgeev", info, n, "did not converge"));
     }
     let col = |j: usize| &vr[j * n..(j + 1) * n];
     let mut vectors = Vec::with_capacity(n);
@@ -176,12 +193,16 @@ pub fn eigen_general(n: usize, mut a: Vec<f64>) -> Result<DenseEigen, String> {
 
 /// The eigenvalues `(re, im)` of the n x n column-major matrix `a` (consumed) by LAPACK's
 /// dgeev (balancing, Hessenberg QR), without eigenvectors.
-pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, String> {
+pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, DenseError> {
     if a.len() != n * n {
-        return Err(format!("dgeev: {} entries for order {n}", a.len()));
+        return Err(DenseError::Shape {
+            what: "dgeev",
+            found: a.len(),
+            order: n,
+        });
     }
     if a.iter().any(|x| !x.is_finite()) {
-        return Err("dgeev: the matrix has NaN or infinite entries".into());
+        return Err(DenseError::NotFinite { what: "dgeev" });
     }
     if n == 0 {
         return Ok(Vec::new());
@@ -217,27 +238,26 @@ pub fn eigenvalues(n: usize, mut a: Vec<f64>) -> Result<Vec<(f64, f64)>, String>
     let mut query = [0.0f64];
     call(&mut query, -1, &mut info);
     if info != 0 {
-        return Err(format!("dgeev workspace query failed (info {info})"));
+        return Err(lapack("dgeev", info, n, "workspace query"));
     }
     let lwork = (query[0] as usize).max(3 * n);
     let mut work = vec![0.0; lwork];
     call(&mut work, dim(lwork)?, &mut info);
     if info != 0 {
-        return Err(format!(
-            "dgeev did not converge (info {info}) for order {n}"
-        ));
+        return Err(lapack("dgeev", info, n, "did not converge"));
     }
     Ok(wr.into_iter().zip(wi).collect())
 }
 
 /// Eigenvalues (ascending) and orthonormal eigenvectors (column-major, n x n) of the
 /// symmetric n x n column-major matrix `a` (its lower triangle is read; consumed).
-pub fn eigen_symmetric(n: usize, mut a: Vec<f64>) -> Result<(Vec<f64>, Vec<f64>), String> {
+pub fn eigen_symmetric(n: usize, mut a: Vec<f64>) -> Result<(Vec<f64>, Vec<f64>), DenseError> {
     if a.len() != n * n {
-        return Err(format!(
-            "dense symmetric eigenproblem: {} entries for order {n}",
-            a.len()
-        ));
+        return Err(DenseError::Shape {
+            what: "dense symmetric eigenproblem",
+            found: a.len(),
+            order: n,
+        });
     }
     if n == 0 {
         return Ok((Vec::new(), Vec::new()));
@@ -264,7 +284,7 @@ pub fn eigen_symmetric(n: usize, mut a: Vec<f64>) -> Result<(Vec<f64>, Vec<f64>)
         );
     }
     if info != 0 {
-        return Err(format!("LAPACK dsyev workspace query failed (info {info})"));
+        return Err(lapack("dsyev", info, n, "workspace query"));
     }
     let lwork = (query as usize).max(3 * n);
     let mut work = vec![0.0; lwork];
@@ -284,9 +304,7 @@ pub fn eigen_symmetric(n: usize, mut a: Vec<f64>) -> Result<(Vec<f64>, Vec<f64>)
         );
     }
     if info != 0 {
-        return Err(format!(
-            "LAPACK dsyev did not converge (info {info}) on a symmetric matrix of order {n}"
-        ));
+        return Err(lapack("dsyev", info, n, "did not converge"));
     }
     Ok((w, a))
 }

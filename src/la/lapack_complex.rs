@@ -3,6 +3,7 @@
 //! Householder QR (zgeqrf / zungqr) and the eigenpairs of a small complex matrix (zgeev). Column-major storage; `Complex64` has the layout of Fortran's
 //! double complex.
 
+use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
 
 use num_complex::Complex64;
@@ -150,12 +151,16 @@ pub struct ComplexLu {
 impl ComplexLu {
     /// Factors the column-major n x n matrix `a` (consumed). Errs on a singular matrix (a zero
     /// pivot) or non-finite entries.
-    pub fn new(n: usize, mut a: Vec<Complex64>) -> Result<Self, String> {
+    pub fn new(n: usize, mut a: Vec<Complex64>) -> Result<Self, DenseError> {
         if a.len() != n * n {
-            return Err(format!("complex LU: {} entries for order {n}", a.len()));
+            return Err(DenseError::Shape {
+                what: "complex LU",
+                found: a.len(),
+                order: n,
+            });
         }
         if a.iter().any(|z| !z.is_finite()) {
-            return Err("complex LU: the matrix has NaN or infinite entries".into());
+            return Err(DenseError::NotFinite { what: "complex LU" });
         }
         let ni = dim(n.max(1))?;
         let mut pivots: Vec<c_int> = vec![0; n];
@@ -174,10 +179,8 @@ impl ComplexLu {
             };
         }
         if info != 0 {
-            return Err(format!(
-                "complex LU of order {n}: {} (info {info})",
-                if info > 0 { "singular" } else { "bad argument" }
-            ));
+            let meaning = if info > 0 { "singular" } else { "bad argument" };
+            return Err(super::lapack::lapack("zgetrf", info, n, meaning));
         }
         Ok(ComplexLu {
             n,
@@ -187,16 +190,17 @@ impl ComplexLu {
     }
 
     /// Solves A X = B in place for the column-major n x nrhs right-hand sides `b`.
-    pub fn solve(&self, b: &mut [Complex64]) -> Result<(), String> {
+    pub fn solve(&self, b: &mut [Complex64]) -> Result<(), DenseError> {
         let n = self.n;
         if n == 0 || b.is_empty() {
             return Ok(());
         }
         if !b.len().is_multiple_of(n) {
-            return Err(format!(
-                "complex LU solve: {} entries for order {n}",
-                b.len()
-            ));
+            return Err(DenseError::Shape {
+                what: "complex LU solve",
+                found: b.len(),
+                order: n,
+            });
         }
         let (ni, nrhs) = (dim(n)?, dim(b.len() / n)?);
         let trans = b'N' as c_char;
@@ -216,7 +220,7 @@ impl ComplexLu {
             );
         }
         if info != 0 {
-            return Err(format!("complex LU solve failed (info {info})"));
+            return Err(super::lapack::lapack("zgetrs", info, n, "bad argument"));
         }
         Ok(())
     }
@@ -226,16 +230,17 @@ impl ComplexLu {
 /// orthonormal basis of their span, by Householder QR (zgeqrf, zungqr): orthonormal to
 /// round-off whatever their conditioning; where columns are dependent, the reflectors supply
 /// orthonormal directions beyond their span.
-pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), String> {
+pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), DenseError> {
     if rows == 0 || q.is_empty() {
         return Ok(());
     }
     let cols = q.len() / rows;
     if q.len() != rows * cols || cols > rows {
-        return Err(format!(
-            "orthonormalize: {} entries in columns of {rows}",
-            q.len()
-        ));
+        return Err(DenseError::Shape {
+            what: "orthonormalize (columns of that many rows)",
+            found: q.len(),
+            order: rows,
+        });
     }
     let (mi, ni) = (dim(rows)?, dim(cols)?);
     let lwork = 64 * cols;
@@ -258,7 +263,7 @@ pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), String> {
         );
     }
     if info != 0 {
-        return Err(format!("zgeqrf failed (info {info})"));
+        return Err(super::lapack::lapack("zgeqrf", info, rows, "bad argument"));
     }
     // SAFETY: as above; zungqr forms the cols x cols reflectors' Q in place.
     unsafe {
@@ -275,7 +280,7 @@ pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), String> {
         );
     }
     if info != 0 {
-        return Err(format!("zungqr failed (info {info})"));
+        return Err(super::lapack::lapack("zungqr", info, rows, "bad argument"));
     }
     Ok(())
 }
@@ -285,15 +290,18 @@ pub fn orthonormalize(rows: usize, q: &mut [Complex64]) -> Result<(), String> {
 pub fn eigen_complex(
     n: usize,
     mut a: Vec<Complex64>,
-) -> Result<(Vec<Complex64>, Vec<Complex64>), String> {
+) -> Result<(Vec<Complex64>, Vec<Complex64>), DenseError> {
     if a.len() != n * n {
-        return Err(format!(
-            "complex eigenproblem: {} entries for order {n}",
-            a.len()
-        ));
+        return Err(DenseError::Shape {
+            what: "complex eigenproblem",
+            found: a.len(),
+            order: n,
+        });
     }
     if a.iter().any(|z| !z.is_finite()) {
-        return Err("complex eigenproblem: the matrix has NaN or infinite entries".into());
+        return Err(DenseError::NotFinite {
+            what: "complex eigenproblem",
+        });
     }
     if n == 0 {
         return Ok((Vec::new(), Vec::new()));
@@ -330,9 +338,7 @@ pub fn eigen_complex(
         );
     }
     if info != 0 {
-        return Err(format!(
-            "zgeev did not converge (info {info}) on a complex matrix of order {n}"
-        ));
+        return Err(super::lapack::lapack("zgeev", info, n, "did not converge"));
     }
     Ok((w, vr))
 }

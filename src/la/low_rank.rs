@@ -190,7 +190,7 @@ impl<'p> LowRankUpdate<'p> {
             .map(|r| Complex64::new((0..s).map(|k| self.d[r * s + k] * t[k]).sum(), 0.0))
             .collect();
         let lu = self.lu.as_ref().expect("active columns have their LU");
-        lu.solve(&mut x).map_err(LaError::Invalid)?;
+        lu.solve(&mut x)?;
         let ws: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.ws[i]).collect();
         let negated: Vec<f64> = x.iter().map(|x| -x.re).collect();
         y.maxpy(&negated, &ws)

@@ -1,5 +1,6 @@
 //! Distributed sparse matrices (PETSc `Mat`): AIJ, and BAIJ/SBAIJ assembled blockwise.
 
+use crate::fem::assembly::Preallocation;
 use std::marker::PhantomData;
 use std::path::Path;
 
@@ -26,17 +27,6 @@ impl MatrixFormat {
             MatrixFormat::Sbaij => cconst(ffi::MATMPISBAIJ),
         }
     }
-}
-
-/// Exact preallocation: per local block row, the number of nonzero blocks whose column is
-/// owned by this rank (`diag`) and by other ranks (`off`); `diag_upper`/`off_upper` count only
-/// the blocks on or above the diagonal (used by SBAIJ).
-#[derive(Debug, Clone, Default)]
-pub struct Preallocation {
-    pub diag: Vec<i32>,
-    pub off: Vec<i32>,
-    pub diag_upper: Vec<i32>,
-    pub off_upper: Vec<i32>,
 }
 
 /// Storage figures of an assembled matrix (summed over ranks).

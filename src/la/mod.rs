@@ -29,9 +29,9 @@ use petsc_sys as ffi;
 
 pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
 use error::call;
-pub use error::{LaError, PetscError, Result};
+pub use error::{DenseError, LaError, PetscError, Result};
 pub use low_rank::{ColumnKey, Dominant, LowRankUpdate, TangentChange};
-pub use matrix::{MatrixFormat, MatrixInfo, Operator, Preallocation, SparseMatrix};
+pub use matrix::{MatrixFormat, MatrixInfo, Operator, SparseMatrix};
 pub use observation::ObservationMatrix;
 pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
 pub use solver::{DirectSolver, Factorization, FactorizationReport};

@@ -13,6 +13,23 @@ pub use clamp::Clamp;
 
 use std::collections::BTreeMap;
 
+/// A name the mesh does not have, or a set that cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum MeshError {
+    #[error("no surface '{name}' in the mesh (surfaces: {})", available.join(", "))]
+    NoSurface {
+        name: String,
+        available: Vec<String>,
+    },
+    #[error("no node set '{name}' in the mesh (sets: {})", available.join(", "))]
+    NoNodeSet {
+        name: String,
+        available: Vec<String>,
+    },
+    #[error("node set '{0}' is empty: nothing would be clamped")]
+    EmptyClamp(String),
+}
+
 use serde::{Deserialize, Serialize};
 
 use crate::fem::material::Material;
@@ -97,17 +114,18 @@ impl Mesh {
     }
 
     /// The surface `name`, or an error listing the surfaces that exist.
-    pub fn surface(&self, name: &str) -> Result<&[(usize, u8)], String> {
-        self.surfaces.get(name).map(Vec::as_slice).ok_or_else(|| {
-            format!(
-                "no surface '{name}' in the mesh (surfaces: {})",
-                self.surfaces.keys().cloned().collect::<Vec<_>>().join(", ")
-            )
-        })
+    pub fn surface(&self, name: &str) -> Result<&[(usize, u8)], MeshError> {
+        self.surfaces
+            .get(name)
+            .map(Vec::as_slice)
+            .ok_or_else(|| MeshError::NoSurface {
+                name: name.to_string(),
+                available: self.surfaces.keys().cloned().collect(),
+            })
     }
 
     /// The nodes of a surface, sorted and unique.
-    pub fn surface_nodes(&self, name: &str) -> Result<Vec<usize>, String> {
+    pub fn surface_nodes(&self, name: &str) -> Result<Vec<usize>, MeshError> {
         let mut nodes: Vec<usize> = self
             .surface(name)?
             .iter()
@@ -160,17 +178,14 @@ impl Mesh {
     }
 
     /// The node set `name`, or an error listing the sets that exist.
-    pub fn node_set(&self, name: &str) -> Result<&[usize], String> {
-        self.node_sets.get(name).map(Vec::as_slice).ok_or_else(|| {
-            format!(
-                "no node set '{name}' in the mesh (sets: {})",
-                self.node_sets
-                    .keys()
-                    .cloned()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        })
+    pub fn node_set(&self, name: &str) -> Result<&[usize], MeshError> {
+        self.node_sets
+            .get(name)
+            .map(Vec::as_slice)
+            .ok_or_else(|| MeshError::NoNodeSet {
+                name: name.to_string(),
+                available: self.node_sets.keys().cloned().collect(),
+            })
     }
 }
 

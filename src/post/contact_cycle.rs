@@ -4,6 +4,7 @@
 //! paper: 66 % under the piston), and the fractions of the pad's points open, sticking and
 //! sliding over the phases.
 
+use crate::invalid::InvalidSetting;
 use crate::measure::nan_max;
 use serde::{Deserialize, Serialize};
 
@@ -29,11 +30,11 @@ impl Default for ContactCycleSettings {
 }
 
 impl ContactCycleSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.phases < 2 {
-            return Err(format!(
-                "key 'post.contact_cycle.phases' = {}: need at least 2",
-                self.phases
+            return Err(InvalidSetting::new(
+                "post.contact_cycle.phases",
+                format!(" = {}: need at least 2", self.phases),
             ));
         }
         Ok(())

@@ -6,6 +6,7 @@
 //! through the states by MAC with continuity. A point that separated adds no stiffness, one
 //! that sticks adds its stick tangent: the state decides, as in the time integration.
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use super::states::{ContactAt, StatesError, StoredStates};
@@ -46,18 +47,22 @@ impl Default for DynamicStabilitySettings {
 }
 
 impl DynamicStabilitySettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.periods == 0 || self.per_period < 2 {
-            return Err(format!(
-                "key 'post.dynamic_stability': periods = {} and per_period = {}: need at least 1 and 2",
-                self.periods, self.per_period
+            return Err(InvalidSetting::new(
+                "post.dynamic_stability",
+                format!(
+                    ": periods = {} and per_period = {}: need at least 1 and 2",
+                    self.periods, self.per_period
+                ),
             ));
         }
         if let Some(t) = &self.times {
             if t.is_empty() || t.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-                return Err(
-                    "key 'post.dynamic_stability.times': give times (s) >= 0, at least one".into(),
-                );
+                return Err(InvalidSetting::new(
+                    "post.dynamic_stability.times",
+                    ": give times (s) >= 0, at least one",
+                ));
             }
         }
         Ok(())
@@ -139,13 +144,13 @@ pub fn dynamic_stability(
         .stability
         .operators_at(petsc.world(), contact, lin.nominal);
     let size = lin.stability.projection.size;
-    let nominal = projected_coordinates(size, &kp, &cp).map_err(LaError::Invalid)?;
+    let nominal = projected_coordinates(size, &kp, &cp).map_err(LaError::from)?;
     let mut points = vec![nominal];
     let start = std::time::Instant::now();
     for &i in indices {
         let state = lin.at.state(states, i)?;
         let (kp, cp) = lin.stability.operators_at(petsc.world(), contact, &state);
-        points.push(projected_coordinates(size, &kp, &cp).map_err(LaError::Invalid)?);
+        points.push(projected_coordinates(size, &kp, &cp).map_err(LaError::from)?);
     }
     let seconds_per_point = start.elapsed().as_secs_f64() / indices.len().max(1) as f64;
     let (tracks, followed, lost) = tracked_modes(&points, &torque, lin.margin);

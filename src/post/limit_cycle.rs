@@ -2,6 +2,7 @@
 //! saturation time, dominant frequency, period, amplitude per cycle and its cycle-to-cycle
 //! variation, and whether the cycle is reached. Pure functions of a sampled signal.
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use super::spectrum::{power_spectrum, resample};
@@ -35,17 +36,17 @@ impl Default for LimitCycleSettings {
 }
 
 impl LimitCycleSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.cycles < 2 {
-            return Err(format!(
-                "key 'post.limit_cycle.cycles' = {}: at least 2",
-                self.cycles
+            return Err(InvalidSetting::new(
+                "post.limit_cycle.cycles",
+                format!(" = {}: at least 2", self.cycles),
             ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1.0) {
-            return Err(format!(
-                "key 'post.limit_cycle.tolerance' = {}: must be in (0, 1)",
-                self.tolerance
+            return Err(InvalidSetting::new(
+                "post.limit_cycle.tolerance",
+                format!(" = {}: must be in (0, 1)", self.tolerance),
             ));
         }
         Ok(())

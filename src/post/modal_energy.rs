@@ -8,6 +8,7 @@
 //! On a reduced model phi_k is the mode's exact reduced representation (the modes lie in the
 //! reduction's span) and M the reduced mass, so eta_k is the same number as on the full model.
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use super::states::nearest;
@@ -43,17 +44,24 @@ impl Default for ModalEnergySettings {
 }
 
 impl ModalEnergySettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.top == 0 {
-            return Err("key 'post.modal_energy.top' = 0: rank at least one mode".into());
+            return Err(InvalidSetting::new(
+                "post.modal_energy.top",
+                " = 0: rank at least one mode",
+            ));
         }
         if self.cycles == 0 {
-            return Err("key 'post.modal_energy.cycles' = 0: must be at least 1".into());
+            return Err(InvalidSetting::new(
+                "post.modal_energy.cycles",
+                " = 0: must be at least 1",
+            ));
         }
         if let Some(at) = self.at {
             if !(at.is_finite() && at >= 0.0) {
-                return Err(format!(
-                    "key 'post.modal_energy.at' = {at}: must be a time (s) >= 0"
+                return Err(InvalidSetting::new(
+                    "post.modal_energy.at",
+                    format!(" = {at}: must be a time (s) >= 0"),
                 ));
             }
         }

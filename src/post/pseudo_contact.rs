@@ -4,6 +4,7 @@
 //! = (C Phi) y from the real modes' observation the projection keeps: no vector of size n, no
 //! factorization; each point costs the laws and the projected tangent O(points x modes^2).
 
+use super::pseudo_trajectory::PseudoError;
 use crate::measure::nan_max;
 use std::cell::RefCell;
 
@@ -96,7 +97,7 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
 }
 
 impl PseudoSystem for ContactPseudoSystem<'_, '_> {
-    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, String> {
+    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, PseudoError> {
         let channels = self.stability.projection.observe(y);
         let (largest, owned) = self.largest_point(&channels);
         // The phase of the largest of gap and slips at that point, from its owner.
@@ -125,7 +126,7 @@ impl PseudoSystem for ContactPseudoSystem<'_, '_> {
         omega: f64,
         alpha: f64,
         theta: f64,
-    ) -> Result<Linearized, String> {
+    ) -> Result<Linearized, PseudoError> {
         self.observe(psi);
         let cache = self.cache.borrow();
         let o = cache.as_ref().expect("observed above");

@@ -10,6 +10,7 @@
 //! +3.3e-4 from one phase, -7.8e-3 from the opposite one, the same states). A pair that does
 //! not come back to its start shows that dependence; the summary counts those amplitudes.
 
+use super::pseudo_trajectory::PseudoError;
 use std::time::Instant;
 
 use super::pseudo_trajectory::{Linearized, PseudoSystem};
@@ -146,7 +147,7 @@ struct Follower<'a> {
 }
 
 impl Follower<'_> {
-    fn linearize(&mut self, at: Point) -> Result<Linearized, String> {
+    fn linearize(&mut self, at: Point) -> Result<Linearized, PseudoError> {
         let clock = Instant::now();
         let lin = self
             .system
@@ -158,7 +159,7 @@ impl Follower<'_> {
     /// The eigenpairs of the tangent `lin` that the pairing of the current pair needs: near
     /// the pair by shift-invert where that provably gives the full pairing, else from all
     /// eigenvalues (`near`), or the full dense solve.
-    fn eigenpairs(&mut self, lin: &Linearized) -> Result<Vec<DenseEigenpair>, String> {
+    fn eigenpairs(&mut self, lin: &Linearized) -> Result<Vec<DenseEigenpair>, PseudoError> {
         let m = self.psi.len();
         self.cost.solves += 1;
         if self.near {
@@ -190,7 +191,7 @@ impl Follower<'_> {
         to: Point,
         lin: &Linearized,
         halvings: usize,
-    ) -> Result<bool, String> {
+    ) -> Result<bool, PseudoError> {
         let pairs = self.eigenpairs(lin)?;
         let next: Option<Vec<(usize, f64)>> =
             pair_modes(&self.current, &pairs).into_iter().collect();
@@ -251,7 +252,7 @@ pub fn period(
     margin: f64,
     near: bool,
     until_stable: bool,
-) -> Result<Period, String> {
+) -> Result<Period, PseudoError> {
     let phases = sampling.phases;
     let mut follower = Follower {
         system,
@@ -360,7 +361,7 @@ mod tests {
     }
 
     impl PseudoSystem for Chain {
-        fn contact_normalization(&self, _: &[Complex]) -> Result<Complex, String> {
+        fn contact_normalization(&self, _: &[Complex]) -> Result<Complex, PseudoError> {
             Ok((1.0, 0.0))
         }
         fn linearize(
@@ -369,7 +370,7 @@ mod tests {
             _: f64,
             alpha: f64,
             theta: f64,
-        ) -> Result<Linearized, String> {
+        ) -> Result<Linearized, PseudoError> {
             let m = self.m;
             let mut kp = self.k0.clone();
             for j in 0..m {

@@ -15,7 +15,25 @@
 //! The model is reached through [`PseudoSystem`] (the brake's projected contact tangent, or a
 //! closed-form model in the tests), so everything here is plain arithmetic on m x m matrices.
 
+use crate::invalid::InvalidSetting;
 use std::time::Instant;
+
+/// Why a pseudo trajectory cannot be followed.
+#[derive(Debug, thiserror::Error)]
+pub enum PseudoError {
+    #[error(transparent)]
+    Dense(#[from] crate::la::DenseError),
+    #[error(transparent)]
+    La(#[from] crate::la::LaError),
+    #[error(
+        "{mode} does not move the contact points (contact amplitude {amplitude:.3e}): no pseudo trajectory"
+    )]
+    NoContactMotion { mode: String, amplitude: f64 },
+    #[error("the mode's contact motion has one phase only (a real shape): no orbit to fit")]
+    RealShape,
+    #[error("{0} has a NaN or infinite entry")]
+    NotFinite(&'static str),
+}
 
 use serde::{Deserialize, Serialize};
 
@@ -81,55 +99,68 @@ impl Default for PseudoTrajectorySettings {
 }
 
 impl PseudoTrajectorySettings {
-    pub fn validate(&self) -> Result<(), String> {
-        let key = "key 'post.pseudo_trajectory";
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        let key = "post.pseudo_trajectory";
         if self.alphas < 2 || self.phases < 4 {
-            return Err(format!(
-                "{key}': alphas = {} and phases = {}: need at least 2 and 4",
-                self.alphas, self.phases
+            return Err(InvalidSetting::new(
+                key,
+                format!(
+                    ": alphas = {} and phases = {}: need at least 2 and 4",
+                    self.alphas, self.phases
+                ),
             ));
         }
         if self.halvings > 8 {
-            return Err(format!(
-                "{key}.halvings' = {}: at most 8 (a step of 1/256 of the phase spacing); raise phases instead",
-                self.halvings
+            return Err(InvalidSetting::new(
+                format!("{key}.halvings"),
+                format!(
+                    " = {}: at most 8 (a step of 1/256 of the phase spacing); raise phases instead",
+                    self.halvings
+                ),
             ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 0.5) {
-            return Err(format!(
-                "{key}.tolerance' = {}: a relative tolerance in (0, 0.5)",
-                self.tolerance
+            return Err(InvalidSetting::new(
+                format!("{key}.tolerance"),
+                format!(" = {}: a relative tolerance in (0, 0.5)", self.tolerance),
             ));
         }
         if let Some([a, b]) = self.alpha_range {
             if !(a > 0.0 && b > a && b.is_finite()) {
-                return Err(format!(
-                    "{key}.alpha_range' = [{a}, {b}]: give 0 < first < last (m)"
+                return Err(InvalidSetting::new(
+                    format!("{key}.alpha_range"),
+                    format!(" = [{a}, {b}]: give 0 < first < last (m)"),
                 ));
             }
         }
         if let Some(a) = self.diagram_alpha {
             if !(a > 0.0 && a.is_finite()) {
-                return Err(format!("{key}.diagram_alpha' = {a}: an amplitude > 0 (m)"));
+                return Err(InvalidSetting::new(
+                    format!("{key}.diagram_alpha"),
+                    format!(" = {a}: an amplitude > 0 (m)"),
+                ));
             }
         }
         match (&self.modes, self.most_unstable) {
             (Some(_), Some(_)) => {
-                return Err(format!(
-                    "{key}': give either 'modes' or 'most_unstable', not both"
+                return Err(InvalidSetting::new(
+                    key,
+                    ": give either 'modes' or 'most_unstable', not both",
                 ))
             }
             (None, Some(0)) => {
-                return Err(format!(
-                    "{key}.most_unstable' = 0: at least one mode (or leave the key out for all)"
+                return Err(InvalidSetting::new(
+                    format!("{key}.most_unstable"),
+                    " = 0: at least one mode (or leave the key out for all)",
                 ))
             }
             _ => {}
         }
         if let Some(modes) = &self.modes {
             if let Some(bad) = modes.iter().find(|m| parse_mode(m).is_none()) {
-                return Err(format!(
-                    "{key}.modes': '{bad}' is not a complex mode's name (C1, C2, ...)"
+                return Err(InvalidSetting::new(
+                    format!("{key}.modes"),
+                    format!(": '{bad}' is not a complex mode's name (C1, C2, ...)"),
                 ));
             }
         }
@@ -167,7 +198,7 @@ pub trait PseudoSystem {
     /// motion whatever the phase of y, which the eigensolver leaves to the signs of the real
     /// modes (1 and 2 ranks chose opposite ones for the brake's C35 at 250 modes, and the
     /// pseudo trajectory's statistics can depend on the phase where a period starts).
-    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, String>;
+    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, PseudoError>;
     /// The tangent at q_static + Re(alpha psi e^{i theta}), qdot = Re(i omega alpha psi
     /// e^{i theta}), psi given by its coordinates.
     fn linearize(
@@ -176,7 +207,7 @@ pub trait PseudoSystem {
         omega: f64,
         alpha: f64,
         theta: f64,
-    ) -> Result<Linearized, String>;
+    ) -> Result<Linearized, PseudoError>;
     /// Contact-law scale of the static state (m): the pressure-weighted mean of p / k_c over
     /// the points in contact (1 / lambda for the exponential law).
     fn gap_scale(&self) -> f64;
@@ -247,9 +278,9 @@ fn bisect(
     lo: &Period,
     hi: &Period,
     tolerance: f64,
-    mut evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, String>,
+    mut evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, PseudoError>,
     crosses: impl Fn(&Period) -> bool,
-) -> Result<(Found, Vec<Period>), String> {
+) -> Result<(Found, Vec<Period>), PseudoError> {
     let (mut lo, mut hi_alpha) = (lo.clone(), hi.alpha);
     let mut evaluated = Vec::new();
     while hi_alpha / lo.alpha > 1.0 + tolerance {
@@ -275,9 +306,9 @@ fn bisect(
 fn bracket_and_bisect(
     sweep: &[Period],
     tolerance: f64,
-    evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, String>,
+    evaluate: impl FnMut(f64, Start<'_>) -> Result<Period, PseudoError>,
     crosses: impl Fn(&Period) -> bool,
-) -> Result<(Found, Vec<Period>), String> {
+) -> Result<(Found, Vec<Period>), PseudoError> {
     match sweep.iter().position(&crosses) {
         None => Ok((Found::AboveRange, Vec::new())),
         Some(0) => Ok((Found::BelowRange, Vec::new())),
@@ -305,7 +336,7 @@ pub fn pseudo_trajectory(
     index: usize,
     settings: &PseudoTrajectorySettings,
     margin: f64,
-) -> Result<PseudoTrajectory, String> {
+) -> Result<PseudoTrajectory, PseudoError> {
     let clock = Instant::now();
     let (s, y) = &nominal[index];
     let pair: Vec<DenseEigenpair> = std::iter::once(index)
@@ -315,9 +346,10 @@ pub fn pseudo_trajectory(
     let normalization = system.contact_normalization(y)?;
     let scale = normalization.0.hypot(normalization.1);
     if !(scale > 0.0 && scale.is_finite()) {
-        return Err(format!(
-            "{name} does not move the contact points (contact amplitude {scale:.3e}): no pseudo trajectory"
-        ));
+        return Err(PseudoError::NoContactMotion {
+            mode: name.to_string(),
+            amplitude: scale,
+        });
     }
     let (c, d) = (normalization.0 / scale, -normalization.1 / scale);
     let psi: Vec<Complex> = y
@@ -348,7 +380,7 @@ pub fn pseudo_trajectory(
         )?;
         count += p.linearizations();
         cost += p.cost;
-        Ok::<Period, String>(p)
+        Ok::<Period, PseudoError>(p)
     };
     let mut sweep: Vec<Period> = Vec::with_capacity(settings.alphas);
     let nominal_start = Start {
@@ -458,7 +490,7 @@ pub struct Fitted {
 
 impl OrbitFit {
     /// `psi`: the observed shape at this rank's points; `sum`: adds numbers over the ranks.
-    pub fn new(psi: &[Complex], sum: impl Fn(&mut [f64])) -> Result<Self, String> {
+    pub fn new(psi: &[Complex], sum: impl Fn(&mut [f64])) -> Result<Self, PseudoError> {
         let basis = [
             psi.iter().map(|p| p.0).collect::<Vec<f64>>(),
             psi.iter().map(|p| -p.1).collect::<Vec<f64>>(),
@@ -472,10 +504,7 @@ impl OrbitFit {
         sum(&mut g);
         let det = g[0] * g[2] - g[1] * g[1];
         if det.is_nan() || det <= 1e-12 * g[0] * g[2] {
-            return Err(
-                "the mode's contact motion has one phase only (a real shape): no orbit to fit"
-                    .into(),
-            );
+            return Err(PseudoError::RealShape);
         }
         Ok(OrbitFit {
             basis,

@@ -19,14 +19,17 @@
 //! the kept block sparse as in the full model, the modal block dense, the coupling only in the
 //! rows and columns of kept DOFs on the border of the kept zone.
 
+use crate::invalid::InvalidSetting;
 use crate::measure::nan_max;
+use crate::mesh::MeshError;
 use std::ops::Range;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
+use crate::fem::assembly::Preallocation;
 use crate::fem::dofmap::DofMap;
-use crate::la::{lapack, LaError, MatrixFormat, Petsc, Preallocation, SparseMatrix, Vector};
+use crate::la::{lapack, LaError, MatrixFormat, Petsc, SparseMatrix, Vector};
 use crate::mesh::Mesh;
 
 /// The `[reduction]` table of a scene.
@@ -59,11 +62,11 @@ impl Default for ReductionSettings {
 }
 
 impl ReductionSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if !(self.drop_tolerance > 0.0 && self.drop_tolerance < 1e-2) {
-            return Err(format!(
-                "key 'reduction.drop_tolerance' = {}: must be in (0, 0.01)",
-                self.drop_tolerance
+            return Err(InvalidSetting::new(
+                "reduction.drop_tolerance",
+                format!(" = {}: must be in (0, 0.01)", self.drop_tolerance),
             ));
         }
         Ok(())
@@ -81,7 +84,7 @@ pub fn kept_dofs(
     dofs: &DofMap,
     surfaces: &[&str],
     coupled: Option<&[bool]>,
-) -> Result<Vec<bool>, String> {
+) -> Result<Vec<bool>, MeshError> {
     let mut kept = vec![false; dofs.global_dofs()];
     let touches = |node: usize| {
         coupled.is_none_or(|c| {
@@ -389,8 +392,7 @@ pub fn reduce<'p>(
             normalized[j * offered + i] *= scale[i] * scale[j];
         }
     }
-    let (values, vectors) =
-        lapack::eigen_symmetric(offered, normalized).map_err(LaError::Invalid)?;
+    let (values, vectors) = lapack::eigen_symmetric(offered, normalized)?;
     let top = values.iter().copied().fold(0.0, nan_max);
     let keep: Vec<usize> = (0..offered)
         .filter(|&j| values[j] > settings.drop_tolerance * top)

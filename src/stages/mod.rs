@@ -53,7 +53,10 @@ pub enum RunError {
         source: crate::mesh::quality::QualityError,
     },
     #[error("brake model: {0}")]
-    Brake(String),
+    Brake(crate::invalid::InvalidSetting),
+    /// A key out of range, found where the model is known (e.g. an interface the model lacks).
+    #[error("{0}")]
+    Setting(#[from] crate::invalid::InvalidSetting),
     /// A scene asks for something its other tables do not provide.
     #[error("key '{key}': {message}")]
     Scene { key: &'static str, message: String },
@@ -61,6 +64,8 @@ pub enum RunError {
     Contact(#[from] crate::contact::ContactError),
     #[error("{0}")]
     Statics(#[from] crate::statics::StaticError),
+    #[error("model: {0}")]
+    Load(#[from] crate::statics::LoadError),
     #[error("{0}")]
     Complex(#[from] complex::ComplexModesError),
     #[error("{0}")]

@@ -90,7 +90,7 @@ pub fn pseudo_trajectories<'p>(
     let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
     let (kp, cp) = stability.operators_at(comm, contact, nominal);
     let size = stability.projection.size;
-    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::Invalid)?;
+    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::from)?;
     let chosen: Vec<usize> = match &settings.modes {
         Some(names) => names
             .iter()

@@ -20,7 +20,7 @@ pub enum ReductionError {
     #[error("key 'reduction': the reduction needs a mesh model (not user matrices)")]
     NoMesh,
     #[error("key 'reduction': the kept zone: {0}")]
-    KeptZone(String),
+    KeptZone(crate::mesh::MeshError),
     #[error("reduction: the contact model on the reduced unknowns: {0}")]
     Contact(#[from] ContactError),
     #[error(transparent)]

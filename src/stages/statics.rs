@@ -48,13 +48,12 @@ pub fn preload<'p>(
     }
     let interfaces = contact_settings
         .resolve(&model.interfaces)
-        .map_err(|m| RunError::scene("contact", m))?;
+        .map_err(RunError::Setting)?;
     let contact = timings.stage("contact pairing", || {
         ContactModel::new(petsc, &model.mesh, dofs, interfaces, contact_settings)
     })?;
     let load =
-        crate::statics::pressure_load(petsc, &model.mesh, dofs, &model.loads, model.pressure)
-            .map_err(|m| RunError::scene("model", m))?;
+        crate::statics::pressure_load(petsc, &model.mesh, dofs, &model.loads, model.pressure)?;
     // Every Newton iteration for a person watching; the summary has the totals.
     let verbose = petsc.rank() == 0 && crate::progress::interactive();
     let state = timings.stage("static preload", || {

@@ -30,12 +30,19 @@ pub enum SweepError {
         warm: Box<StaticError>,
         cold: Box<StaticError>,
     },
-    #[error("key 'sweep': point {point} ({parameter} = {value}): {message}")]
-    Parameter {
+    #[error("key 'sweep': point {point} ({parameter} = {value}): {source}")]
+    Laws {
         point: usize,
         parameter: &'static str,
         value: f64,
-        message: String,
+        source: crate::eigen::sweep::LawMismatch,
+    },
+    #[error("key 'sweep': point {point} ({parameter} = {value}): {source}")]
+    Modes {
+        point: usize,
+        parameter: &'static str,
+        value: f64,
+        source: crate::la::DenseError,
     },
     #[error(transparent)]
     La(#[from] LaError),
@@ -145,11 +152,11 @@ fn sweep_points<'p>(
         match sweep.parameter {
             SweepParameter::PressureBar => f.scale(v / input.pressure_bar)?,
             SweepParameter::DiscSpeed => speed = v,
-            p => apply_to_laws(p, v, &mut laws).map_err(|message| SweepError::Parameter {
+            p => apply_to_laws(p, v, &mut laws).map_err(|source| SweepError::Laws {
                 point: i + 1,
                 parameter: name,
                 value: v,
-                message,
+                source,
             })?,
         }
         let contact = &preload.contact.with_laws(laws, speed)?;
@@ -191,11 +198,11 @@ fn sweep_points<'p>(
         let t = Instant::now();
         let pairs = stability
             .modes_at(world, contact, &state.contact)
-            .map_err(|message| SweepError::Parameter {
+            .map_err(|source| SweepError::Modes {
                 point: i + 1,
                 parameter: name,
                 value: v,
-                message,
+                source,
             })?;
         out.modal_seconds.push(t.elapsed().as_secs_f64());
         out.unstable.push(

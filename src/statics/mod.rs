@@ -2,6 +2,7 @@
 //! line search and load stepping (pressure ramp, then friction ramp with the disc sliding at
 //! Omega), each Newton step a MUMPS LU of the unsymmetric tangent.
 
+use crate::invalid::InvalidSetting;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
@@ -66,23 +67,32 @@ impl Default for StaticSettings {
 }
 
 impl StaticSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.pressure_steps == 0 {
-            return Err("key 'statics.pressure_steps' must be at least 1".into());
+            return Err(InvalidSetting::new(
+                "statics.pressure_steps",
+                " must be at least 1",
+            ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
-            return Err(format!(
-                "key 'statics.tolerance' = {}: must be in (0, 0.01)",
-                self.tolerance
+            return Err(InvalidSetting::new(
+                "statics.tolerance",
+                format!(" = {}: must be in (0, 0.01)", self.tolerance),
             ));
         }
         if self.max_iterations == 0 {
-            return Err("key 'statics.max_iterations' must be at least 1".into());
+            return Err(InvalidSetting::new(
+                "statics.max_iterations",
+                " must be at least 1",
+            ));
         }
         if !(0.0..1.0).contains(&self.reuse_contraction) {
-            return Err(format!(
-                "key 'statics.reuse_contraction' = {}: must be in [0, 1) (0 = full Newton)",
-                self.reuse_contraction
+            return Err(InvalidSetting::new(
+                "statics.reuse_contraction",
+                format!(
+                    " = {}: must be in [0, 1) (0 = full Newton)",
+                    self.reuse_contraction
+                ),
             ));
         }
         Ok(())
@@ -133,6 +143,17 @@ pub struct StaticState<'p> {
     pub load_norm: f64,
 }
 
+/// Why the pressure load cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    #[error("loaded surface: {0}")]
+    Surface(#[from] crate::mesh::MeshError),
+    #[error("loaded surface '{0}' has no area")]
+    NoArea(String),
+    #[error(transparent)]
+    La(#[from] LaError),
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum StaticError {
     #[error(
@@ -166,8 +187,8 @@ pub fn pressure_load<'p>(
     dofs: &DofMap,
     loads: &[PressureLoad],
     pressure: f64,
-) -> Result<Vector<'p>, String> {
-    let mut f = Vector::new(petsc, dofs.local_dofs()).map_err(|e| e.to_string())?;
+) -> Result<Vector<'p>, LoadError> {
+    let mut f = Vector::new(petsc, dofs.local_dofs())?;
     if petsc.rank() == 0 {
         for load in loads {
             let faces: Vec<Face> = mesh
@@ -177,7 +198,7 @@ pub fn pressure_load<'p>(
                 .collect();
             let area: f64 = faces.iter().map(|f| f.area(3)).sum();
             if area.is_nan() || area <= 0.0 {
-                return Err(format!("loaded surface '{}' has no area", load.surface));
+                return Err(LoadError::NoArea(load.surface.clone()));
             }
             let traction = pressure * load.area / area;
             let (mut idx, mut val) = (Vec::new(), Vec::new());
@@ -196,10 +217,10 @@ pub fn pressure_load<'p>(
                     }
                 }
             }
-            f.add_values(&idx, &val).map_err(|e| e.to_string())?;
+            f.add_values(&idx, &val)?;
         }
     }
-    f.assemble().map_err(|e| e.to_string())?;
+    f.assemble()?;
     Ok(f)
 }
 

@@ -17,7 +17,8 @@ use squeal::contact::kernel::{self, Channel, Observed, Part, PointRows};
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::eigen::complex_modes::{full, solve_dense, ComplexModeSettings, Operators};
 use squeal::eigen::stability::ModalProjection;
-use squeal::la::{MatrixFormat, Petsc, Preallocation, SparseMatrix};
+use squeal::fem::assembly::Preallocation;
+use squeal::la::{MatrixFormat, Petsc, SparseMatrix};
 use squeal::measure::{exceeds, nan_max, nan_min};
 
 use super::common::{rel, say};
@@ -430,7 +431,11 @@ fn projected_eigenvalues(
         &terms(&[Part::Damping]),
         &Default::default(),
     );
-    Ok(solve_dense(2, &kp, &cp)?.into_iter().map(|p| p.0).collect())
+    Ok(solve_dense(2, &kp, &cp)
+        .map_err(|e| e.to_string())?
+        .into_iter()
+        .map(|p| p.0)
+        .collect())
 }
 
 /// The eigenvalue with the largest real part, and its Re(s)/|s|.

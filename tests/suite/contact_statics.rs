@@ -150,7 +150,7 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         gauss_points: gauss,
         ..Default::default()
     };
-    let resolved = settings.resolve(&interfaces)?;
+    let resolved = settings.resolve(&interfaces).map_err(|e| e.to_string())?;
     let contact = ContactModel::new(petsc, &mesh, &system.dofs, resolved, &settings)
         .map_err(|e| e.to_string())?;
     if contact.misses()[0] != 0 {
@@ -160,7 +160,8 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         surface: "upper_top".into(),
         area: 1.0,
     }];
-    let f = pressure_load(petsc, &mesh, &system.dofs, &loads, p_applied)?;
+    let f =
+        pressure_load(petsc, &mesh, &system.dofs, &loads, p_applied).map_err(|e| e.to_string())?;
     let statics = StaticSettings {
         tolerance: 1e-12,
         ..Default::default()
@@ -197,7 +198,9 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         slip_speed: 1e-3,
     };
     settings.disc_speed = 2.0 * std::f64::consts::PI; // one revolution per second
-    let resolved = settings.resolve(&model.interfaces)?;
+    let resolved = settings
+        .resolve(&model.interfaces)
+        .map_err(|e| e.to_string())?;
     let contact = ContactModel::new(petsc, &model.mesh, &system.dofs, resolved, &settings)
         .map_err(|e| e.to_string())?;
     let f = pressure_load(
@@ -206,7 +209,8 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         &system.dofs,
         &model.loads,
         model.pressure,
-    )?;
+    )
+    .map_err(|e| e.to_string())?;
     let statics = StaticSettings::default();
     let state = preload(petsc, &system, &contact, &f, &statics)?;
     let piston = model.loads[0].area * model.pressure;

@@ -141,7 +141,8 @@ fn dense_of_export(out: &std::path::Path) -> Result<(usize, Vec<(f64, f64)>), St
         return Err(format!("orders differ: M {n}, C {nc}, K_tangent {nk}"));
     }
     let omega_max = 2.0 * std::f64::consts::PI * F_MAX_HZ;
-    let mut values: Vec<(f64, f64)> = quadratic_eigenvalues(n, &k, &c, &m)?
+    let mut values: Vec<(f64, f64)> = quadratic_eigenvalues(n, &k, &c, &m)
+        .map_err(|e| e.to_string())?
         .into_iter()
         .filter(|&(_, im)| im > 0.0 && im <= omega_max)
         .collect();

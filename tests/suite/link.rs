@@ -100,7 +100,7 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
         if lin.cp[0] != C || lin.cp[1] != 0.0 || lin.cp[2] != 0.0 || lin.cp[3] != C {
             return Err(format!("the damping is not c I: {:?}", lin.cp));
         }
-        let pairs = projected_coordinates(2, &lin.kp, &lin.cp)?;
+        let pairs = projected_coordinates(2, &lin.kp, &lin.cp).map_err(|e| e.to_string())?;
         // The frozen tangent from the state alone: k_c = lambda N0 e^(-lambda y) = e^-y.
         let kc = (-q[1]).exp();
         let frozen = [K_S[0][0], K_S[1][0], K_S[0][1] + MU * kc, K_S[1][1] + kc];

@@ -32,9 +32,9 @@
 //!   converge at second order (the differences of successive halvings shrink by at least 3).
 
 use squeal::contact::law::{FrictionLaw, NormalLaw};
+use squeal::fem::assembly::Preallocation;
 use squeal::la::{
-    DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, Preallocation,
-    SparseMatrix, Vector,
+    DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };
 use squeal::measure::{nan_max, nan_min};
 use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};

@@ -13,13 +13,14 @@
 use std::path::{Path, PathBuf};
 
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
+use squeal::fem::assembly::Preallocation;
 use squeal::fem::shape::ElementKind;
 use squeal::io::matrix_market;
 use squeal::io::user_matrices::{load_sum, MatrixTerm};
 use squeal::la::fem_assembly::assemble_system;
 use squeal::la::{
-    solve_quadratic, DirectSolver, Factorization, MatrixFormat, Petsc, Preallocation,
-    QuadraticOptions, SparseMatrix, Vector,
+    solve_quadratic, DirectSolver, Factorization, MatrixFormat, Petsc, QuadraticOptions,
+    SparseMatrix, Vector,
 };
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;

@@ -35,7 +35,7 @@ use squeal::eigen::complex_modes::{solve_dense, Complex};
 use squeal::la::Petsc;
 use squeal::measure::{nan_max, nan_min};
 use squeal::post::pseudo_trajectory::{
-    pseudo_trajectory, Linearized, OrbitFit, PseudoSystem, PseudoTrajectorySettings,
+    pseudo_trajectory, Linearized, OrbitFit, PseudoError, PseudoSystem, PseudoTrajectorySettings,
 };
 
 use super::common::{rel, say};
@@ -93,13 +93,13 @@ impl Hoffmann {
 impl PseudoSystem for Hoffmann {
     /// The contact point's relative displacement is the state itself: |y|, with the phase of
     /// its larger component.
-    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, String> {
+    fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, PseudoError> {
         let norm = y.iter().map(|&(r, i)| r * r + i * i).sum::<f64>().sqrt();
         let larger = y[0].0.hypot(y[0].1).max(y[1].0.hypot(y[1].1));
         let at = y
             .iter()
             .find(|c| c.0.hypot(c.1) == larger)
-            .ok_or("a NaN in the shape")?;
+            .ok_or(PseudoError::NotFinite("the shape"))?;
         Ok((norm * at.0 / larger, norm * at.1 / larger))
     }
     fn linearize(
@@ -108,7 +108,7 @@ impl PseudoSystem for Hoffmann {
         omega: f64,
         alpha: f64,
         theta: f64,
-    ) -> Result<Linearized, String> {
+    ) -> Result<Linearized, PseudoError> {
         let (c, s) = (theta.cos(), theta.sin());
         // Re(alpha psi e^{i theta}) and Re(i omega alpha psi e^{i theta}).
         let d = |p: Complex| alpha * (p.0 * c - p.1 * s);
@@ -126,7 +126,7 @@ impl PseudoSystem for Hoffmann {
 fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     let system = Hoffmann;
     let rest = system.tangent([static_x(), 0.0], [0.0; 2]);
-    let pairs = solve_dense(2, &rest.kp, &rest.cp)?;
+    let pairs = solve_dense(2, &rest.kp, &rest.cp).map_err(|e| e.to_string())?;
     let index = (0..pairs.len())
         .max_by(|&a, &b| pairs[a].0 .0.total_cmp(&pairs[b].0 .0))
         .ok_or("no mode")?;
@@ -139,7 +139,8 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         alphas: 2,
         ..Default::default()
     };
-    let p = pseudo_trajectory(&system, "C2", &pairs, index, &tiny, margin)?;
+    let p = pseudo_trajectory(&system, "C2", &pairs, index, &tiny, margin)
+        .map_err(|e| e.to_string())?;
     let worst = p.sweep[0]
         .eigenvalue
         .iter()
@@ -154,13 +155,15 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     }
 
     let settings = PseudoTrajectorySettings::default();
-    let a = pseudo_trajectory(&system, "C2", &pairs, index, &settings, margin)?;
+    let a = pseudo_trajectory(&system, "C2", &pairs, index, &settings, margin)
+        .map_err(|e| e.to_string())?;
     let other_grid = PseudoTrajectorySettings {
         alpha_range: Some([1.3e-3, 8.0]),
         alphas: 17,
         ..Default::default()
     };
-    let b = pseudo_trajectory(&system, "C2", &pairs, index, &other_grid, margin)?;
+    let b = pseudo_trajectory(&system, "C2", &pairs, index, &other_grid, margin)
+        .map_err(|e| e.to_string())?;
     if std::env::var_os("SQUEAL_DEBUG_PSEUDO").is_some() {
         for p in a.sweep.iter().chain(&b.sweep) {
             let f = p.frequencies_hz();
@@ -187,7 +190,8 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         .iter()
         .map(|&(r, i)| (r * c - i * d, r * d + i * c))
         .collect();
-    let t = pseudo_trajectory(&system, "C2", &turned, index, &settings, margin)?;
+    let t = pseudo_trajectory(&system, "C2", &turned, index, &settings, margin)
+        .map_err(|e| e.to_string())?;
     let psi_moved = t
         .psi
         .iter()
@@ -222,7 +226,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         let q = record.q[i];
         [c[0] + q[0] / samples, c[1] + q[1] / samples]
     });
-    let fit = OrbitFit::new(&a.psi, |_| {})?;
+    let fit = OrbitFit::new(&a.psi, |_| {}).map_err(|e| e.to_string())?;
     let fitted: Vec<_> = (from..to)
         .map(|i| {
             let q = record.q[i];

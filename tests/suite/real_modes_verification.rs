@@ -140,7 +140,7 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
                 ..Default::default()
             };
             let (system, modes) = solve_modes(petsc, &mesh, &[Clamp::all("inner")], &request)?;
-            let outer = mesh.node_set("outer")?;
+            let outer = mesh.node_set("outer").map_err(|e| e.to_string())?;
             let mut by_diameters = [f64::NAN; 5];
             worst = 0.0;
             line.clear();

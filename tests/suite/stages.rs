@@ -147,7 +147,9 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         damping,
     )
     .map_err(|e| e.to_string())?;
-    let pairs = stability.modes_at(world, &preload.contact, &preload.state.contact)?;
+    let pairs = stability
+        .modes_at(world, &preload.contact, &preload.state.contact)
+        .map_err(|e| e.to_string())?;
     let mut worst = 0.0f64;
     for m in nominal {
         let s = m.eigenvalue;

@@ -109,7 +109,7 @@ fn tip_deflection(
     {
         let mut local = f.local_mut().map_err(|e| e.to_string())?;
         let first = system.dofs.owned_dofs().start;
-        for &node in mesh.node_set("u1")? {
+        for &node in mesh.node_set("u1").map_err(|e| e.to_string())? {
             let d = system.dofs.node_dofs[node][2];
             if d >= 0 && system.dofs.owned_dofs().contains(&(d as usize)) {
                 let x = mesh.coords[node];
@@ -122,7 +122,7 @@ fn tip_deflection(
         .map_err(|e| e.to_string())?;
     solver.solve(&f, &mut u).map_err(|e| e.to_string())?;
     let all = u.gather_all().map_err(|e| e.to_string())?;
-    let face = mesh.node_set("u1")?;
+    let face = mesh.node_set("u1").map_err(|e| e.to_string())?;
     let tip: f64 = face
         .iter()
         .map(|&nd| all[system.dofs.node_dofs[nd][2] as usize])

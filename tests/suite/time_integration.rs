@@ -18,8 +18,9 @@
 //!   h = 1e-3), energy stays within 1e-5 of its initial value (measured <= 7e-7), at most 2
 //!   fixed-Jacobian iterations per step.
 
+use squeal::fem::assembly::Preallocation;
 use squeal::la::{
-    DirectSolver, Factorization, MatrixFormat, Operator, Petsc, Preallocation, SparseMatrix, Vector,
+    DirectSolver, Factorization, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };
 use squeal::time::newmark::{
     initial_acceleration, jacobian, Damping, Forces, Jacobian, ModalDamping, Newmark,
@@ -693,7 +694,7 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
             a[(i + 1) * n + i] = v;
         }
     }
-    let (values, vectors) = squeal::la::lapack::eigen_symmetric(n, a)?;
+    let (values, vectors) = squeal::la::lapack::eigen_symmetric(n, a).map_err(|e| e.to_string())?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&x, &y| values[x].total_cmp(&values[y]));
     let omega: Vec<f64> = order.iter().map(|&j| values[j].sqrt()).collect();

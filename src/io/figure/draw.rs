@@ -5,15 +5,20 @@ use plotters::prelude::*;
 
 use super::{colormap, tick, Figure, Layer, Layout, Rgb, FONT, MAX_CELLS};
 
-fn text_error<E: std::fmt::Display>(e: E) -> String {
-    e.to_string()
+/// A failure of the drawing backend (plotters' error, with the backend's as its source).
+#[derive(Debug, thiserror::Error)]
+#[error("drawing the figure: {0}")]
+pub struct DrawError(Box<dyn std::error::Error + Send + Sync>);
+
+fn text_error<E: std::error::Error + Send + Sync + 'static>(e: E) -> DrawError {
+    DrawError(Box::new(e))
 }
 
-pub(super) fn draw_panels<DB: DrawingBackend>(
+pub(super) fn draw_panels<DB: DrawingBackend<ErrorType: 'static>>(
     root: &DrawingArea<DB, Shift>,
     figures: &[&Figure],
     layout: Layout,
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     root.fill(&WHITE).map_err(text_error)?;
     let mut rest = root.clone();
     for f in figures {
@@ -38,7 +43,10 @@ const Y_AREA: u32 = 78;
 const CAPTION: u32 = 34;
 const BAR: u32 = 140;
 
-fn draw<DB: DrawingBackend>(f: &Figure, area: &DrawingArea<DB, Shift>) -> Result<(), String> {
+fn draw<DB: DrawingBackend<ErrorType: 'static>>(
+    f: &Figure,
+    area: &DrawingArea<DB, Shift>,
+) -> Result<(), DrawError> {
     let (w, h) = area.dim_in_pixel();
     let (main, bar) = if f.colour_bar.is_some() {
         let (m, b) = area.split_horizontally(w.saturating_sub(BAR));
@@ -113,12 +121,12 @@ type Chart<'a, DB> = ChartContext<
 >;
 
 /// Draws one layer; true when it added a legend entry.
-fn draw_layer<DB: DrawingBackend>(
+fn draw_layer<DB: DrawingBackend<ErrorType: 'static>>(
     f: &Figure,
     chart: &mut Chart<'_, DB>,
     layer: &Layer,
     (x, y): ((f64, f64), (f64, f64)),
-) -> Result<bool, String> {
+) -> Result<bool, DrawError> {
     let inside = |p: &(f64, f64)| {
         p.0.is_finite()
             && p.1.is_finite()
@@ -265,13 +273,13 @@ fn draw_layer<DB: DrawingBackend>(
 }
 
 /// A heat map's cells (merged down to at most `MAX_CELLS`), coloured on the colour bar.
-fn draw_cells<DB: DrawingBackend>(
+fn draw_cells<DB: DrawingBackend<ErrorType: 'static>>(
     f: &Figure,
     chart: &mut Chart<'_, DB>,
     (columns, rows): (usize, usize),
     values: &[f64],
     (cx, cy): ((f64, f64), (f64, f64)),
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     let (nx, ny) = (columns.min(MAX_CELLS.0), rows.min(MAX_CELLS.1));
     let merged = merge_cells((columns, rows), values, (nx, ny));
     let (dx, dy) = ((cx.1 - cx.0) / nx as f64, (cy.1 - cy.0) / ny as f64);
@@ -336,11 +344,11 @@ pub(super) fn merge_cells(
         .collect()
 }
 
-fn draw_colour_bar<DB: DrawingBackend>(
+fn draw_colour_bar<DB: DrawingBackend<ErrorType: 'static>>(
     area: &DrawingArea<DB, Shift>,
     label: &str,
     (lo, hi): (f64, f64),
-) -> Result<(), String> {
+) -> Result<(), DrawError> {
     let mut chart = ChartBuilder::on(area)
         .margin_top(MARGIN + CAPTION)
         .margin_bottom(MARGIN + X_AREA)

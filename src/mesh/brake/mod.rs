@@ -14,6 +14,7 @@ pub mod grid;
 pub mod pad;
 pub mod piston;
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use crate::fem::material::{Elasticity, Material};
@@ -132,7 +133,7 @@ impl Default for BrakeGeometry {
 impl BrakeGeometry {
     /// Checks that every dimension is positive and that the components fit together; errors
     /// name the key under `model.geometry`.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         let fields: [(&str, f64); 20] = [
             ("disc_outer_radius", self.disc_outer_radius),
             ("disc_thickness", self.disc_thickness),
@@ -157,16 +158,17 @@ impl BrakeGeometry {
         ];
         for (key, v) in fields {
             if !(v.is_finite() && v > 0.0) {
-                return Err(format!(
-                    "key 'model.geometry.{key}' = {v}: must be positive and finite (m, or degrees for *_deg)"
+                return Err(InvalidSetting::new(
+                    format!("model.geometry.{key}"),
+                    format!(" = {v}: must be positive and finite (m, or degrees for *_deg)"),
                 ));
             }
         }
-        let fits = |ok: bool, what: &str| -> Result<(), String> {
+        let fits = |ok: bool, what: &str| -> Result<(), InvalidSetting> {
             if ok {
                 Ok(())
             } else {
-                Err(format!("model.geometry: {what}"))
+                Err(InvalidSetting::new("model.geometry", format!(": {what}")))
             }
         };
         fits(
@@ -306,29 +308,38 @@ impl BrakeSpec {
         self.components.contains(&c)
     }
 
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if self.components.is_empty() {
-            return Err("key 'model.components' is empty: list at least one of disc, inner_pad, outer_pad, piston, caliper, anchor".into());
+            return Err(InvalidSetting::new("model.components", " is empty: list at least one of disc, inner_pad, outer_pad, piston, caliper, anchor"));
         }
         if !matches!(
             self.element,
             ElementKind::Hex8 | ElementKind::Hex8I | ElementKind::Hex20
         ) {
-            return Err(format!(
-                "key 'model.element' = '{}': the brake generator makes hexahedra: hex8i, hex8 or hex20",
-                self.element.name()
+            return Err(InvalidSetting::new(
+                "model.element",
+                format!(
+                    " = '{}': the brake generator makes hexahedra: hex8i, hex8 or hex20",
+                    self.element.name()
+                ),
             ));
         }
         if !(1_000..=50_000_000).contains(&self.target_dofs) {
-            return Err(format!(
-                "key 'model.target_dofs' = {}: must be between 1000 and 50,000,000",
-                self.target_dofs
+            return Err(InvalidSetting::new(
+                "model.target_dofs",
+                format!(
+                    " = {}: must be between 1000 and 50,000,000",
+                    self.target_dofs
+                ),
             ));
         }
         if !(self.pressure_bar.is_finite() && self.pressure_bar >= 0.0) {
-            return Err(format!(
-                "key 'model.pressure_bar' = {}: must be a finite pressure >= 0 (bar)",
-                self.pressure_bar
+            return Err(InvalidSetting::new(
+                "model.pressure_bar",
+                format!(
+                    " = {}: must be a finite pressure >= 0 (bar)",
+                    self.pressure_bar
+                ),
             ));
         }
         self.geometry.validate()?;
@@ -340,8 +351,9 @@ impl BrakeSpec {
             ("caliper", &self.materials.caliper),
             ("anchor", &self.materials.anchor),
         ] {
-            m.validate()
-                .map_err(|e| format!("model.materials.{key}: {e}"))?;
+            m.validate().map_err(|e| {
+                InvalidSetting::new(format!("model.materials.{key}"), format!(": {e}"))
+            })?;
         }
         Ok(())
     }
@@ -405,15 +417,18 @@ pub fn count_nodes(spec: &BrakeSpec, h: f64) -> usize {
 
 /// The element size whose node count x 3 is nearest to `target_dofs` (bisection on log h;
 /// the count is a non-increasing step function of h).
-pub fn element_size_for(spec: &BrakeSpec) -> Result<f64, String> {
+pub fn element_size_for(spec: &BrakeSpec) -> Result<f64, InvalidSetting> {
     let target = spec.target_dofs as f64;
     let dofs = |h: f64| 3.0 * count_nodes(spec, h) as f64;
     let mut coarse = 0.05_f64;
     if dofs(coarse) > 1.1 * target {
-        return Err(format!(
-            "key 'model.target_dofs' = {}: the coarsest mesh of these components has {} DOF; ask for more",
-            spec.target_dofs,
-            dofs(coarse)
+        return Err(InvalidSetting::new(
+            "model.target_dofs",
+            format!(
+                " = {}: the coarsest mesh of these components has {} DOF; ask for more",
+                spec.target_dofs,
+                dofs(coarse)
+            ),
         ));
     }
     // Halve until the count passes the target (each halving multiplies it by up to 8).
@@ -439,9 +454,12 @@ pub fn element_size_for(spec: &BrakeSpec) -> Result<f64, String> {
         }
     }
     if (best.1 - target).abs() > 0.1 * target {
-        return Err(format!(
-            "key 'model.target_dofs' = {}: the nearest mesh has {} DOF (more than 10 % off); try a different target",
-            spec.target_dofs, best.1
+        return Err(InvalidSetting::new(
+            "model.target_dofs",
+            format!(
+                " = {}: the nearest mesh has {} DOF (more than 10 % off); try a different target",
+                spec.target_dofs, best.1
+            ),
         ));
     }
     Ok(best.0)
@@ -454,7 +472,7 @@ pub fn element_size_for(spec: &BrakeSpec) -> Result<f64, String> {
 /// by its constraint: without the anchor the backplate ears are held in x and y; without the
 /// caliper the outer backplate's back is held in z; without the piston the pressure acts on
 /// the inner backplate's back.
-pub fn generate(spec: &BrakeSpec) -> Result<BrakeModel, String> {
+pub fn generate(spec: &BrakeSpec) -> Result<BrakeModel, InvalidSetting> {
     spec.validate()?;
     let h = element_size_for(spec)?;
     Ok(generate_with_size(spec, h))
@@ -586,6 +604,6 @@ mod tests {
         let mut spec = BrakeSpec::default();
         spec.geometry.piston_diameter = 0.070;
         let e = spec.validate().unwrap_err();
-        assert!(e.contains("caliper does not fit"), "{e}");
+        assert!(e.to_string().contains("caliper does not fit"), "{e}");
     }
 }

@@ -1,5 +1,6 @@
 //! The `[transient]` table of a scene: step, length, start, output rates, Newton variant.
 
+use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 /// The `[transient]` table of a scene.
@@ -191,56 +192,66 @@ fn default_amplitude() -> f64 {
 }
 
 impl TransientSettings {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
         if !(self.step > 0.0 && self.step.is_finite()) {
-            return Err(format!(
-                "key 'transient.step' = {}: must be a positive time step (s)",
-                self.step
+            return Err(InvalidSetting::new(
+                "transient.step",
+                format!(" = {}: must be a positive time step (s)", self.step),
             ));
         }
         if self.steps == 0 {
-            return Err("key 'transient.steps' must be at least 1".into());
+            return Err(InvalidSetting::new(
+                "transient.steps",
+                " must be at least 1",
+            ));
         }
         if !(self.tolerance > 0.0 && self.tolerance < 1e-2) {
-            return Err(format!(
-                "key 'transient.tolerance' = {}: must be in (0, 0.01)",
-                self.tolerance
+            return Err(InvalidSetting::new(
+                "transient.tolerance",
+                format!(" = {}: must be in (0, 0.01)", self.tolerance),
             ));
         }
         if self.mode == 0 {
-            return Err("key 'transient.mode' is 1-based: the first real mode is 1".into());
+            return Err(InvalidSetting::new(
+                "transient.mode",
+                " is 1-based: the first real mode is 1",
+            ));
         }
         for (name, p) in &self.sensors {
             if p.iter().any(|x| !x.is_finite()) {
-                return Err(format!(
-                    "key 'transient.sensors.{name}': the position must be three finite coordinates (m)"
+                return Err(InvalidSetting::new(
+                    format!("transient.sensors.{name}"),
+                    ": the position must be three finite coordinates (m)",
                 ));
             }
         }
         if self.spectrogram_max_hz.is_nan() || self.spectrogram_max_hz <= 0.0 {
-            return Err("key 'transient.spectrogram_max_hz' must be positive (Hz)".into());
+            return Err(InvalidSetting::new(
+                "transient.spectrogram_max_hz",
+                " must be positive (Hz)",
+            ));
         }
         if !(self.state_interval >= 0.0 && self.state_interval.is_finite()) {
-            return Err(format!(
-                "key 'transient.state_interval' = {}: must be a time (s) >= 0 (0: no states)",
-                self.state_interval
+            return Err(InvalidSetting::new(
+                "transient.state_interval",
+                format!(
+                    " = {}: must be a time (s) >= 0 (0: no states)",
+                    self.state_interval
+                ),
             ));
         }
         if !self.amplitude.is_finite() {
-            return Err("key 'transient.amplitude' must be finite".into());
+            return Err(InvalidSetting::new(
+                "transient.amplitude",
+                " must be finite",
+            ));
         }
         match (self.start, &self.impulse) {
             (Start::Impulse, None) => {
-                return Err(
-                    "key 'transient.start' = \"impulse\" needs [transient.impulse] with point = [x, y, z] (m) and value = [Ix, Iy, Iz] (N s)"
-                        .into(),
-                )
+                return Err(InvalidSetting::new("transient.start", " = \"impulse\" needs [transient.impulse] with point = [x, y, z] (m) and value = [Ix, Iy, Iz] (N s)"))
             }
             (_, Some(i)) if i.point.iter().chain(&i.value).any(|x| !x.is_finite()) => {
-                return Err(
-                    "key 'transient.impulse': point and value must be three finite numbers each"
-                        .into(),
-                )
+                return Err(InvalidSetting::new("transient.impulse", ": point and value must be three finite numbers each"))
             }
             _ => {}
         }
@@ -261,7 +272,8 @@ mod tests {
         let err = settings("steps = 10\nstart = \"impulse\"")
             .validate()
             .unwrap_err();
-        assert!(err.contains("transient.impulse"), "{err}");
+        assert_eq!(err.key, "transient.start", "{err}");
+        assert!(err.to_string().contains("transient.impulse"), "{err}");
         let ok = settings(
             "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, 0.0, 0.0]\nvalue = [0.0, 0.0, 1.0e-3]",
         );
@@ -269,7 +281,8 @@ mod tests {
         let nan = settings(
             "steps = 10\nstart = \"impulse\"\n[impulse]\npoint = [0.0, nan, 0.0]\nvalue = [0.0, 0.0, 1.0]",
         );
-        assert!(nan.validate().unwrap_err().contains("finite"));
+        let nan = nan.validate().unwrap_err();
+        assert!(nan.key == "transient.impulse" && nan.detail.contains("finite"));
         assert!(toml::from_str::<TransientSettings>("steps = 1\nstart = \"noise\"").is_err());
     }
 
