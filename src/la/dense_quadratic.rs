@@ -7,8 +7,8 @@
 //! gamma = sqrt(||K|| / ||M||), everything divided by ||K||; Fan, Lin & Van Dooren, SIMAX 26,
 //! 2004) and turned into a standard problem with the Cholesky factor of M:
 //! [[0, I], [-M~^-1 K~, -M~^-1 C~]], whose eigenvalues dgeev finds (balancing, Hessenberg QR).
-//! QZ on the pencil (dggev) would not need M^-1 but measured 22x slower here (71.5 s against
-//! 3.2 s at order 2,000; dgeev 22 s at 4,064).
+//! QZ on the pencil (dggev) would not need M^-1 but is much slower at the orders the projected
+//! routes reach (benches/decisions-results.md, "dense-quadratic").
 
 use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};

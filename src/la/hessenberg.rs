@@ -3,8 +3,8 @@
 //! then the right eigenvectors of selected eigenvalues by inverse iteration on the Hessenberg
 //! form (dhsein), carried back by the reduction's reflectors (dormhr) and the balancing
 //! (dgebak). For a caller that needs all eigenvalues but only a few vectors this costs about
-//! two thirds of dgeev with vectors (order 500: 80 against 117 ms here): the Schur vectors
-//! and all eigenvectors are what it skips; each vector then costs O(n^2).
+//! two thirds of dgeev with vectors (benches/decisions-results.md, "hessenberg"): the Schur
+//! vectors and all eigenvectors are what it skips; each vector then costs O(n^2).
 
 use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};

@@ -2,10 +2,10 @@
 //! P^-1 = F^-1 - W (I + D U^T W)^-1 D U^T F^-1 with W = F^-1 U.
 //!
 //! Why: in a transient's saturated regime the consistent tangent drifts away from the factored
-//! Jacobian by the few contact points that stick, slip, open or close within a step (small
-//! brake: 99.99 % of the change's Frobenius norm sits on ~15 of 352 points), and GMRES
-//! preconditioned by F^-1 alone needed ~13-22 iterations per Newton iteration however fresh
-//! the factor. Those points' columns make the preconditioner nearly exact, at one solve per
+//! Jacobian by the few contact points that stick, slip, open or close within a step (nearly
+//! all of the change sits on a few percent of the points), and GMRES preconditioned by F^-1
+//! alone needed over ten iterations per Newton iteration however fresh the factor
+//! (benches/decisions-results.md, "low-rank"). Those points' columns make the preconditioner nearly exact, at one solve per
 //! new column, cached for the factor's life.
 
 use num_complex::Complex64;

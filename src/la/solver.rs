@@ -210,12 +210,10 @@ impl<'p> DirectSolver<'p> {
     /// Factorizes `a` on every rank: the whole matrix gathered to each rank (PCREDUNDANT) and
     /// LU-factorized there by PETSc's own sequential LU (nested-dissection ordering); a solve
     /// then gathers the right-hand side, solves locally and keeps the rank's rows. For small
-    /// systems solved very often (a reduced model's time-stepping Jacobian, ~2k unknowns):
-    /// measured on the small brake's reduced Jacobian (2,059 unknowns, ~6e5 factor entries,
-    /// 2 ranks), one solve took 0.35 ms against 0.99 ms for MUMPS over both ranks (PORD
-    /// ordering; 0.63 ms with AMD) and 0.78-0.89 ms for sequential MUMPS on each rank: the
-    /// factor's ~4.8 MB streamed at ~14 GB/s, this machine's one-core bandwidth, while MUMPS'
-    /// solve adds fixed costs that dominate at this size. The factorization itself is not
+    /// systems solved very often (a reduced model's time-stepping Jacobian, ~2k unknowns): one
+    /// solve streams the factor at one core's bandwidth, while MUMPS' distributed solve adds
+    /// fixed costs that dominate at this size (benches/decisions-results.md,
+    /// "per-rank-factor"). The factorization itself is not
     /// parallel and its memory is on every rank: for large systems use [`Self::factorize`].
     /// No pivoting beyond the diagonal (PETSc's LU): for matrices with a dominant diagonal,
     /// such as M / (beta h^2) + ... + K; a zero pivot is an error, not a silent result.

@@ -271,9 +271,9 @@ pub fn log_space(a: f64, b: f64, n: usize) -> Vec<f64> {
 
 /// Bisection in log(alpha) for the first amplitude where `crosses` turns true, between
 /// `lo` (false) and `hi` (true), to relative width `tolerance`; with the periods evaluated.
-/// Bisection, not a secant method: the mean damping is rough in alpha (on the brake's C35 it
-/// jumps by 4.5e-4 within 0.05 % of alpha near 1.84e-5 m and crosses zero three times in one
-/// grid interval), and regula falsi (Illinois, tried) saved 1 of 10 periods there.
+/// Bisection, not a secant method: the mean damping is rough in alpha (it can jump and cross
+/// zero several times within one grid interval), and regula falsi (Illinois, tried) saved
+/// little there (benches/decisions-results.md, "pseudo-bisection").
 fn bisect(
     lo: &Period,
     hi: &Period,

@@ -106,8 +106,9 @@ fn save(fig: &Figure, output: &Path, name: &str) -> Result<(), WriteError> {
         .map_err(|source| WriteError::Io { path, source })
 }
 
-/// The ranked modes' energies against time, log scale, labelled with mode and frequency.
-fn plot_modal_energy(r: &ModalEnergyReport, output: &Path) -> Result<(), WriteError> {
+/// modal_energy.png: the ranked modes' energies against time, log scale, labelled with mode
+/// and frequency (rank 0 writes it).
+pub fn plot_modal_energy(r: &ModalEnergyReport, output: &Path) -> Result<(), WriteError> {
     let e = &r.energy;
     let log = |x: f64| x.max(1e-300).log10();
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);

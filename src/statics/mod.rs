@@ -49,8 +49,8 @@ fn default_max_iterations() -> usize {
     40
 }
 fn default_reuse_contraction() -> f64 {
-    // Measured on the 30k brake, mu 0.4: full Newton 31 LU / 18.1 s; 0.1: 15 LU + 46 solves,
-    // 9.4 s; 0.3: 11 LU + 71 solves, 8.3 s. Larger models shift the balance further to reuse.
+    // Fewer factorizations for more solves, fastest of those measured on the 30k brake
+    // (benches/decisions-results.md, "statics-reuse").
     0.3
 }
 

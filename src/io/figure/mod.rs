@@ -337,8 +337,9 @@ fn write_png(path: &Path, (width, height): (u32, u32), rgb: &[u8]) -> std::io::R
     let mut encoder = png::Encoder::new(file, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    // Plots are flat colour: adaptive filtering and the better deflate level make them 3-4x
-    // smaller (and the report, which embeds them, too) for ~10 ms each.
+    // Plots are flat colour: adaptive filtering and the better deflate level make them (and
+    // the report, which embeds them) several times smaller for a little time
+    // (benches/decisions-results.md, "png-compression").
     encoder.set_adaptive_filter(png::AdaptiveFilterType::Adaptive);
     encoder.set_compression(png::Compression::Best);
     let mut writer = encoder.write_header().map_err(std::io::Error::other)?;

@@ -136,11 +136,10 @@ pub enum JacobianFactor {
     PerRank,
 }
 
-/// `jacobian_factor = "auto"` factorizes J on every rank up to this many unknowns. Measured
-/// on the small brake's reduced J (2,059 unknowns, 2 ranks): a solve 0.35 ms per rank against
-/// 0.99 ms with MUMPS over both ranks; the factor's memory is then on every rank, and its
-/// factorization is not parallel, which the reduced models of ~30k unknowns were not measured
-/// for (they stay with MUMPS unless a scene asks).
+/// `jacobian_factor = "auto"` factorizes J on every rank up to this many unknowns (faster
+/// solves at ~2k unknowns: benches/decisions-results.md, "per-rank-factor"); the factor's
+/// memory is then on every rank and its factorization is not parallel, so larger reduced
+/// models stay with MUMPS unless a scene asks.
 pub const PER_RANK_MAX_UNKNOWNS: usize = 10_000;
 
 impl JacobianFactor {
