@@ -11,6 +11,7 @@ pub mod modes;
 pub mod post;
 pub mod pseudo;
 pub mod reduction;
+mod sections;
 pub mod stability;
 pub mod statics;
 pub mod summary;

@@ -5,9 +5,10 @@
 //! [`modes::real_modes`] -> [`complex::complex_modes`] | [`sweep::SweepOutput`] ->
 //! [`reduce::Reduced`] -> [`transient::Trajectory`]
 //!
-//! [`analyses`] runs the stages before the transient in chain order; `crate::pipeline` is the
-//! driver of a whole run; writers of each stage's output live in `crate::report`; the
-//! run's summary is [`summary::RunSummary`].
+//! Stages compute and return; they never write. `crate::pipeline` is the driver of a whole
+//! run (it runs what the scene asks, in chain order, and keeps the outputs in [`Analyses`]);
+//! the writers of each stage's output, the run's summary and report.html are in
+//! `crate::report`.
 
 pub mod complex;
 pub mod link;
