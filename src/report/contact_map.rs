@@ -3,7 +3,7 @@
 //! cells of its Gauss points and filled with the point's value; the pad's outline, a colour
 //! bar with values and units, and an arrow for the disc's direction of motion.
 
-use std::collections::HashMap;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::contact::pairing::{Axis, ContactPoint};
@@ -164,7 +164,8 @@ pub fn plane_map(context: MapContext, interface: usize) -> Option<PlaneMap> {
     let mut cells = Vec::new();
     // Face edges by their end nodes: an edge of one face only is on the outline.
     type Edge = ((f64, f64), (f64, f64), usize); // ends in the plane, faces using it
-    let mut edges: HashMap<(usize, usize), Edge> = HashMap::new();
+                                                 // Ordered, so the outline is drawn in the same order every run (byte-identical figures).
+    let mut edges: BTreeMap<(usize, usize), Edge> = BTreeMap::new();
     let mut seen = std::collections::HashSet::new();
     for &i in &mine {
         let p = &points[i];
