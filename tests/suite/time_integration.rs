@@ -1133,7 +1133,11 @@ fn run_series(
 /// restart test), but the seed gives the same start on both (coefficients from the seed, mode
 /// signs fixed by the node positions). Asserted 1e-6 of the torque fluctuation (the static
 /// state agrees to ~1e-12 of itself across rank counts, and the fluctuation is 4e-5 of the
-/// torque: measured 6e-8) and 1e-6 of the largest pad velocity.
+/// torque: measured 6e-8). The pad velocity: each rank count stops its Newton iterations at
+/// a different iterate within the tolerance tau = 1e-8 (the correction below tau of the
+/// step's displacement increment), so v = 2 (q1 - q0) / h - v0 may differ by 2 tau of itself
+/// per step, and these add at most linearly: bound 2 tau x 100 steps = 2e-6 of the largest pad
+/// velocity (measured 4e-7 to 1.3e-6 on 4 oversubscribed ranks, varying from run to run).
 fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
     let text = small_brake_scene(
         100,
@@ -1158,7 +1162,8 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
         return Ok(());
     };
     let mut report = Vec::new();
-    for (k, (name, bound)) in [("torque", 1e-6), ("pad velocity", 1e-6)]
+    let velocity_bound = 2.0 * 1e-8 * 100.0;
+    for (k, (name, bound)) in [("torque", 1e-6), ("pad velocity", velocity_bound)]
         .iter()
         .enumerate()
     {
