@@ -71,6 +71,10 @@ pub struct PostSettings {
     /// amplitude (needs no transient; compared with it when there is one).
     #[serde(default)]
     pub pseudo_trajectory: Option<crate::post::pseudo_trajectory::PseudoTrajectorySettings>,
+    /// Radiated sound power (ERP) and levels of the pseudo trajectories' modes at alpha_sat
+    /// and of the transient's last cycles (DESIGN.md §2c).
+    #[serde(default)]
+    pub loudness: Option<crate::post::loudness::LoudnessSettings>,
 }
 
 impl PostSettings {
@@ -483,6 +487,15 @@ impl Scene {
             }
             if let Some(cc) = &post.contact_cycle {
                 cc.validate()?;
+            }
+            if let Some(l) = &post.loudness {
+                l.validate()?;
+                if post.pseudo_trajectory.is_none() && self.transient.is_none() {
+                    return Err(InvalidSetting::new("post.loudness", ": levels are of the pseudo trajectories' modes (at their alpha_sat) and of a transient's stored states: add [post.pseudo_trajectory] or a [transient] with state_interval > 0"));
+                }
+                if self.statics.is_none() || self.real_modes.is_none() {
+                    return Err(InvalidSetting::new("post.loudness", ": radiates the preloaded model's vibration: it needs [statics] and [real_modes]"));
+                }
             }
             let stored = self.transient.as_ref().map_or(0.0, |t| t.state_interval);
             if post.uses_states() && stored <= 0.0 {

@@ -11,6 +11,7 @@ use crate::post::limit_cycle::LimitCycle;
 use crate::post::states::StoredStates;
 use crate::scene::Scene;
 use crate::stages::link::{self, LinearizationSettings, Link, Nominal};
+use crate::stages::loudness::{self, LoudnessReport, StoredRun};
 use crate::stages::post::LimitCycleReport;
 use crate::stages::pseudo::{self, PseudoReport};
 use crate::stages::transient::Trajectory;
@@ -26,6 +27,17 @@ pub(super) struct AfterTransient<'a, 'p> {
     /// default settings (the analyses need the run's period).
     cycle: Option<std::borrow::Cow<'a, LimitCycle>>,
     stream: PathBuf,
+    /// The mesh and DOF map the radiating surfaces live on.
+    mesh: Option<&'a crate::mesh::Mesh>,
+    dofs: Option<&'a crate::fem::dofmap::DofMap>,
+}
+
+/// What the analyses after the transient found; each failure is kept for after the results
+/// are written.
+pub(super) struct After {
+    pub link: Result<Link, RunError>,
+    pub pseudo: Result<Option<PseudoReport>, RunError>,
+    pub loudness: Result<Option<LoudnessReport>, RunError>,
 }
 
 pub(super) fn after_transient<'a, 'p>(
@@ -55,6 +67,8 @@ pub(super) fn after_transient<'a, 'p>(
         trajectory,
         cycle,
         stream: output.join("transient.h5"),
+        mesh: a.model.as_ref().map(|m| &m.mesh),
+        dofs: a.ops.dofs.as_ref(),
     }
 }
 
@@ -63,20 +77,16 @@ impl AfterTransient<'_, '_> {
     /// results are written.
     ///
     /// # Collective
-    pub fn run(
-        &self,
-        timings: &mut Timings,
-    ) -> (
-        Result<Link, RunError>,
-        Result<Option<PseudoReport>, RunError>,
-    ) {
+    pub fn run(&self, timings: &mut Timings) -> After {
         let post = self.scene.post.as_ref();
         let wants_link = post.is_some_and(|p| p.uses_states()) && self.trajectory.is_some();
         let stored = self
             .trajectory
             .is_some_and(|t| t.state_interval > 0.0 && self.scene.transient.is_some());
         let wants_pseudo = post.is_some_and(|p| p.pseudo_trajectory.is_some());
-        let opened = match (wants_link || (wants_pseudo && stored), self.nominal) {
+        let wants_loudness = post.is_some_and(|p| p.loudness.is_some());
+        let compared = (wants_pseudo || wants_loudness) && stored;
+        let opened = match (wants_link || compared, self.nominal) {
             (true, Some(_)) => Some(self.open_states()),
             _ => None,
         };
@@ -91,11 +101,19 @@ impl AfterTransient<'_, '_> {
             (Some(s), true) => self.link(s, timings),
             (None, true) => failure.take().map_or(Ok(Link::default()), Err),
         };
-        let pseudo = match failure {
+        let pseudo = match failure.take() {
             Some(e) => Err(e),
             None => self.pseudo(states.as_ref().filter(|_| stored), timings),
         };
-        (link, pseudo)
+        let loudness = match &pseudo {
+            Err(_) => Ok(None),
+            Ok(p) => self.loudness(p.as_ref(), states.as_ref().filter(|_| stored), timings),
+        };
+        After {
+            link,
+            pseudo,
+            loudness,
+        }
     }
 
     /// # Collective
@@ -165,6 +183,32 @@ impl AfterTransient<'_, '_> {
         timings
             .stage("pseudo trajectories", || {
                 pseudo::pseudo_trajectories(self.petsc, nominal, lin, settings, comparison)
+            })
+            .map(Some)
+    }
+
+    /// # Collective
+    fn loudness(
+        &self,
+        pseudo: Option<&PseudoReport>,
+        states: Option<&StoredStates>,
+        timings: &mut Timings,
+    ) -> Result<Option<LoudnessReport>, RunError> {
+        let Some(settings) = self.scene.post.as_ref().and_then(|p| p.loudness.as_ref()) else {
+            return Ok(None);
+        };
+        let (Some(nominal), Some(mesh), Some(dofs)) = (self.nominal, self.mesh, self.dofs) else {
+            let message = "needs a mesh model, [statics] and [real_modes]";
+            return Err(RunError::scene("post.loudness", message));
+        };
+        let run = match (states, &self.cycle) {
+            (Some(states), Some(cycle)) => Some(StoredRun { states, cycle }),
+            _ => None,
+        };
+        timings
+            .stage("loudness", || {
+                let radiator = loudness::radiator(self.petsc, mesh, dofs, settings)?;
+                loudness::loudness(self.petsc, &radiator, settings, nominal, pseudo, run)
             })
             .map(Some)
     }

@@ -120,7 +120,8 @@ pub fn run_with(
         _ => None,
     };
     let after = after_transient(petsc, scene, &a, trajectory.as_ref(), &limit_cycle, output);
-    let (link, pseudo) = after.run(&mut timings);
+    let after = after.run(&mut timings);
+    let (link, pseudo, loudness) = (after.link, after.pseudo, after.loudness);
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         let signals = &t.signals;
@@ -141,6 +142,9 @@ pub fn run_with(
     if let Ok(Some(p)) = &pseudo {
         checked(report::pseudo::write_pseudo(petsc, &file, p, output))?;
     }
+    if let Ok(Some(l)) = &loudness {
+        checked(report::loudness::write_loudness(petsc, &file, l, output))?;
+    }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         let shapes = link
             .as_ref()
@@ -156,6 +160,7 @@ pub fn run_with(
     // Reported after the results are written: the steps before the failure are kept.
     let link = link?;
     let pseudo = pseudo?;
+    let loudness = loudness?;
     let signals = trajectory.map(|t| {
         failure = failure.take().or(t.failure.map(RunError::Time));
         t.signals
@@ -166,6 +171,7 @@ pub fn run_with(
     summary.limit_cycle = limit_cycle;
     summary.link = link;
     summary.pseudo = pseudo;
+    summary.loudness = loudness;
     summary.failure = failure.as_ref().map(ToString::to_string);
     write_report(petsc, &summary, scene_text, output)?;
     match failure {

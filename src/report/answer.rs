@@ -105,6 +105,9 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
             ));
         }
     }
+    if let Some(l) = &s.loudness {
+        lines.push(how_loud(l));
+    }
     if lines.is_empty() && !s.frequencies_hz.is_empty() {
         let (lo, hi) = (
             s.frequencies_hz[0],
@@ -120,4 +123,51 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
         s.output.join("report.html").display()
     ));
     lines
+}
+
+/// "how loud": the modes ranked by L_W(A) at alpha_sat (else per 1 um), the transient's level
+/// and loudest band, and predicted against transient.
+fn how_loud(l: &crate::stages::loudness::LoudnessReport) -> String {
+    use crate::post::loudness::power_level;
+    let named: Vec<String> = l
+        .modes
+        .iter()
+        .take(NAMED)
+        .map(|m| match m.power_at_sat {
+            Some(_) => format!(
+                "{} {:.1} Hz {:.1} dB(A) at alpha_sat",
+                m.name,
+                m.frequency_hz,
+                m.level_a()
+            ),
+            None => format!(
+                "{} {:.1} Hz {:.1} dB(A) per 1 um (no alpha_sat)",
+                m.name,
+                m.frequency_hz,
+                m.level_a()
+            ),
+        })
+        .collect();
+    let mut line = String::from("how loud (sound power, ERP)");
+    if !named.is_empty() {
+        line += &format!(": {}", named.join("; "));
+    }
+    if let Some(t) = &l.transient {
+        let band = t.dominant_band().map_or(String::new(), |(b, _)| {
+            format!(", loudest band {} Hz", b.nominal)
+        });
+        line += &format!(
+            "; the transient's last cycles {:.1} dB(A) (L_W {:.1} dB{band})",
+            t.level_a(),
+            power_level(t.mean_power)
+        );
+        if let Some(m) = l.modes.iter().find(|m| m.power_at_sat.is_some()) {
+            line += &format!(
+                "; predicted ({}) minus transient {:+.1} dB(A)",
+                m.name,
+                m.level_a() - t.level_a()
+            );
+        }
+    }
+    line
 }

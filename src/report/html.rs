@@ -21,7 +21,7 @@ pub struct Section {
 }
 
 /// The report's section anchors, in order (tests compare them with the stages that ran).
-pub const SECTION_IDS: [&str; 14] = [
+pub const SECTION_IDS: [&str; 15] = [
     "answer",
     "model",
     "static-state",
@@ -34,6 +34,7 @@ pub const SECTION_IDS: [&str; 14] = [
     "contact-cycle",
     "dynamic-stability",
     "pseudo-trajectories",
+    "how-loud",
     "run",
     "scene",
 ];
@@ -226,6 +227,19 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
             "Pseudo trajectories: predicted saturation",
             body,
         );
+    }
+    if let Some(l) = &s.loudness {
+        let mut body = String::new();
+        if !l.modes.is_empty() {
+            let caption = "Radiated sound power level (A-weighted) of each unstable mode at its predicted saturation amplitude and at 1 um of contact amplitude.";
+            body += &figure(output, "loudness_modes.png", caption)?;
+        }
+        if l.transient.is_some() {
+            let caption = "The transient's last cycles: radiated power in 1/3-octave bands.";
+            body += &figure(output, "loudness_bands.png", caption)?;
+        }
+        body += &text(s, Part::Loudness);
+        add("how-loud", "How loud", body);
     }
     add("run", "Speed against accuracy", run_table(s));
     add(

@@ -7,6 +7,7 @@ pub mod answer;
 pub mod contact_map;
 pub mod html;
 pub mod link;
+pub mod loudness;
 pub mod modes;
 pub mod post;
 pub mod pseudo;

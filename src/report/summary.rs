@@ -49,6 +49,8 @@ pub struct RunSummary {
     pub link: crate::stages::link::Link,
     /// The pseudo trajectories, when `[post.pseudo_trajectory]` asked for them.
     pub pseudo: Option<crate::stages::pseudo::PseudoReport>,
+    /// Radiated sound power and levels, when `[post.loudness]` asked for them.
+    pub loudness: Option<crate::stages::loudness::LoudnessReport>,
     /// Why the run stopped early (the transient's error), when it did.
     pub failure: Option<String>,
 }
@@ -186,6 +188,7 @@ impl RunSummary {
             limit_cycle: None,
             link: Default::default(),
             pseudo: None,
+            loudness: None,
             failure: None,
         }
     }
@@ -389,11 +392,12 @@ pub enum Part {
     ContactCycle,
     DynamicStability,
     Pseudo,
+    Loudness,
     Timings,
 }
 
 impl Part {
-    pub const ALL: [Part; 12] = [
+    pub const ALL: [Part; 13] = [
         Part::Model,
         Part::Statics,
         Part::Modes,
@@ -405,6 +409,7 @@ impl Part {
         Part::ContactCycle,
         Part::DynamicStability,
         Part::Pseudo,
+        Part::Loudness,
         Part::Timings,
     ];
 }
@@ -430,6 +435,10 @@ impl fmt::Display for SummaryPart<'_> {
                 .pseudo
                 .as_ref()
                 .map_or(Ok(()), |p| super::text::fmt_pseudo(p, f)),
+            Part::Loudness => s
+                .loudness
+                .as_ref()
+                .map_or(Ok(()), |l| super::text::fmt_loudness(l, f)),
             Part::Timings => s.fmt_timings(f),
         }
     }

@@ -248,3 +248,74 @@ pub fn fmt_pseudo(r: &PseudoReport, f: &mut std::fmt::Formatter<'_>) -> std::fmt
     }
     Ok(())
 }
+
+/// The loudness section: per mode (loudest first) L_W and L_W(A) at alpha_sat and per 1 um,
+/// microphones, the transient's last cycles.
+pub fn fmt_loudness(
+    r: &crate::stages::loudness::LoudnessReport,
+    f: &mut std::fmt::Formatter<'_>,
+) -> std::fmt::Result {
+    use crate::post::loudness::{a_weighting, power_level};
+    writeln!(
+        f,
+        "how loud: equivalent radiated power (radiation efficiency 1) of the exterior of {} ({} faces, {:.4e} m^2; air {} kg/m^3, {} m/s)",
+        r.components.join(", "),
+        r.faces,
+        r.area,
+        r.density,
+        r.sound_speed
+    )?;
+    for m in &r.modes {
+        let a = a_weighting(m.frequency_hz);
+        let per_unit = power_level(m.power_per_unit);
+        write!(
+            f,
+            "    {:<5} {:8.1} Hz  Re(s) {:7.1} 1/s  at 1 um: L_W {:6.1} dB, L_W(A) {:6.1} dB(A)",
+            m.name,
+            m.frequency_hz,
+            m.growth,
+            per_unit,
+            per_unit + a
+        )?;
+        match (m.alpha_sat, m.power_at_sat) {
+            (Some(alpha), Some(p)) => write!(
+                f,
+                "; at alpha_sat {:.3e} m: {:.3e} W, L_W {:.1} dB, L_W(A) {:.1} dB(A)",
+                alpha,
+                p,
+                power_level(p),
+                power_level(p) + a
+            )?,
+            _ => write!(f, "; no alpha_sat found (ranked per unit amplitude)")?,
+        }
+        for (name, unit, sat) in &m.microphones {
+            write!(f, "; at {name}: {unit:.1} dB per 1 um")?;
+            if let Some(l) = sat {
+                write!(f, ", {l:.1} dB at alpha_sat")?;
+            }
+        }
+        writeln!(f)?;
+    }
+    if let Some(t) = &r.transient {
+        write!(
+            f,
+            "    transient, last cycles [{:.4e}, {:.4e}] s ({} stored states): mean ERP {:.3e} W, L_W {:.1} dB, L_W(A) {:.1} dB(A)",
+            t.window.0,
+            t.window.1,
+            t.states,
+            t.mean_power,
+            power_level(t.mean_power),
+            t.level_a()
+        )?;
+        if let Some((band, p)) = t.dominant_band() {
+            write!(
+                f,
+                "; loudest 1/3-octave band {} Hz ({:.1} dB)",
+                band.nominal,
+                power_level(*p)
+            )?;
+        }
+        writeln!(f)?;
+    }
+    Ok(())
+}

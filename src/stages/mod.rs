@@ -12,6 +12,7 @@
 
 pub mod complex;
 pub mod link;
+pub mod loudness;
 pub mod model;
 pub mod modes;
 pub mod operators;

@@ -388,7 +388,32 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     if worst.is_nan() || worst >= 1e-9 {
         return Err(format!("alpha -> 0 on the brake: {worst:e} from C35"));
     }
-    let coarse = run_brake(petsc, "pseudo-coarse", "alphas = 9\nphases = 16\n")?;
+    // With the levels of C35 (DESIGN.md §2c) at a microphone 0.5 m in front of the disc.
+    let coarse = run_brake(
+        petsc,
+        "pseudo-coarse",
+        "alphas = 9\nphases = 16\n[post.loudness]\nmicrophones = { front = [0.0, 0.0, 0.5] }\n",
+    )?;
+    let loud = coarse.loudness.as_ref().ok_or("no loudness")?;
+    let c35 = loud.modes.first().ok_or("no level of C35")?;
+    let mic = c35.microphones.first().map(|m| m.1).unwrap_or(f64::NAN);
+    say(
+        petsc,
+        &format!(
+            "brake C35 radiates {:.3e} W at 1 um of contact amplitude ({:.4e} m^2 of disc and backplates), {:.3e} W at alpha_sat; {mic:.1} dB at the front microphone per 1 um",
+            c35.power_per_unit,
+            loud.area,
+            c35.power_at_sat.unwrap_or(f64::NAN)
+        ),
+    );
+    if !(c35.power_per_unit > 0.0 && c35.power_per_unit.is_finite() && mic.is_finite()) {
+        return Err(format!("C35's levels: {c35:?}"));
+    }
+    let levels = vec![
+        c35.power_per_unit,
+        c35.power_at_sat.unwrap_or(f64::NAN),
+        mic,
+    ];
     let p = coarse.pseudo.as_ref().ok_or("no pseudo trajectories")?;
     let t = &p.studies.first().ok_or("no study")?.trajectory;
     let (Some(crit), Some(sat)) = (t.alpha_crit.alpha(), t.alpha_sat.alpha()) else {
@@ -409,9 +434,13 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     }
     let mut values = vec![crit, sat];
     values.extend(t.sweep.iter().map(|p| p.mean_damping_ratio));
-    let Some(one) = super::common::one_rank_values(petsc, "pseudo-brake", &values)? else {
+    let swept = values.len();
+    values.extend(&levels);
+    let Some(all) = super::common::one_rank_values(petsc, "pseudo-brake", &values)? else {
         return Ok(());
     };
+    let (one, one_levels) = all.split_at(swept);
+    let values = &values[..swept];
     let zeta = super::common::max_scaled_difference(&one[2..], &values[2..]);
     let amplitudes = (0..2)
         .map(|k| (one[k] - values[k]).abs() / one[k])
@@ -426,6 +455,20 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
     );
     if diff.is_nan() || diff > 1e-6 {
         return Err(format!("2 ranks differ from 1 by {diff:e}"));
+    }
+    // The levels: the power per unit amplitude is a sum over the ranks' points (round-off,
+    // asserted 1e-10); at alpha_sat it carries alpha_sat's 1e-6 twice; the microphone level
+    // in dB to 1e-6 dB.
+    let relative = |k: usize| (one_levels[k] - levels[k]).abs() / one_levels[k].abs();
+    let (unit, sat, db) = (relative(0), relative(1), (one_levels[2] - levels[2]).abs());
+    say(
+        petsc,
+        &format!("C35's power per 1 um {unit:.1e}, at alpha_sat {sat:.1e} (relative), microphone {db:.1e} dB, {} ranks vs 1", petsc.size()),
+    );
+    if !(unit <= 1e-10 && sat <= 3e-6 && db <= 1e-6) {
+        return Err(format!(
+            "loudness on 2 ranks differs from 1: {unit:e}, {sat:e}, {db:e} dB"
+        ));
     }
     Ok(())
 }

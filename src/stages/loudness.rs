@@ -1,0 +1,356 @@
+//! Stage 11: how loud (DESIGN.md §2c). The radiating surfaces (the exterior faces of the
+//! components the scene names; default the disc and the pads' backplates) observed by a
+//! distributed normal-velocity matrix N (rows: face quadrature points, split evenly over the
+//! ranks), then the equivalent radiated power of every unstable mode the pseudo trajectories
+//! followed (at 1 um of contact amplitude and at its predicted alpha_sat) and of the
+//! transient's stored states (over time, and in 1/3-octave bands over its last cycles), with
+//! the sound pressure at the scene's microphones by the Rayleigh integral.
+
+use std::collections::BTreeMap;
+
+use super::link::{period_of, Nominal};
+use super::pseudo::PseudoReport;
+use super::RunError;
+use crate::eigen::complex_modes::expand;
+use crate::fem::dofmap::DofMap;
+use crate::invalid::InvalidSetting;
+use crate::la::{LaError, ObservationMatrix, Petsc, Vector};
+use crate::mesh::Mesh;
+use crate::post::limit_cycle::LimitCycle;
+use crate::post::loudness::{
+    a_weighting, band_powers, erp_harmonic, erp_instant, exterior_faces, power_level,
+    pressure_level, radiating_points, rayleigh_pressure, Band, LoudnessSettings, RadiatingPoint,
+};
+use crate::post::states::{Lift, StoredStates};
+
+/// Contact amplitude of the per-amplitude levels (m): 1 um.
+pub const UNIT_AMPLITUDE: f64 = 1e-6;
+
+/// The radiating surfaces with this rank's share of their quadrature points.
+pub struct Radiator<'p> {
+    pub components: Vec<String>,
+    /// Faces and quadrature points over all ranks, and the radiating area (m^2).
+    pub faces: usize,
+    pub points: usize,
+    pub area: f64,
+    /// This rank's points (rows of N).
+    local: Vec<RadiatingPoint>,
+    weights: Vec<f64>,
+    normal: ObservationMatrix<'p>,
+}
+
+/// The radiating surfaces of `settings` on the mesh.
+///
+/// # Collective
+pub fn radiator<'p>(
+    petsc: &'p Petsc,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    settings: &LoudnessSettings,
+) -> Result<Radiator<'p>, RunError> {
+    let names: Vec<String> = match &settings.components {
+        Some(names) => names.clone(),
+        None => ["disc", "inner_backplate", "outer_backplate"]
+            .iter()
+            .filter(|n| mesh.blocks.iter().any(|b| b.name == **n))
+            .map(|n| n.to_string())
+            .collect(),
+    };
+    let mut blocks = Vec::new();
+    for name in &names {
+        let found: Vec<usize> = (0..mesh.blocks.len())
+            .filter(|&b| mesh.blocks[b].name == *name)
+            .collect();
+        if found.is_empty() {
+            let have: Vec<&str> = mesh.blocks.iter().map(|b| b.name.as_str()).collect();
+            let detail = format!(
+                ": '{name}' is not a component of the model (it has: {})",
+                have.join(", ")
+            );
+            return Err(InvalidSetting::new("post.loudness.components", detail).into());
+        }
+        blocks.extend(found);
+    }
+    if blocks.is_empty() {
+        let detail = ": no radiating component (the model has no disc or backplate); name them";
+        return Err(InvalidSetting::new("post.loudness.components", detail).into());
+    }
+    let faces = exterior_faces(mesh, &blocks);
+    let all = radiating_points(mesh, &faces, settings.quadrature);
+    let area = all.iter().map(|p| p.weight).sum();
+    let (ranks, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let first_of = |r: usize| r * all.len() / ranks;
+    let (first, last) = (first_of(rank), first_of(rank + 1));
+    let local: Vec<RadiatingPoint> = all[first..last].to_vec();
+    let rows: Vec<Vec<(i32, f64)>> = local
+        .iter()
+        .map(|p| {
+            let mut row = Vec::with_capacity(3 * p.nodes.len());
+            for (&node, &n) in p.nodes.iter().zip(&p.shape) {
+                for c in 0..3 {
+                    row.push((dofs.node_dofs[node][c], n * p.normal[c]));
+                }
+            }
+            row
+        })
+        .collect();
+    let normal = ObservationMatrix::from_rows(petsc, first, &rows, dofs.owned_dofs())?;
+    Ok(Radiator {
+        components: names,
+        faces: faces.len(),
+        points: all.len(),
+        area,
+        weights: local.iter().map(|p| p.weight).collect(),
+        local,
+        normal,
+    })
+}
+
+impl<'p> Radiator<'p> {
+    /// N v: the normal velocity at this rank's points.
+    ///
+    /// # Collective
+    fn normal_velocity(&self, v: &Vector<'p>) -> Result<Vec<f64>, LaError> {
+        let mut y = self.normal.new_point_vector()?;
+        self.normal.mult(v, &mut y)?;
+        let out = y.local()?.to_vec();
+        Ok(out)
+    }
+}
+
+/// A mode's levels: its radiated power (W) per 1 um of contact amplitude and at its predicted
+/// saturation amplitude, and the pressure levels at the microphones.
+#[derive(Debug, Clone)]
+pub struct ModeLoudness {
+    pub name: String,
+    pub frequency_hz: f64,
+    /// Re(s) of the mode at the static state (1/s).
+    pub growth: f64,
+    pub alpha_sat: Option<f64>,
+    pub power_per_unit: f64,
+    pub power_at_sat: Option<f64>,
+    /// Per microphone: name, pressure level (dB re 20 uPa) per unit amplitude and at alpha_sat.
+    pub microphones: Vec<(String, f64, Option<f64>)>,
+}
+
+impl ModeLoudness {
+    /// L_W(A) at alpha_sat, else per unit amplitude (dB).
+    pub fn level_a(&self) -> f64 {
+        power_level(self.power_at_sat.unwrap_or(self.power_per_unit))
+            + a_weighting(self.frequency_hz)
+    }
+}
+
+/// The transient's radiated power.
+#[derive(Debug, Clone)]
+pub struct TransientLoudness {
+    /// ERP at stored states (s, W).
+    pub times: Vec<f64>,
+    pub power: Vec<f64>,
+    /// The window of the last cycles, their mean power and its 1/3-octave bands.
+    pub window: (f64, f64),
+    pub states: usize,
+    pub mean_power: f64,
+    pub bands: Vec<(Band, f64)>,
+}
+
+impl TransientLoudness {
+    /// L_W(A) of the last cycles from the bands (dB).
+    pub fn level_a(&self) -> f64 {
+        let total: f64 = self
+            .bands
+            .iter()
+            .map(|(b, p)| p * 10f64.powf(a_weighting(b.centre) / 10.0))
+            .sum();
+        power_level(total)
+    }
+
+    /// The band that carries the most power.
+    pub fn dominant_band(&self) -> Option<&(Band, f64)> {
+        self.bands.iter().max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+}
+
+/// What the loudness stage found.
+pub struct LoudnessReport {
+    pub components: Vec<String>,
+    pub faces: usize,
+    pub points: usize,
+    pub area: f64,
+    pub density: f64,
+    pub sound_speed: f64,
+    /// Unstable modes, loudest (L_W(A)) first.
+    pub modes: Vec<ModeLoudness>,
+    pub transient: Option<TransientLoudness>,
+}
+
+/// The transient's stored states and what places its last cycles.
+pub struct StoredRun<'a, 's> {
+    pub states: &'a StoredStates<'s>,
+    pub cycle: &'a LimitCycle,
+}
+
+/// The levels of the pseudo trajectories' modes and of the transient.
+///
+/// # Collective
+pub fn loudness<'p>(
+    petsc: &'p Petsc,
+    radiator: &Radiator<'p>,
+    settings: &LoudnessSettings,
+    nominal: Nominal<'_, 'p>,
+    pseudo: Option<&PseudoReport>,
+    run: Option<StoredRun>,
+) -> Result<LoudnessReport, RunError> {
+    let mut modes = Vec::new();
+    for study in pseudo.map_or(&[][..], |p| &p.studies) {
+        modes.push(mode_loudness(
+            petsc,
+            radiator,
+            settings,
+            nominal,
+            &study.trajectory,
+        )?);
+    }
+    modes.sort_by(|a, b| b.level_a().total_cmp(&a.level_a()));
+    let transient = match run {
+        Some(run) => Some(transient_loudness(petsc, radiator, settings, nominal, run)?),
+        None => None,
+    };
+    Ok(LoudnessReport {
+        components: radiator.components.clone(),
+        faces: radiator.faces,
+        points: radiator.points,
+        area: radiator.area,
+        density: settings.density,
+        sound_speed: settings.sound_speed,
+        modes,
+        transient,
+    })
+}
+
+/// # Collective
+fn mode_loudness<'p>(
+    petsc: &'p Petsc,
+    radiator: &Radiator<'p>,
+    settings: &LoudnessSettings,
+    nominal: Nominal<'_, 'p>,
+    trajectory: &crate::post::pseudo_trajectory::PseudoTrajectory,
+) -> Result<ModeLoudness, RunError> {
+    let comm = petsc.world();
+    let air = settings.air();
+    // psi has contact amplitude 1 (m per m): at amplitude alpha the velocity is
+    // i omega alpha psi; its normal component at the points, per unit alpha.
+    let (xr, xi) = expand(&nominal.modes.shapes, &trajectory.psi)?;
+    let (nr, ni) = (
+        radiator.normal_velocity(&xr)?,
+        radiator.normal_velocity(&xi)?,
+    );
+    let omega = trajectory.nominal.1;
+    let per_alpha: Vec<(f64, f64)> = nr
+        .iter()
+        .zip(&ni)
+        .map(|(r, i)| (-omega * i, omega * r))
+        .collect();
+    let mut erp = [erp_harmonic(&air, &radiator.weights, &per_alpha)];
+    crate::parallel::sum_in_place(comm, &mut erp);
+    let alpha_sat = trajectory.alpha_sat.alpha();
+    let mut microphones = Vec::new();
+    for (name, at) in &settings.microphones {
+        let p = rayleigh_pressure(&air, &radiator.local, &per_alpha, omega, *at);
+        let mut sum = [p.0, p.1];
+        crate::parallel::sum_in_place(comm, &mut sum);
+        let amplitude = sum[0].hypot(sum[1]);
+        microphones.push((
+            name.clone(),
+            pressure_level(amplitude * UNIT_AMPLITUDE),
+            alpha_sat.map(|a| pressure_level(amplitude * a)),
+        ));
+    }
+    Ok(ModeLoudness {
+        name: trajectory.name.clone(),
+        frequency_hz: omega / (2.0 * std::f64::consts::PI),
+        growth: trajectory.nominal.0,
+        alpha_sat,
+        power_per_unit: erp[0] * UNIT_AMPLITUDE * UNIT_AMPLITUDE,
+        power_at_sat: alpha_sat.map(|a| erp[0] * a * a),
+        microphones,
+    })
+}
+
+/// The ERP at the stored states (at most ~400 over the run, every state of the window), and
+/// the bands of the last `settings.cycles` periods.
+///
+/// # Collective
+fn transient_loudness<'p>(
+    petsc: &'p Petsc,
+    radiator: &Radiator<'p>,
+    settings: &LoudnessSettings,
+    nominal: Nominal<'_, 'p>,
+    run: StoredRun,
+) -> Result<TransientLoudness, RunError> {
+    let comm = petsc.world();
+    let air = settings.air();
+    let states = run.states;
+    let end = states.window_end(&run.cycle.cycle_starts);
+    let from = end - settings.cycles as f64 * period_of(run.cycle);
+    let window = states.between(from, end);
+    let stride = states.len().div_ceil(400).max(1);
+    let mut chosen: BTreeMap<usize, bool> = (0..states.len())
+        .step_by(stride)
+        .map(|i| (i, false))
+        .collect();
+    for &i in &window {
+        chosen.insert(i, true);
+    }
+    let at = nominal.contact_at(petsc);
+    let mut x = at.state_template.duplicate()?;
+    let mut xv = at.state_template.duplicate()?;
+    let mut v = at.full_template.duplicate()?;
+    let (mut times, mut power) = (Vec::new(), Vec::new());
+    let mut series: Vec<Vec<f64>> = vec![Vec::with_capacity(window.len()); radiator.weights.len()];
+    for (&i, &in_window) in &chosen {
+        states.read(i, &mut x, &mut xv)?;
+        let velocity = match at.lift {
+            Lift::Full => &xv,
+            Lift::Reduced(r) => {
+                r.recover(petsc, &xv, &mut v)?;
+                &v
+            }
+        };
+        let vn = radiator.normal_velocity(velocity)?;
+        let mut erp = [erp_instant(&air, &radiator.weights, &vn)];
+        crate::parallel::sum_in_place(comm, &mut erp);
+        times.push(states.times[i]);
+        power.push(erp[0]);
+        if in_window {
+            for (s, value) in series.iter_mut().zip(&vn) {
+                s.push(*value);
+            }
+        }
+    }
+    let dt = match window.len() {
+        0 | 1 => f64::NAN,
+        n => (states.times[window[n - 1]] - states.times[window[0]]) / (n - 1) as f64,
+    };
+    let mut bands = band_powers(&air, &radiator.weights, &series, dt);
+    let mut sums: Vec<f64> = bands.iter().map(|b| b.1).collect();
+    crate::parallel::sum_in_place(comm, &mut sums);
+    for (b, s) in bands.iter_mut().zip(sums) {
+        b.1 = s;
+    }
+    let in_window: Vec<f64> = times
+        .iter()
+        .zip(&power)
+        .filter(|(t, _)| **t >= from && **t <= end)
+        .map(|(_, p)| *p)
+        .collect();
+    let mean_power = in_window.iter().sum::<f64>() / in_window.len().max(1) as f64;
+    Ok(TransientLoudness {
+        times,
+        power,
+        window: (from, end),
+        states: window.len(),
+        mean_power,
+        bands,
+    })
+}
