@@ -153,7 +153,7 @@ fn plot_modes(r: &LoudnessReport, output: &Path) -> Result<(), WriteError> {
     );
     for (k, m) in r.modes.iter().enumerate() {
         let x = k as f64;
-        for (offset, level, colour) in [(0.15, per_unit[k], BLUE), (0.5, at_sat[k], RED)] {
+        for (offset, level, colour) in [(0.12, per_unit[k], BLUE), (0.53, at_sat[k], RED)] {
             if level.is_finite() {
                 let (a, b) = (x + offset, x + offset + 0.35);
                 let base = lo.min(0.0);

@@ -107,6 +107,27 @@ pub fn radiator<'p>(
 }
 
 impl<'p> Radiator<'p> {
+    /// The mean radiated power (W) of the harmonic vibration q(t) = x cos(omega t) of a real
+    /// displacement shape `x` (full model).
+    ///
+    /// # Collective
+    pub fn harmonic_power(
+        &self,
+        petsc: &Petsc,
+        settings: &LoudnessSettings,
+        x: &Vector<'p>,
+        omega: f64,
+    ) -> Result<f64, LaError> {
+        let vn: Vec<(f64, f64)> = self
+            .normal_velocity(x)?
+            .iter()
+            .map(|v| (omega * v, 0.0))
+            .collect();
+        let mut erp = [erp_harmonic(&settings.air(), &self.weights, &vn)];
+        crate::parallel::sum_in_place(petsc.world(), &mut erp);
+        Ok(erp[0])
+    }
+
     /// N v: the normal velocity at this rank's points.
     ///
     /// # Collective

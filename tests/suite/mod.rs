@@ -7,6 +7,7 @@ pub mod convergence;
 pub mod dense_reference;
 pub mod growth;
 pub mod link;
+pub mod loudness;
 pub mod mode_coupling;
 pub mod parallel_and_solvers;
 pub mod pseudo_trajectory;
@@ -38,6 +39,7 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(stages::tests());
     v.extend(stick_slip::tests());
     v.extend(mode_coupling::tests());
+    v.extend(loudness::tests());
     v.extend(growth::tests());
     v.extend(link::tests());
     v.extend(pseudo_trajectory::tests());

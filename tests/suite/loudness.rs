@@ -1,0 +1,173 @@
+//! The radiated power of a transient against the closed form of a mode vibrating alone.
+//!
+//! Reference: a real mode of the linearized model, started from rest at a displacement x,
+//! vibrates as q(t) = q_static + x cos(omega t); its normal velocity at the surface is
+//! -omega (N x) sin(omega t), so the instantaneous ERP rho0 c0 sum A v_n^2 has the time mean
+//! rho0 c0 sum A (omega N x)^2 / 2, the ERP of the harmonic amplitude omega x (DESIGN.md
+//! §2c). The transient (reduced model, recovered to the full one at every stored state) must
+//! give that mean over whole periods.
+
+use std::path::Path;
+
+use squeal::io::series::{Hdf5Storage, SeriesFile};
+use squeal::la::Petsc;
+use squeal::post::limit_cycle::LimitCycle;
+use squeal::post::loudness::LoudnessSettings;
+use squeal::post::states::StoredStates;
+use squeal::scene::Scene;
+use squeal::stages::{self, loudness, RunError, Timings};
+use squeal::time::transient::{TransientFiles, TransientSettings};
+
+use super::common::{say, suite_dir};
+
+pub fn tests() -> Vec<super::NamedTest> {
+    vec![(
+        "transient_erp_of_one_real_mode_equals_its_modal_erp",
+        single_mode_erp,
+    )]
+}
+
+/// The small brake without friction anywhere, the disc at rest, preloaded, 40 real modes,
+/// reduced; the transient starts at 1 nm along one mode between 2 and 3 kHz and runs 20 of
+/// its periods without damping. Friction is out because a real mode is then not a mode of
+/// the transient's tangent: the pads' regularized Coulomb law damps their tangential motion
+/// viscously (measured: 0.44 of the closed form), and the joints' stick traction couples
+/// with the gap (unsymmetric, left out of the real modes; measured 5.9 % off, the ERP's peak
+/// 2.45 times its mean where one mode alone gives 2).
+///
+/// Bound: the window holds whole periods of the mode only up to the stored states' spacing,
+/// and the mean of cos^2 over T_w differs from 1/2 by at most 1 / (2 omega T_w) relative;
+/// Newmark's period elongation changes omega by (omega h)^2 / 12, the power by twice that;
+/// the contact laws at 1 nm of a 5 um gap scale are linear to 2e-4. Sum asserted (measured
+/// value printed).
+fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
+    let e = |e: RunError| e.to_string();
+    let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
+                [contact]\ndisc_speed = 0.0\n\
+                [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
+                friction = { law = \"coulomb\", mu = 0.0, slip_speed = 1.0e-3 }\n\
+                [contact.sticking]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
+                friction = { law = \"none\" }\n\
+                [statics]\n[real_modes]\ncount = 40\n[reduction]\n";
+    let scene = Scene::parse(text, "loudness test").map_err(|e| e.to_string())?;
+    let mut timings = Timings::default();
+    let (model, _, ops) =
+        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings).map_err(e)?;
+    let model = model.ok_or("a brake model")?;
+    let statics = scene.statics.as_ref().ok_or("[statics]")?;
+    let contact = scene.contact.clone().unwrap_or_default();
+    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
+        .map_err(e)?;
+    let request = scene.real_modes.clone().ok_or("[real_modes]")?;
+    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
+    let reduction = scene.reduction.clone().ok_or("[reduction]")?;
+    let reduced = stages::reduce::reduce(petsc, &reduction, &model, &ops, &preload, &modes)
+        .map_err(|e| e.to_string())?;
+    let (index, f) = modes
+        .frequencies_hz
+        .iter()
+        .enumerate()
+        .find(|(_, f)| (2000.0..3000.0).contains(*f))
+        .ok_or("no real mode between 2 and 3 kHz")?;
+    let h = 2e-6;
+    let periods = 20.0;
+    let steps = (periods / f / h).ceil() as usize + 10;
+    let transient: TransientSettings = toml::from_str(&format!(
+        "step = {h:e}\nsteps = {steps}\nstart = \"mode\"\nmode = {}\namplitude = 1.0e-9\n\
+         state_interval = 1.0e-5\ncheckpoint_every = 0\n",
+        index + 1
+    ))
+    .map_err(|e| e.to_string())?;
+    let dir = suite_dir().join(format!("loudness-mode-{}", petsc.size()));
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    squeal::parallel::barrier(petsc.world());
+    let storage = Hdf5Storage {
+        comm: petsc.world(),
+    };
+    let files = TransientFiles::in_directory(&storage, &dir, false);
+    let trajectory = stages::transient::transient(
+        petsc,
+        &transient,
+        &Default::default(),
+        Some(&model),
+        &ops,
+        &preload,
+        &modes,
+        Some(&reduced),
+        &files,
+    )
+    .map_err(e)?;
+    if let Some(failure) = trajectory.failure {
+        return Err(failure.to_string());
+    }
+    let file = SeriesFile::open(petsc.world(), &files.stream).map_err(|e| e.to_string())?;
+    let states =
+        StoredStates::new(Box::new(file), "transient.h5".into(), 2).map_err(|e| e.to_string())?;
+    let settings = LoudnessSettings {
+        cycles: periods as usize,
+        ..Default::default()
+    };
+    let mesh = &model.mesh;
+    let dofs = ops.dofs.as_ref().ok_or("a DOF map")?;
+    let radiator = loudness::radiator(petsc, mesh, dofs, &settings).map_err(e)?;
+    let nominal = stages::link::Nominal {
+        preload: &preload,
+        modes: &modes,
+        reduced: Some(&reduced),
+    };
+    // The closed form: the start state's displacement from the static state, x.
+    let at = nominal.contact_at(petsc);
+    let mut x0 = at.state_template.duplicate().map_err(|e| e.to_string())?;
+    let mut v0 = at.state_template.duplicate().map_err(|e| e.to_string())?;
+    states
+        .read(0, &mut x0, &mut v0)
+        .map_err(|e| e.to_string())?;
+    let mut x = preload
+        .state
+        .displacement
+        .duplicate()
+        .map_err(|e| e.to_string())?;
+    reduced
+        .model
+        .reduction
+        .recover(petsc, &x0, &mut x)
+        .map_err(|e| e.to_string())?;
+    x.axpy(-1.0, &preload.state.displacement)
+        .map_err(|e| e.to_string())?;
+    let omega = 2.0 * std::f64::consts::PI * f;
+    let expected = radiator
+        .harmonic_power(petsc, &settings, &x, omega)
+        .map_err(|e| e.to_string())?;
+    let cycle = LimitCycle {
+        period: Some(1.0 / f),
+        dominant_frequency: *f,
+        ..Default::default()
+    };
+    let run = loudness::StoredRun {
+        states: &states,
+        cycle: &cycle,
+    };
+    let report =
+        loudness::loudness(petsc, &radiator, &settings, nominal, None, Some(run)).map_err(e)?;
+    let t = report.transient.as_ref().ok_or("no transient level")?;
+    let error = (t.mean_power - expected).abs() / expected;
+    let peak = squeal::measure::largest(t.power.iter().copied()) / expected;
+    let window = t.window.1 - t.window.0;
+    let bound = 1.0 / (2.0 * omega * window) + (omega * h).powi(2) / 6.0 + 2e-4;
+    say(
+        petsc,
+        &format!(
+            "real mode {} ({f:.1} Hz) alone, {} stored states over {window:.3e} s: transient mean ERP {:.6e} W vs {expected:.6e} W closed form, relative {error:.1e} (bound {bound:.1e}); peak / mean {peak:.4} (2 for one mode)",
+            index + 1,
+            t.states,
+            t.mean_power
+        ),
+    );
+    if squeal::measure::exceeds(error, bound) {
+        return Err(format!(
+            "transient ERP {:e} W vs the mode's {expected:e} W: relative {error:e} > {bound:e}",
+            t.mean_power
+        ));
+    }
+    Ok(())
+}
