@@ -159,6 +159,10 @@ fn expected_sections(scene: &str) -> Vec<&'static str> {
                 .is_some(),
             "pseudo-trajectories",
         ),
+        (
+            v.get("post").and_then(|p| p.get("loudness")).is_some(),
+            "how-loud",
+        ),
     ] {
         if asked {
             out.push(id);

@@ -358,3 +358,62 @@ pub fn band_powers(air: &Air, weights: &[f64], series: &[Vec<f64>], dt: f64) -> 
     }
     bands.into_iter().zip(power).collect()
 }
+
+/// The sound pressure at `at` over time from normal velocities sampled every `dt` (one series
+/// per point), by the Rayleigh integral in the time domain, each face baffled:
+/// p(t) = sum rho0 A / (2 pi R) dv_n/dt (t - R / c0). Accelerations by central differences,
+/// retarded values by linear interpolation; the samples from index `first` on (every rank
+/// passes the same `first`, at least the largest delay over all points in samples plus 2).
+/// This rank's part.
+pub fn pressure_series(
+    air: &Air,
+    points: &[RadiatingPoint],
+    series: &[Vec<f64>],
+    dt: f64,
+    at: [f64; 3],
+    first: usize,
+) -> Vec<f64> {
+    let n = series.first().map_or(0, Vec::len);
+    let mut p = vec![0.0; n.saturating_sub(first + 1)];
+    for (point, v) in points.iter().zip(series) {
+        let r = [
+            at[0] - point.position[0],
+            at[1] - point.position[1],
+            at[2] - point.position[2],
+        ];
+        let distance = dot(r, r).sqrt();
+        let gain = air.density * point.weight / (2.0 * PI * distance);
+        let delay = distance / air.sound_speed / dt;
+        let acceleration = |i: usize| (v[i + 1] - v[i - 1]) / (2.0 * dt);
+        for (m, out) in p.iter_mut().enumerate() {
+            let t = (first + m) as f64 - delay;
+            let i = t.floor() as usize;
+            let frac = t - i as f64;
+            if i >= 1 && i + 2 < n {
+                *out += gain * ((1.0 - frac) * acceleration(i) + frac * acceleration(i + 1));
+            }
+        }
+    }
+    p
+}
+
+/// The level (dB re 20 uPa) of pressure samples every `dt`, and A-weighted (the one-sided
+/// spectrum of the samples weighted per bin; Parseval keeps the plain mean square).
+pub fn series_levels(p: &[f64], dt: f64) -> (f64, f64) {
+    let n = p.len();
+    let level = |ms: f64| 10.0 * (ms / (PRESSURE_REFERENCE * PRESSURE_REFERENCE)).log10();
+    if n < 2 {
+        return (f64::NAN, f64::NAN);
+    }
+    let mean = p.iter().sum::<f64>() / n as f64;
+    let centred: Vec<f64> = p.iter().map(|x| x - mean).collect();
+    let plain = centred.iter().map(|x| x * x).sum::<f64>() / n as f64;
+    let spectrum = super::spectrum::power_spectrum(&centred);
+    let mut weighted = 0.0;
+    for (k, s) in spectrum.iter().enumerate().skip(1) {
+        let twice = if 2 * k == n { 1.0 } else { 2.0 };
+        let f = k as f64 / (n as f64 * dt);
+        weighted += twice * s / (n as f64 * n as f64) * 10f64.powf(a_weighting(f) / 10.0);
+    }
+    (level(plain), level(weighted))
+}

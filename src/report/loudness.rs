@@ -110,6 +110,11 @@ pub fn write_loudness(
         file.set_number(&p, "window_end_s", t.window.1)?;
         file.set_number(&p, "mean_power_w", t.mean_power)?;
         file.set_number(&p, "level_a_db", t.level_a())?;
+        for (name, plain, weighted) in &t.microphones {
+            let m = format!("{p}/microphones/{name}");
+            file.set_number(&m, "level_db", *plain)?;
+            file.set_number(&m, "level_a_db", *weighted)?;
+        }
     }
     if petsc.rank() == 0 {
         if !r.modes.is_empty() {

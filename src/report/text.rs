@@ -315,6 +315,9 @@ pub fn fmt_loudness(
                 power_level(*p)
             )?;
         }
+        for (name, plain, weighted) in &t.microphones {
+            write!(f, "; at {name}: {plain:.1} dB, {weighted:.1} dB(A)")?;
+        }
         writeln!(f)?;
     }
     Ok(())

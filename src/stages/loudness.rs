@@ -19,7 +19,8 @@ use crate::mesh::Mesh;
 use crate::post::limit_cycle::LimitCycle;
 use crate::post::loudness::{
     a_weighting, band_powers, erp_harmonic, erp_instant, exterior_faces, power_level,
-    pressure_level, radiating_points, rayleigh_pressure, Band, LoudnessSettings, RadiatingPoint,
+    pressure_level, pressure_series, radiating_points, rayleigh_pressure, series_levels, Band,
+    LoudnessSettings, RadiatingPoint,
 };
 use crate::post::states::{Lift, StoredStates};
 
@@ -128,6 +129,29 @@ impl<'p> Radiator<'p> {
         Ok(erp[0])
     }
 
+    /// The sound pressure amplitude (Pa) at `at` of the harmonic vibration q(t) = x cos(omega t)
+    /// (Rayleigh integral).
+    ///
+    /// # Collective
+    pub fn harmonic_pressure(
+        &self,
+        petsc: &Petsc,
+        settings: &LoudnessSettings,
+        x: &Vector<'p>,
+        omega: f64,
+        at: [f64; 3],
+    ) -> Result<f64, LaError> {
+        let vn: Vec<(f64, f64)> = self
+            .normal_velocity(x)?
+            .iter()
+            .map(|v| (omega * v, 0.0))
+            .collect();
+        let p = rayleigh_pressure(&settings.air(), &self.local, &vn, omega, at);
+        let mut sum = [p.0, p.1];
+        crate::parallel::sum_in_place(petsc.world(), &mut sum);
+        Ok(sum[0].hypot(sum[1]))
+    }
+
     /// N v: the normal velocity at this rank's points.
     ///
     /// # Collective
@@ -173,6 +197,9 @@ pub struct TransientLoudness {
     pub states: usize,
     pub mean_power: f64,
     pub bands: Vec<(Band, f64)>,
+    /// Per microphone: name and the pressure level over the window (dB re 20 uPa), plain and
+    /// A-weighted (the Rayleigh integral in the time domain).
+    pub microphones: Vec<(String, f64, f64)>,
 }
 
 impl TransientLoudness {
@@ -354,6 +381,7 @@ fn transient_loudness<'p>(
         n => (states.times[window[n - 1]] - states.times[window[0]]) / (n - 1) as f64,
     };
     let mut bands = band_powers(&air, &radiator.weights, &series, dt);
+    let microphones = transient_microphones(petsc, radiator, settings, &series, dt);
     let mut sums: Vec<f64> = bands.iter().map(|b| b.1).collect();
     crate::parallel::sum_in_place(comm, &mut sums);
     for (b, s) in bands.iter_mut().zip(sums) {
@@ -373,5 +401,47 @@ fn transient_loudness<'p>(
         states: window.len(),
         mean_power,
         bands,
+        microphones,
     })
+}
+
+/// The microphones' levels over the window: the Rayleigh integral in the time domain (the
+/// retarded accelerations of every point, summed over the ranks), from the largest delay on.
+///
+/// # Collective
+fn transient_microphones(
+    petsc: &Petsc,
+    radiator: &Radiator,
+    settings: &LoudnessSettings,
+    series: &[Vec<f64>],
+    dt: f64,
+) -> Vec<(String, f64, f64)> {
+    let air = settings.air();
+    let comm = petsc.world();
+    settings
+        .microphones
+        .iter()
+        .map(|(name, at)| {
+            let local_delay = radiator
+                .local
+                .iter()
+                .map(|p| {
+                    let r = [
+                        at[0] - p.position[0],
+                        at[1] - p.position[1],
+                        at[2] - p.position[2],
+                    ];
+                    (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() / air.sound_speed
+                })
+                .fold(0.0, crate::measure::nan_max);
+            let delay = crate::parallel::max(comm, local_delay);
+            let first = (delay / dt).ceil() as usize + 2;
+            let mut p = pressure_series(&air, &radiator.local, series, dt, *at, first);
+            let length = crate::parallel::max(comm, p.len() as f64) as usize;
+            p.resize(length, 0.0);
+            crate::parallel::sum_in_place(comm, &mut p);
+            let (plain, weighted) = series_levels(&p, dt);
+            (name.clone(), plain, weighted)
+        })
+        .collect()
 }
