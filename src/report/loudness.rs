@@ -133,7 +133,8 @@ fn save(fig: &Figure, output: &Path, name: &str) -> Result<(), WriteError> {
         .map_err(|source| WriteError::Io { path, source })
 }
 
-/// loudness_modes.png: L_W(A) of every mode at alpha_sat (red) and per 1 um (blue), as bars.
+/// loudness_modes.png: L_W(A) of every mode against its frequency, as bars: at alpha_sat
+/// (red) and per 1 um of contact amplitude (blue), each labelled with the mode's name.
 fn plot_modes(r: &LoudnessReport, output: &Path) -> Result<(), WriteError> {
     let per_unit: Vec<f64> = r
         .modes
@@ -146,27 +147,38 @@ fn plot_modes(r: &LoudnessReport, output: &Path) -> Result<(), WriteError> {
         .map(|m| m.power_at_sat.map_or(f64::NAN, power_level) + a_weighting(m.frequency_hz))
         .collect();
     let (lo, hi) = finite_range(per_unit.iter().chain(&at_sat)).unwrap_or((0.0, 1.0));
-    let n = r.modes.len() as f64;
+    let frequencies: Vec<f64> = r.modes.iter().map(|m| m.frequency_hz).collect();
+    let (f_lo, f_hi) = finite_range(&frequencies).unwrap_or((0.0, 1.0));
+    // A span of at least 1 kHz, so a single mode's bars have a width to be seen.
+    let centre = 0.5 * (f_lo + f_hi);
+    let half = (0.5 * (f_hi - f_lo)).max(500.0) * 1.15;
+    let width = 0.02 * half;
+    let base = lo.min(0.0);
     let mut fig = Figure::new(
         1000,
         560,
-        (0.0, n),
-        padded(lo.min(0.0), hi, 0.08),
+        ((centre - half).max(0.0), centre + half),
+        padded(base, hi, 0.08),
         "radiated sound power of the unstable modes: at alpha_sat (red), at 1 um of contact amplitude (blue)",
-        "mode",
+        "mode frequency (Hz)",
         "L_W(A) (dB(A) re 1 pW)",
     );
     for (k, m) in r.modes.iter().enumerate() {
-        let x = k as f64;
-        for (offset, level, colour) in [(0.12, per_unit[k], BLUE), (0.53, at_sat[k], RED)] {
+        let f = m.frequency_hz;
+        for (a, b, level, colour) in [
+            (f - 2.0 * width, f - 0.2 * width, per_unit[k], BLUE),
+            (f + 0.2 * width, f + 2.0 * width, at_sat[k], RED),
+        ] {
             if level.is_finite() {
-                let (a, b) = (x + offset, x + offset + 0.35);
-                let base = lo.min(0.0);
                 fig.line(&[(a, base), (a, level), (b, level), (b, base)], colour);
             }
         }
-        let label = format!("{} {:.0} Hz", m.name, m.frequency_hz);
-        fig.label(x + 0.5, lo.min(0.0), &label, BLACK, true);
+        let top = if at_sat[k].is_finite() {
+            at_sat[k]
+        } else {
+            per_unit[k]
+        };
+        fig.label(f, top, &m.name, BLACK, false);
     }
     save(&fig, output, "loudness_modes.png")
 }
