@@ -504,22 +504,5 @@ impl RawMsh {
 
 /// The faces of the volume elements by their sorted corner nodes: (element, face 1-based).
 fn face_index(mesh: &Mesh) -> HashMap<Vec<usize>, (usize, u8)> {
-    let mut faces = HashMap::new();
-    let mut g = 0;
-    for block in &mesh.blocks {
-        let corners = if block.kind.faces() == 6 { 4 } else { 3 };
-        for e in 0..block.len() {
-            let nodes = block.element(e);
-            for f in 1..=block.kind.faces() {
-                let mut key: Vec<usize> = block.kind.face_local_nodes(f)[..corners]
-                    .iter()
-                    .map(|&i| nodes[i])
-                    .collect();
-                key.sort_unstable();
-                faces.insert(key, (g + e, f));
-            }
-        }
-        g += block.len();
-    }
-    faces
+    mesh.face_keys(|_| true).into_iter().collect()
 }

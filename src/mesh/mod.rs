@@ -113,6 +113,32 @@ impl Mesh {
             .collect()
     }
 
+    /// Every face of the elements of the blocks `chosen` accepts, keyed by its sorted corner
+    /// nodes (the same key for the two elements that share it): (key, (element, face 1-based)),
+    /// elements numbered globally in block order.
+    pub fn face_keys(&self, chosen: impl Fn(usize) -> bool) -> Vec<(Vec<usize>, (usize, u8))> {
+        let mut out = Vec::new();
+        let mut first = 0;
+        for (b, block) in self.blocks.iter().enumerate() {
+            if chosen(b) {
+                let corners = if block.kind.faces() == 6 { 4 } else { 3 };
+                for e in 0..block.len() {
+                    let nodes = block.element(e);
+                    for f in 1..=block.kind.faces() {
+                        let mut key: Vec<usize> = block.kind.face_local_nodes(f)[..corners]
+                            .iter()
+                            .map(|&i| nodes[i])
+                            .collect();
+                        key.sort_unstable();
+                        out.push((key, (first + e, f)));
+                    }
+                }
+            }
+            first += block.len();
+        }
+        out
+    }
+
     /// The surface `name`, or an error listing the surfaces that exist.
     pub fn surface(&self, name: &str) -> Result<&[(usize, u8)], MeshError> {
         self.surfaces

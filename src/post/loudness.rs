@@ -160,25 +160,7 @@ pub struct RadiatingPoint {
 /// The faces of the elements of `blocks` that no other element of those blocks shares: the
 /// outside of those components (element, face 1-based), in element order.
 pub fn exterior_faces(mesh: &Mesh, blocks: &[usize]) -> Vec<(usize, u8)> {
-    let mut first = 0;
-    let mut faces: Vec<(Vec<usize>, (usize, u8))> = Vec::new();
-    for (b, block) in mesh.blocks.iter().enumerate() {
-        if blocks.contains(&b) {
-            let corners = if block.kind.faces() == 6 { 4 } else { 3 };
-            for e in 0..block.len() {
-                let nodes = block.element(e);
-                for f in 1..=block.kind.faces() {
-                    let mut key: Vec<usize> = block.kind.face_local_nodes(f)[..corners]
-                        .iter()
-                        .map(|&i| nodes[i])
-                        .collect();
-                    key.sort_unstable();
-                    faces.push((key, (first + e, f)));
-                }
-            }
-        }
-        first += block.len();
-    }
+    let mut faces = mesh.face_keys(|b| blocks.contains(&b));
     faces.sort();
     let mut out = Vec::new();
     let mut i = 0;

@@ -229,17 +229,7 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
         );
     }
     if let Some(l) = &s.loudness {
-        let mut body = String::new();
-        if !l.modes.is_empty() {
-            let caption = "Radiated sound power level (A-weighted) of each unstable mode at its predicted saturation amplitude and at 1 um of contact amplitude.";
-            body += &figure(output, "loudness_modes.png", caption)?;
-        }
-        if l.transient.is_some() {
-            let caption = "The transient's last cycles: radiated power in 1/3-octave bands.";
-            body += &figure(output, "loudness_bands.png", caption)?;
-        }
-        body += &text(s, Part::Loudness);
-        add("how-loud", "How loud", body);
+        add("how-loud", "How loud", loudness_section(s, l, output)?);
     }
     add("run", "Speed against accuracy", run_table(s));
     add(
@@ -462,4 +452,23 @@ fn pseudo_table(p: &crate::stages::pseudo::PseudoReport) -> String {
         );
     }
     t + "</table>"
+}
+
+/// The "How loud" section: the levels per mode, the transient's bands, the summary's lines.
+fn loudness_section(
+    s: &RunSummary,
+    l: &crate::stages::loudness::LoudnessReport,
+    output: &Path,
+) -> std::io::Result<String> {
+    let mut body = String::new();
+    if !l.modes.is_empty() {
+        let caption = "Radiated sound power level (A-weighted) of each unstable mode at its predicted saturation amplitude and at 1 um of contact amplitude.";
+        body += &figure(output, "loudness_modes.png", caption)?;
+    }
+    if l.transient.is_some() {
+        let caption = "The transient's last cycles: radiated power in 1/3-octave bands.";
+        body += &figure(output, "loudness_bands.png", caption)?;
+    }
+    body += &text(s, Part::Loudness);
+    Ok(body)
 }
