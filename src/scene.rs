@@ -490,9 +490,6 @@ impl Scene {
             }
             if let Some(l) = &post.loudness {
                 l.validate()?;
-                if post.pseudo_trajectory.is_none() && self.transient.is_none() {
-                    return Err(InvalidSetting::new("post.loudness", ": levels are of the pseudo trajectories' modes (at their alpha_sat) and of a transient's stored states: add [post.pseudo_trajectory] or a [transient] with state_interval > 0"));
-                }
                 if self.statics.is_none() || self.real_modes.is_none() {
                     return Err(InvalidSetting::new("post.loudness", ": radiates the preloaded model's vibration: it needs [statics] and [real_modes]"));
                 }

@@ -208,7 +208,14 @@ impl AfterTransient<'_, '_> {
         timings
             .stage("loudness", || {
                 let radiator = loudness::radiator(self.petsc, mesh, dofs, settings)?;
-                loudness::loudness(self.petsc, &radiator, settings, nominal, pseudo, run)
+                let lin = self.linearization();
+                let mut unstable = pseudo::unstable_modes(self.petsc, nominal, lin)?;
+                // The modes the complex-modes stage reports (below its f_max).
+                let f_max = self.scene.complex_modes.as_ref().and_then(|c| c.f_max_hz);
+                let top = f_max.unwrap_or(f64::INFINITY) * 2.0 * std::f64::consts::PI;
+                unstable.retain(|m| m.nominal.1 <= top);
+                let (p, s) = (self.petsc, settings);
+                loudness::loudness(p, &radiator, s, nominal, &unstable, pseudo, run)
             })
             .map(Some)
     }

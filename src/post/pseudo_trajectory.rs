@@ -327,6 +327,29 @@ pub fn partner(nominal: &[DenseEigenpair], index: usize) -> Option<usize> {
     })
 }
 
+/// psi = y / c, the shape of coordinates `y` at contact amplitude 1 with its phase fixed by
+/// the system (`PseudoSystem::contact_normalization`), and c.
+pub fn unit_contact_shape(
+    system: &dyn PseudoSystem,
+    name: &str,
+    y: &[Complex],
+) -> Result<(Vec<Complex>, Complex), PseudoError> {
+    let normalization = system.contact_normalization(y)?;
+    let scale = normalization.0.hypot(normalization.1);
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(PseudoError::NoContactMotion {
+            mode: name.to_string(),
+            amplitude: scale,
+        });
+    }
+    let (c, d) = (normalization.0 / scale, -normalization.1 / scale);
+    let psi: Vec<Complex> = y
+        .iter()
+        .map(|&(r, i)| ((r * c - i * d) / scale, (r * d + i * c) / scale))
+        .collect();
+    Ok((psi, normalization))
+}
+
 /// The pseudo-trajectory study of nominal mode `index` of the static state's modes
 /// `nominal` (eigenvalues with coordinates), named `name`.
 pub fn pseudo_trajectory(
@@ -343,19 +366,7 @@ pub fn pseudo_trajectory(
         .chain(partner(nominal, index))
         .map(|k| nominal[k].clone())
         .collect();
-    let normalization = system.contact_normalization(y)?;
-    let scale = normalization.0.hypot(normalization.1);
-    if !(scale > 0.0 && scale.is_finite()) {
-        return Err(PseudoError::NoContactMotion {
-            mode: name.to_string(),
-            amplitude: scale,
-        });
-    }
-    let (c, d) = (normalization.0 / scale, -normalization.1 / scale);
-    let psi: Vec<Complex> = y
-        .iter()
-        .map(|&(r, i)| ((r * c - i * d) / scale, (r * d + i * c) / scale))
-        .collect();
+    let (psi, normalization) = unit_contact_shape(system, name, y)?;
     let omega = s.1;
     let [a, b] = settings.alpha_range.unwrap_or_else(|| {
         let g = system.gap_scale();

@@ -286,7 +286,7 @@ pub fn fmt_loudness(
                 power_level(p),
                 power_level(p) + a
             )?,
-            _ => write!(f, "; no alpha_sat found (ranked per unit amplitude)")?,
+            _ => write!(f, "; no alpha_sat (none found, or no pseudo trajectory of this mode): ranked per unit amplitude")?,
         }
         for (name, unit, sat) in &m.microphones {
             write!(f, "; at {name}: {unit:.1} dB per 1 um")?;

@@ -9,9 +9,9 @@
 use std::collections::BTreeMap;
 
 use super::link::{period_of, Nominal};
-use super::pseudo::PseudoReport;
+use super::pseudo::{PseudoReport, UnitMode};
 use super::RunError;
-use crate::eigen::complex_modes::expand;
+use crate::eigen::complex_modes::{expand, Complex};
 use crate::fem::dofmap::DofMap;
 use crate::invalid::InvalidSetting;
 use crate::la::{LaError, ObservationMatrix, Petsc, Vector};
@@ -227,7 +227,8 @@ pub struct LoudnessReport {
     pub area: f64,
     pub density: f64,
     pub sound_speed: f64,
-    /// Unstable modes, loudest (L_W(A)) first.
+    /// The modes: those with an alpha_sat first, then the unstable ones per unit amplitude,
+    /// loudest (L_W(A)) first in each.
     pub modes: Vec<ModeLoudness>,
     pub transient: Option<TransientLoudness>,
 }
@@ -238,7 +239,9 @@ pub struct StoredRun<'a, 's> {
     pub cycle: &'a LimitCycle,
 }
 
-/// The levels of the pseudo trajectories' modes and of the transient.
+/// The levels of the static state's unstable modes (at 1 um of contact amplitude, and at
+/// alpha_sat for those the pseudo trajectories followed, with any stable mode they followed
+/// too) and of the transient.
 ///
 /// # Collective
 pub fn loudness<'p>(
@@ -246,20 +249,35 @@ pub fn loudness<'p>(
     radiator: &Radiator<'p>,
     settings: &LoudnessSettings,
     nominal: Nominal<'_, 'p>,
+    unstable: &[UnitMode],
     pseudo: Option<&PseudoReport>,
     run: Option<StoredRun>,
 ) -> Result<LoudnessReport, RunError> {
+    let studies = pseudo.map_or(&[][..], |p| &p.studies);
     let mut modes = Vec::new();
-    for study in pseudo.map_or(&[][..], |p| &p.studies) {
+    for study in studies {
+        let t = &study.trajectory;
+        let shape = (&t.name[..], t.nominal, &t.psi[..]);
+        let sat = t.alpha_sat.alpha();
         modes.push(mode_loudness(
-            petsc,
-            radiator,
-            settings,
-            nominal,
-            &study.trajectory,
+            petsc, radiator, settings, nominal, shape, sat,
         )?);
     }
-    modes.sort_by(|a, b| b.level_a().total_cmp(&a.level_a()));
+    for mode in unstable {
+        if studies.iter().any(|s| s.trajectory.name == mode.name) {
+            continue;
+        }
+        let shape = (&mode.name[..], mode.nominal, &mode.psi[..]);
+        modes.push(mode_loudness(
+            petsc, radiator, settings, nominal, shape, None,
+        )?);
+    }
+    // The levels at alpha_sat first, then those per unit amplitude: loudest first in each.
+    modes.sort_by(|a, b| {
+        (a.alpha_sat.is_none(), -a.level_a())
+            .partial_cmp(&(b.alpha_sat.is_none(), -b.level_a()))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
     let transient = match run {
         Some(run) => Some(transient_loudness(petsc, radiator, settings, nominal, run)?),
         None => None,
@@ -276,24 +294,28 @@ pub fn loudness<'p>(
     })
 }
 
+/// A mode's levels: `shape` is its name, nominal eigenvalue and psi's coordinates (contact
+/// amplitude 1).
+///
 /// # Collective
 fn mode_loudness<'p>(
     petsc: &'p Petsc,
     radiator: &Radiator<'p>,
     settings: &LoudnessSettings,
     nominal: Nominal<'_, 'p>,
-    trajectory: &crate::post::pseudo_trajectory::PseudoTrajectory,
+    (name, eigenvalue, psi): (&str, Complex, &[Complex]),
+    alpha_sat: Option<f64>,
 ) -> Result<ModeLoudness, RunError> {
     let comm = petsc.world();
     let air = settings.air();
     // psi has contact amplitude 1 (m per m): at amplitude alpha the velocity is
     // i omega alpha psi; its normal component at the points, per unit alpha.
-    let (xr, xi) = expand(&nominal.modes.shapes, &trajectory.psi)?;
+    let (xr, xi) = expand(&nominal.modes.shapes, psi)?;
     let (nr, ni) = (
         radiator.normal_velocity(&xr)?,
         radiator.normal_velocity(&xi)?,
     );
-    let omega = trajectory.nominal.1;
+    let omega = eigenvalue.1;
     let per_alpha: Vec<(f64, f64)> = nr
         .iter()
         .zip(&ni)
@@ -301,23 +323,22 @@ fn mode_loudness<'p>(
         .collect();
     let mut erp = [erp_harmonic(&air, &radiator.weights, &per_alpha)];
     crate::parallel::sum_in_place(comm, &mut erp);
-    let alpha_sat = trajectory.alpha_sat.alpha();
     let mut microphones = Vec::new();
-    for (name, at) in &settings.microphones {
+    for (mic, at) in &settings.microphones {
         let p = rayleigh_pressure(&air, &radiator.local, &per_alpha, omega, *at);
         let mut sum = [p.0, p.1];
         crate::parallel::sum_in_place(comm, &mut sum);
         let amplitude = sum[0].hypot(sum[1]);
         microphones.push((
-            name.clone(),
+            mic.clone(),
             pressure_level(amplitude * UNIT_AMPLITUDE),
             alpha_sat.map(|a| pressure_level(amplitude * a)),
         ));
     }
     Ok(ModeLoudness {
-        name: trajectory.name.clone(),
+        name: name.to_string(),
         frequency_hz: omega / (2.0 * std::f64::consts::PI),
-        growth: trajectory.nominal.0,
+        growth: eigenvalue.0,
         alpha_sat,
         power_per_unit: erp[0] * UNIT_AMPLITUDE * UNIT_AMPLITUDE,
         power_at_sat: alpha_sat.map(|a| erp[0] * a * a),

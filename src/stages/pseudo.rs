@@ -6,13 +6,14 @@ use crate::measure::nan_max;
 
 use super::link::{LinearizationSettings, Nominal};
 use super::RunError;
-use crate::eigen::complex_modes::{damping_ratio, projected_coordinates, DenseEigenpair};
+use crate::eigen::complex_modes::{damping_ratio, projected_coordinates, Complex, DenseEigenpair};
 use crate::eigen::stability::ProjectedStability;
 use crate::la::Petsc;
 use crate::post::limit_cycle::LimitCycle;
 use crate::post::pseudo_contact::ContactPseudoSystem;
 use crate::post::pseudo_trajectory::{
-    parse_mode, pseudo_trajectory, OrbitFit, PseudoTrajectory, PseudoTrajectorySettings,
+    parse_mode, pseudo_trajectory, unit_contact_shape, OrbitFit, PseudoTrajectory,
+    PseudoTrajectorySettings,
 };
 use crate::post::states::StoredStates;
 
@@ -69,6 +70,46 @@ fn most_unstable(pairs: &[DenseEigenpair], margin: f64, limit: Option<usize>) ->
         unstable.truncate(n);
     }
     unstable
+}
+
+/// A mode unstable at the static state, at contact amplitude 1 (psi's coordinates on the
+/// real modes, normalized as the pseudo trajectories normalize them).
+pub struct UnitMode {
+    pub name: String,
+    pub nominal: Complex,
+    pub psi: Vec<Complex>,
+}
+
+/// The static state's unstable modes (projected on the real modes), at contact amplitude 1:
+/// what can be ranked without a pseudo-trajectory study.
+///
+/// # Collective
+pub fn unstable_modes<'p>(
+    petsc: &'p Petsc,
+    basis: Nominal<'_, 'p>,
+    linearization: LinearizationSettings,
+) -> Result<Vec<UnitMode>, RunError> {
+    let (modes, preload) = (basis.modes, basis.preload);
+    let LinearizationSettings { damping, margin } = linearization;
+    let (contact, nominal) = (&preload.contact, &preload.state.contact);
+    let comm = petsc.world();
+    let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
+    let (kp, cp) = stability.operators_at(comm, contact, nominal);
+    let size = stability.projection.size;
+    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::from)?;
+    let system = ContactPseudoSystem::new(comm, contact, nominal, &stability);
+    let mut out = Vec::new();
+    for k in most_unstable(&pairs, margin, None) {
+        let name = format!("C{}", k + 1);
+        let (psi, _) = unit_contact_shape(&system, &name, &pairs[k].1)
+            .map_err(|e| RunError::scene("post.loudness", format!("{name}: {e}")))?;
+        out.push(UnitMode {
+            name,
+            nominal: pairs[k].0,
+            psi,
+        });
+    }
+    Ok(out)
 }
 
 /// The pseudo trajectories of the modes the scene names (default: those unstable at the

@@ -150,8 +150,8 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         states: &states,
         cycle: &cycle,
     };
-    let report =
-        loudness::loudness(petsc, &radiator, &settings, nominal, None, Some(run)).map_err(e)?;
+    let report = loudness::loudness(petsc, &radiator, &settings, nominal, &[], None, Some(run))
+        .map_err(e)?;
     let t = report.transient.as_ref().ok_or("no transient level")?;
     let error = (t.mean_power - expected).abs() / expected;
     let peak = squeal::measure::largest(t.power.iter().copied()) / expected;

@@ -395,7 +395,37 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         "alphas = 9\nphases = 16\n[post.loudness]\nmicrophones = { front = [0.0, 0.0, 0.5] }\n",
     )?;
     let loud = coarse.loudness.as_ref().ok_or("no loudness")?;
-    let c35 = loud.modes.first().ok_or("no level of C35")?;
+    let c35 = loud
+        .modes
+        .iter()
+        .find(|m| m.name == "C35")
+        .ok_or("no level of C35")?;
+    // Every unstable mode of the complex-modes stage (the same projection) is ranked, C35 at
+    // its alpha_sat, the others per unit amplitude, and no other.
+    let mut unstable: Vec<&str> = coarse
+        .complex
+        .iter()
+        .flat_map(|c| c.modes.iter())
+        .filter(|m| m.unstable)
+        .map(|m| m.name.as_str())
+        .collect();
+    let mut ranked: Vec<&str> = loud.modes.iter().map(|m| m.name.as_str()).collect();
+    unstable.sort_unstable();
+    ranked.sort_unstable();
+    say(
+        petsc,
+        &format!("brake: unstable {unstable:?}, ranked by level {ranked:?}"),
+    );
+    if unstable != ranked
+        || loud
+            .modes
+            .iter()
+            .any(|m| (m.name == "C35") != m.alpha_sat.is_some())
+    {
+        return Err(format!(
+            "the levels rank {ranked:?}, the unstable modes are {unstable:?}"
+        ));
+    }
     let mic = c35.microphones.first().map(|m| m.1).unwrap_or(f64::NAN);
     say(
         petsc,
