@@ -155,6 +155,9 @@ fn main() {
     for lib in lapack.split_whitespace() {
         println!("cargo:rustc-link-lib={lib}");
     }
+    // MUMPS' single-precision library, beside the double-precision one PETSc links
+    // (libmumps-dev).
+    println!("cargo:rustc-link-lib=smumps");
     let mut include_dirs = found.include_dirs;
     include_dirs.extend(mpi_include_dirs());
     check_configuration(&include_dirs);
@@ -172,6 +175,8 @@ fn main() {
         .allowlist_function(format!("{prefixes}.*"))
         .allowlist_type(format!("{prefixes}.*"))
         .allowlist_type("_p_.*")
+        .allowlist_type("SMUMPS_STRUC_C")
+        .allowlist_function("smumps_c")
         .allowlist_var(format!("{prefixes}.*"))
         // MPI types come from rsmpi's mpi-sys, so communicators pass straight through.
         .blocklist_type("MPI_.*")

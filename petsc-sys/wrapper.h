@@ -3,3 +3,6 @@
 #include <slepceps.h>
 #include <slepcpep.h>
 #include <slepcsvd.h>
+/* MUMPS in single precision, called directly (la/single_lu.rs): PETSc hands MUMPS only its
+   own scalar type. */
+#include <smumps_c.h>

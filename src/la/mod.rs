@@ -15,6 +15,7 @@ pub mod low_rank;
 pub mod matrix;
 pub mod observation;
 pub mod quadratic;
+pub mod single_lu;
 
 pub mod solver;
 pub mod vector;

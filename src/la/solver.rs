@@ -155,7 +155,9 @@ pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<Factorizati
 
 /// A factored matrix ready for repeated solves (KSPPREONLY + MUMPS).
 pub struct DirectSolver<'p> {
+    /// Null for the single-precision factor, which PETSc does not hold.
     raw: ffi::KSP,
+    single: Option<std::cell::RefCell<super::single_lu::SingleLu<'p>>>,
     prefix: String,
     report: FactorizationReport,
     _petsc: PhantomData<&'p Petsc<'p>>,
@@ -176,6 +178,7 @@ impl<'p> DirectSolver<'p> {
         call!(KSPCreate(petsc.comm(), &mut raw))?;
         let mut solver = DirectSolver {
             raw,
+            single: None,
             prefix: prefix.to_string(),
             report: FactorizationReport::unknown(),
             _petsc: PhantomData,
@@ -225,6 +228,7 @@ impl<'p> DirectSolver<'p> {
         call!(KSPCreate(petsc.comm(), &mut raw))?;
         let mut solver = DirectSolver {
             raw,
+            single: None,
             prefix: prefix.to_string(),
             report: FactorizationReport::unknown(),
             _petsc: PhantomData,
@@ -277,6 +281,28 @@ impl<'p> DirectSolver<'p> {
         Ok(solver)
     }
 
+    /// Factorizes `a` with MUMPS in single precision over all ranks (libsmumps directly:
+    /// [`super::single_lu`]), LU or LDL^T as `kind` says. `prefix` only names the solver in
+    /// messages: PETSc's options do not reach this factor.
+    ///
+    /// # Collective
+    pub fn factorize_single(
+        petsc: &'p Petsc,
+        a: &SparseMatrix,
+        kind: Factorization,
+        prefix: &str,
+    ) -> Result<Self> {
+        let factor =
+            super::single_lu::SingleLu::factorize(petsc, a, kind == Factorization::Cholesky)?;
+        Ok(DirectSolver {
+            raw: std::ptr::null_mut(),
+            report: factor.report(),
+            single: Some(std::cell::RefCell::new(factor)),
+            prefix: prefix.to_string(),
+            _petsc: PhantomData,
+        })
+    }
+
     pub fn report(&self) -> FactorizationReport {
         self.report
     }
@@ -285,7 +311,10 @@ impl<'p> DirectSolver<'p> {
     ///
     /// # Collective
     pub fn solve(&self, b: &Vector, x: &mut Vector) -> Result<()> {
-        call!(KSPSolve(self.raw, b.raw, x.raw))
+        match &self.single {
+            Some(f) => f.borrow_mut().solve(b, x),
+            None => call!(KSPSolve(self.raw, b.raw, x.raw)),
+        }
     }
 
     pub fn prefix(&self) -> &str {
@@ -367,6 +396,9 @@ pub(crate) fn configure_mumps_pc(
 
 impl Drop for DirectSolver<'_> {
     fn drop(&mut self) {
+        if self.raw.is_null() {
+            return;
+        }
         report_destroy(call!(KSPDestroy(&mut self.raw)));
     }
 }

@@ -8,7 +8,9 @@
 //!   below 3 kHz by spectrum slicing (Sylvester inertia) equal the 20 lowest by count;
 //! - Matrix Market export then import gives the same operator.
 //! - the transient's per-rank LU (PETSc's sequential LU on every rank, no pivoting) solves the
-//!   Newmark Jacobian of brake M0 with friction (unsymmetric) backward stably, like MUMPS.
+//!   Newmark Jacobian of brake M0 with friction (unsymmetric) backward stably, like MUMPS;
+//!   MUMPS in single precision within the single-precision bound, refined in double
+//!   precision to the double bound in at most 3 steps.
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +49,10 @@ pub fn tests() -> Vec<super::NamedTest> {
         (
             "brake_m0_newmark_jacobian_per_rank_lu_backward_stable",
             brake_m0_newmark_jacobian_per_rank_lu_backward_stable,
+        ),
+        (
+            "brake_m0_newmark_jacobian_single_precision_mumps",
+            brake_m0_newmark_jacobian_single_precision_mumps,
         ),
     ]
 }
@@ -380,16 +386,9 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
     Ok(())
 }
 
-/// The Newmark Jacobian J = M / (beta h^2) + gamma / (beta h) D + K of brake M0 (Graebner et
-/// al., ZAMM 2016; tests/data/brake-m0) at Omega = 4 pi rad/s with its friction (KR,
-/// unsymmetric) and gyroscopic (DG) terms, h = 1 us: the system the transient solves at every
-/// iteration. PETSc's LU on every rank pivots only on the diagonal; for a matrix whose diagonal
-/// dominates (the mass term at small h) Wilkinson's bound keeps the growth factor small and
-/// the normwise backward error |b - J x|_inf / (|J|_inf |x|_inf + |b|_inf) at a modest
-/// multiple of n_row eps (n_row <= 200 entries per row here: ~4e-14); asserted below 1e-12,
-/// as for MUMPS with its pivoting on the same system. The two solutions then agree within
-/// cond(J) times that (cond_inf(J) ~ 1e2 here, from the mass-dominated diagonal): 1e-9.
-fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Result<(), String> {
+/// The brake M0 Newmark Jacobian (see the test below) and b = J x_true for an x_true with
+/// entries of both signs and several magnitudes.
+fn m0_newmark_system<'p>(petsc: &'p Petsc) -> Result<(SparseMatrix<'p>, Vector<'p>), String> {
     let (h, beta, gamma, omega) = (1e-6, 0.25, 0.5, 4.0 * std::f64::consts::PI);
     let term = |f: &str, c: f64| MatrixTerm {
         file: PathBuf::from(f),
@@ -424,6 +423,20 @@ fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Resul
     }
     let mut b = x_true.duplicate().map_err(|e| e.to_string())?;
     j.mult(&x_true, &mut b).map_err(|e| e.to_string())?;
+    Ok((j, b))
+}
+
+/// The Newmark Jacobian J = M / (beta h^2) + gamma / (beta h) D + K of brake M0 (Graebner et
+/// al., ZAMM 2016; tests/data/brake-m0) at Omega = 4 pi rad/s with its friction (KR,
+/// unsymmetric) and gyroscopic (DG) terms, h = 1 us: the system the transient solves at every
+/// iteration. PETSc's LU on every rank pivots only on the diagonal; for a matrix whose diagonal
+/// dominates (the mass term at small h) Wilkinson's bound keeps the growth factor small and
+/// the normwise backward error |b - J x|_inf / (|J|_inf |x|_inf + |b|_inf) at a modest
+/// multiple of n_row eps (n_row <= 200 entries per row here: ~4e-14); asserted below 1e-12,
+/// as for MUMPS with its pivoting on the same system. The two solutions then agree within
+/// cond(J) times that (cond_inf(J) ~ 1e2 here, from the mass-dominated diagonal): 1e-9.
+fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Result<(), String> {
+    let (j, b) = m0_newmark_system(petsc)?;
     let j_inf = j.norm_infinity().map_err(|e| e.to_string())?;
     let b_inf = b.norm_inf().map_err(|e| e.to_string())?;
     let solve = |per_rank: bool| -> Result<(Vector<'_>, f64), String> {
@@ -458,6 +471,64 @@ fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Resul
     if bad(backward_lu, 1e-12) || bad(backward_mumps, 1e-12) || bad(difference, 1e-9) {
         return Err(format!(
             "backward errors {backward_lu:e} (per-rank LU), {backward_mumps:e} (MUMPS), difference {difference:e}"
+        ));
+    }
+    Ok(())
+}
+
+/// The same Jacobian factorized by MUMPS in single precision (libsmumps: the transient's
+/// `jacobian_factor = "single"`). Bound: the argument above with u = 2^-24 = 5.96e-8 in place
+/// of eps (and the rounding of J's entries to single precision, a relative perturbation of u
+/// per entry, inside it): one solve's normwise backward error at most n_row u = 1.2e-5. The
+/// transient uses the factor inside an iteration whose residual is in double precision; that
+/// iteration (here x += F^-1 (b - J x), the modified Newton step of a linear problem)
+/// contracts the error by about cond(J) u ~ 1e-5 per step, so from 1.2e-5 it must reach the
+/// double-precision bound above (1e-12) within 3 steps, and then agree with MUMPS' double
+/// factor's solution within 1e-9 as above.
+fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(), String> {
+    let e = |e: squeal::la::LaError| e.to_string();
+    let (j, b) = m0_newmark_system(petsc)?;
+    let j_inf = j.norm_infinity().map_err(e)?;
+    let b_inf = b.norm_inf().map_err(e)?;
+    let backward = |x: &Vector, r: &mut Vector| -> Result<f64, String> {
+        j.mult(x, r).map_err(e)?;
+        r.axpy(-1.0, &b).map_err(e)?;
+        r.scale(-1.0).map_err(e)?;
+        Ok(r.norm_inf().map_err(e)? / (j_inf * x.norm_inf().map_err(e)? + b_inf))
+    };
+    let single =
+        DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_single_").map_err(e)?;
+    let double = DirectSolver::factorize(petsc, &j, Factorization::Lu, "m0_double_").map_err(e)?;
+    let mut x = b.duplicate().map_err(e)?;
+    single.solve(&b, &mut x).map_err(e)?;
+    let mut r = b.duplicate().map_err(e)?;
+    let first = backward(&x, &mut r)?;
+    let mut dx = b.duplicate().map_err(e)?;
+    let (mut refined, mut steps) = (first, 0);
+    while !(refined <= 1e-12) && steps < 3 {
+        single.solve(&r, &mut dx).map_err(e)?;
+        x.axpy(1.0, &dx).map_err(e)?;
+        refined = backward(&x, &mut r)?;
+        steps += 1;
+    }
+    let mut reference = b.duplicate().map_err(e)?;
+    double.solve(&b, &mut reference).map_err(e)?;
+    x.axpy(-1.0, &reference).map_err(e)?;
+    let difference = x.norm_inf().map_err(e)? / reference.norm_inf().map_err(e)?;
+    let report = single.report();
+    say(
+        petsc,
+        &format!(
+            "M0 Newmark J in single precision: {:.3e} factor entries ({:.1} MB of values; double: {:.3e} entries), one solve's backward error {first:.2e} (bound 1.2e-5); {refined:.2e} after {steps} refinement steps in double precision (bound 1e-12 within 3); against MUMPS in double {difference:.2e} (bound 1e-9)",
+            report.factor_entries,
+            report.factor_entries * 4.0 / 1e6,
+            double.report().factor_entries
+        ),
+    );
+    let bad = |x: f64, bound: f64| x.is_nan() || x > bound;
+    if bad(first, 1.2e-5) || bad(refined, 1e-12) || bad(difference, 1e-9) {
+        return Err(format!(
+            "single precision: backward error {first:e}, refined {refined:e} after {steps} steps, difference {difference:e}"
         ));
     }
     Ok(())
