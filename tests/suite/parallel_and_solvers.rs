@@ -505,7 +505,7 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
     let first = backward(&x, &mut r)?;
     let mut dx = b.duplicate().map_err(e)?;
     let (mut refined, mut steps) = (first, 0);
-    while !(refined <= 1e-12) && steps < 3 {
+    while (refined > 1e-12 || refined.is_nan()) && steps < 3 {
         single.solve(&r, &mut dx).map_err(e)?;
         x.axpy(1.0, &dx).map_err(e)?;
         refined = backward(&x, &mut r)?;
