@@ -8,6 +8,7 @@
 
 use std::time::Instant;
 
+use super::settings::JacobianFactor;
 use crate::contact::kernel::Part;
 use crate::contact::linearize::Base;
 use crate::contact::linearize::TangentOperator;
@@ -38,8 +39,8 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     static_state: &'a ContactState,
     /// The static mock contact stiffness (normal and stick).
     mock: SparseMatrix<'p>,
-    /// J factorized on every rank (PETSc's sequential LU) instead of by MUMPS over all ranks.
-    per_rank: bool,
+    /// Where J is factorized ("auto" resolved).
+    factor: JacobianFactor,
     /// A restart's saved Jacobian state, used by the first factorization.
     restart_at: Option<(Vector<'p>, Vector<'p>)>,
     /// The state the current Jacobian was built at (None: the static mock).
@@ -67,7 +68,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         c: Damping<'a, 'p>,
         static_state: &'a ContactState,
         restart_at: Option<(Vector<'p>, Vector<'p>)>,
-        per_rank: bool,
+        factor: JacobianFactor,
     ) -> Result<Self, LaError> {
         let mock = contact.linearize(
             petsc,
@@ -84,7 +85,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             c,
             static_state,
             mock,
-            per_rank,
+            factor,
             restart_at,
             built_at: None,
             built_contact: None,
@@ -123,10 +124,10 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
 
     /// Where J is factorized, for the summary.
     pub fn solver_name(&self) -> &'static str {
-        if self.per_rank {
-            "LU on every rank"
-        } else {
-            "MUMPS over all ranks"
+        match self.factor {
+            JacobianFactor::PerRank => "LU on every rank",
+            JacobianFactor::Single => "MUMPS over all ranks in single precision",
+            _ => "MUMPS over all ranks",
         }
     }
 
@@ -196,10 +197,12 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         } else {
             Factorization::Cholesky
         };
-        let factor = if self.per_rank {
-            DirectSolver::factorize_per_rank(self.petsc, &j, "time_")?
-        } else {
-            DirectSolver::factorize(self.petsc, &j, kind, "time_")?
+        let factor = match self.factor {
+            JacobianFactor::PerRank => DirectSolver::factorize_per_rank(self.petsc, &j, "time_")?,
+            JacobianFactor::Single => {
+                DirectSolver::factorize_single(self.petsc, &j, kind, "time_")?
+            }
+            _ => DirectSolver::factorize(self.petsc, &j, kind, "time_")?,
         };
         self.factor_entries = factor.report().factor_entries;
         self.built += 1;

@@ -318,7 +318,7 @@ pub fn run<'p>(
         input.c,
         input.static_state,
         restart_at,
-        settings.jacobian_factor.per_rank(k0.global_rows()),
+        settings.jacobian_factor.resolve(k0.global_rows()),
     )?);
     let mut factorize =
         |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);

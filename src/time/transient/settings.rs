@@ -57,8 +57,10 @@ pub struct TransientSettings {
     pub sensors: std::collections::BTreeMap<String, [f64; 3]>,
     /// Where the stepping Jacobian is factorized: `"auto"` (default: `"per-rank"` up to
     /// [`PER_RANK_MAX_UNKNOWNS`] unknowns, else `"distributed"`), `"distributed"` (MUMPS over
-    /// all ranks) or `"per-rank"` (the whole J on every rank, PETSc's sequential LU: no
-    /// communication inside a solve; for a reduced model's small J, solved ~10^5 times).
+    /// all ranks), `"per-rank"` (the whole J on every rank, PETSc's sequential LU: no
+    /// communication inside a solve; for a reduced model's small J, solved ~10^5 times) or
+    /// `"single"` (MUMPS over all ranks in single precision: half the factor's bytes per solve,
+    /// the residual in double precision).
     /// (Not written when "auto": the restart fingerprint of checkpoints written before this
     /// key existed stays the same.)
     #[serde(default, skip_serializing_if = "JacobianFactor::is_auto")]
@@ -134,6 +136,9 @@ pub enum JacobianFactor {
     Auto,
     Distributed,
     PerRank,
+    /// MUMPS over all ranks in single precision (libsmumps): half the bytes per solve; the
+    /// iteration's residual stays in double precision.
+    Single,
 }
 
 /// `jacobian_factor = "auto"` factorizes J on every rank up to this many unknowns (faster
@@ -149,10 +154,15 @@ impl JacobianFactor {
 
     /// Per rank or distributed, for a J of `unknowns` rows.
     pub fn per_rank(self, unknowns: usize) -> bool {
+        self.resolve(unknowns) == JacobianFactor::PerRank
+    }
+
+    /// The factor for a J of `unknowns` rows ("auto" resolved).
+    pub fn resolve(self, unknowns: usize) -> JacobianFactor {
         match self {
-            JacobianFactor::Auto => unknowns <= PER_RANK_MAX_UNKNOWNS,
-            JacobianFactor::Distributed => false,
-            JacobianFactor::PerRank => true,
+            JacobianFactor::Auto if unknowns <= PER_RANK_MAX_UNKNOWNS => JacobianFactor::PerRank,
+            JacobianFactor::Auto => JacobianFactor::Distributed,
+            other => other,
         }
     }
 }
