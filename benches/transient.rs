@@ -20,6 +20,7 @@ use std::time::Instant;
 use clap::Parser;
 use squeal::la::Petsc;
 use squeal::pipeline::{run_with, RunOptions, RunSummary};
+use squeal::report::summary::TransientSummary;
 use squeal::scene::Scene;
 
 #[derive(Parser)]
@@ -31,6 +32,9 @@ struct Args {
     modes: usize,
     #[arg(long, default_value_t = 500)]
     steps: usize,
+    /// The transient's `jacobian_factor` values to run (one pipeline run each).
+    #[arg(long, value_delimiter = ',', default_value = "distributed,single")]
+    factors: Vec<String>,
     /// Target size of the step-size study (DOF); 0 skips part 3.
     #[arg(long, default_value_t = 12_000)]
     study_dofs: usize,
@@ -47,7 +51,14 @@ struct Args {
     bench: bool,
 }
 
-fn scene(dofs: usize, modes: usize, step: f64, steps: usize, amplitude: f64) -> String {
+fn scene(
+    dofs: usize,
+    modes: usize,
+    step: f64,
+    steps: usize,
+    amplitude: f64,
+    factor: &str,
+) -> String {
     format!(
         "[model]\nsource = \"brake\"\ntarget_dofs = {dofs}\npressure_bar = 20.0\n\
          [contact]\ndisc_speed = 6.2832\n\
@@ -56,7 +67,7 @@ fn scene(dofs: usize, modes: usize, step: f64, steps: usize, amplitude: f64) -> 
          [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = {modes}\n\
          [reduction]\n\
          [transient]\nstep = {step:e}\nsteps = {steps}\nmode = 2\namplitude = {amplitude:e}\n\
-         state_interval = 0.0\ncheckpoint_every = 0\n\
+         state_interval = 0.0\ncheckpoint_every = 0\njacobian_factor = \"{factor}\"\n\
          [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
     )
 }
@@ -86,24 +97,132 @@ fn read(dir: &str, name: &str) -> Vec<f64> {
         .unwrap_or_else(|e| panic!("{}: {name}: {e}", path.display()))
 }
 
-/// Triad a = b + s c on every rank at once; returns the total bandwidth (bytes/s), best of 5.
-fn stream_bandwidth(petsc: &Petsc, n: usize) -> f64 {
+/// Memory bandwidth (bytes/s), best of 5: a read (sum of one array) and a triad
+/// (a = b + s c: two reads, one write), by rank 0 alone and by every rank at once (the total).
+#[derive(Clone, Copy)]
+struct Bandwidth {
+    read_one: f64,
+    read_all: f64,
+    triad_one: f64,
+    triad_all: f64,
+}
+
+fn stream_bandwidth(petsc: &Petsc, n: usize) -> Bandwidth {
     let b = vec![1.0f64; n];
     let c = vec![2.0f64; n];
     let mut a = vec![0.0f64; n];
-    let mut best = f64::INFINITY;
-    for _ in 0..5 {
-        squeal::parallel::barrier(petsc.world());
-        let t = Instant::now();
+    let time = |alone: bool, kernel: &mut dyn FnMut()| -> f64 {
+        let mut best = f64::INFINITY;
+        for _ in 0..5 {
+            squeal::parallel::barrier(petsc.world());
+            let t = Instant::now();
+            if !alone || petsc.rank() == 0 {
+                kernel();
+            }
+            let slowest = squeal::parallel::max(petsc.world(), t.elapsed().as_secs_f64());
+            best = best.min(slowest);
+        }
+        best
+    };
+    let mut read = || {
+        // Four partial sums: the loop is not bound by one addition's latency.
+        let mut s = [0.0f64; 4];
+        for chunk in b.chunks_exact(4) {
+            for k in 0..4 {
+                s[k] += chunk[k];
+            }
+        }
+        std::hint::black_box(s);
+    };
+    let read_bytes = 8.0 * n as f64;
+    let read_one = read_bytes / time(true, &mut read);
+    let read_all = read_bytes * petsc.size() as f64 / time(false, &mut read);
+    let mut triad = || {
         for ((x, y), z) in a.iter_mut().zip(&b).zip(&c) {
             *x = y + 3.0 * z;
         }
         std::hint::black_box(&mut a);
-        let slowest = squeal::parallel::max(petsc.world(), t.elapsed().as_secs_f64());
-        best = best.min(slowest);
+    };
+    let triad_bytes = 3.0 * 8.0 * n as f64;
+    let triad_one = triad_bytes / time(true, &mut triad);
+    let triad_all = triad_bytes * petsc.size() as f64 / time(false, &mut triad);
+    Bandwidth {
+        read_one,
+        read_all,
+        triad_one,
+        triad_all,
     }
-    // Three arrays move per element (two reads, one write), on every rank.
-    3.0 * 8.0 * n as f64 * petsc.size() as f64 / best
+}
+
+/// The cost model of one run: per part of a step, calls per step, bytes per call, the bound
+/// (bytes over the bandwidth of every rank at once: the part perfectly split and streaming;
+/// the per-rank factor streams its whole copy on every rank, so over one rank's share), the
+/// measured time per call and their ratio.
+fn cost_table(say: &dyn Fn(&str), t: &TransientSummary, bw: Bandwidth, ranks: usize) {
+    let c = &t.cost;
+    let per_rank = t.jacobian_solver.contains("every rank");
+    let solve_bandwidth = if per_rank {
+        bw.read_all / ranks as f64
+    } else {
+        bw.read_all
+    };
+    say(&format!(
+        "cost model ({} unknowns, {}; bound = bytes / bandwidth of all {ranks} ranks at once: read {:.1} GB/s for the solve{}, triad {:.1} GB/s for the products):",
+        c.unknowns,
+        t.jacobian_solver,
+        bw.read_all / 1e9,
+        if per_rank { " over one rank's share" } else { "" },
+        bw.triad_all / 1e9
+    ));
+    say("    part                   calls/step   MB/call   bound (ms)   measured (ms)   ratio   ms/step");
+    let row = |name: &str, calls: f64, bytes: f64, bandwidth: f64, seconds: f64| {
+        let bound = bytes / bandwidth;
+        say(&format!(
+            "    {name:<22} {calls:>10.2} {:>9.2} {:>12.3} {:>15.3} {:>7.1} {:>9.2}",
+            bytes / 1e6,
+            1e3 * bound,
+            1e3 * seconds,
+            seconds / bound,
+            1e3 * seconds * calls
+        ));
+    };
+    row(
+        "solve",
+        c.solves_per_step,
+        c.bytes_per_solve,
+        solve_bandwidth,
+        c.seconds_per_solve,
+    );
+    row(
+        "linear force (K x)",
+        1.0,
+        c.bytes_linear_force,
+        bw.triad_all,
+        c.seconds_linear_force,
+    );
+    row(
+        "contact evaluation",
+        c.force_evaluations_per_step,
+        c.bytes_per_force_evaluation,
+        bw.triad_all,
+        c.seconds_per_force_evaluation,
+    );
+    row(
+        "contact tangent x",
+        c.tangent_products_per_step,
+        c.bytes_per_tangent_product,
+        bw.triad_all,
+        c.seconds_per_tangent_product,
+    );
+    let parts = c.solves_per_step * c.seconds_per_solve
+        + c.seconds_linear_force
+        + c.force_evaluations_per_step * c.seconds_per_force_evaluation
+        + c.tangent_products_per_step * c.seconds_per_tangent_product;
+    say(&format!(
+        "    the rest (vector updates, norms, recording): {:.2} ms/step of {:.2}",
+        1e3 * (t.seconds_per_step - parts),
+        1e3 * t.seconds_per_step
+    ));
 }
 
 fn main() {
@@ -116,16 +235,19 @@ fn main() {
             println!("{s}");
         }
     };
-    let bandwidth = stream_bandwidth(&petsc, args.stream_len);
+    let bw = stream_bandwidth(&petsc, args.stream_len);
     say(&format!(
-        "memory bandwidth (triad, {} ranks at once): {:.2} GB/s",
+        "memory bandwidth: read {:.1} GB/s one rank alone, {:.1} GB/s all {} at once; triad {:.1} / {:.1} GB/s",
+        bw.read_one / 1e9,
+        bw.read_all / 1e9,
         petsc.size(),
-        bandwidth / 1e9
+        bw.triad_one / 1e9,
+        bw.triad_all / 1e9
     ));
 
-    if args.dofs > 0 {
-        let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9);
-        let s = run(&petsc, &text, &format!("transient-{}", args.dofs));
+    for factor in args.factors.iter().filter(|_| args.dofs > 0) {
+        let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9, factor);
+        let s = run(&petsc, &text, &format!("transient-{}-{factor}", args.dofs));
         let r = s.reduction.as_ref().expect("reduction ran");
         let t = s.transient.as_ref().expect("transient ran");
         let stage = |name: &str| {
@@ -136,7 +258,7 @@ fn main() {
                 .map_or(0.0, |(_, v)| *v)
         };
         say(&format!(
-            "brake {} DOF: static preload {:.1} s, {} real modes {:.1} s, reduction {:.1} s (basis work {:.1} s + reduced-mode check)",
+            "brake {} DOF (jacobian_factor = \"{factor}\"): static preload {:.1} s, {} real modes {:.1} s, reduction {:.1} s (basis work {:.1} s + reduced-mode check)",
             r.full_dofs,
             stage("static preload"),
             args.modes,
@@ -153,35 +275,19 @@ fn main() {
             r.rows_per_rank,
             r.mode_error
         ));
-        let factor_bytes = 8.0 * t.factor_entries;
-        let bound = 2.0 * factor_bytes / bandwidth;
         say(&format!(
-            "transient: {} steps of 2 us, {:.2} iterations/step, {:.2} ms/step; factor {:.3e} entries ({:.0} MB), factorized in {:.2} s",
+            "transient: {} steps of 2 us, {:.2} iterations/step, {:.2} ms/step; {}: factor {:.3e} entries ({:.0} MB read per solve), factorized in {:.2} s; one iteration {:.2} ms vs one solve {:.2} ms",
             t.steps,
             t.mean_iterations,
             1e3 * t.seconds_per_step,
+            t.jacobian_solver,
             t.factor_entries,
-            factor_bytes / 1e6,
-            t.seconds_factorizing
-        ));
-        say(&format!(
-            "one iteration {:.2} ms vs one MUMPS solve on the same factor {:.2} ms: ratio {:.2} (target <= 1.3); solve vs bandwidth bound (2 x factor bytes / {:.1} GB/s = {:.2} ms): {:.1}x",
+            t.cost.bytes_per_solve / 1e6,
+            t.seconds_factorizing,
             1e3 * t.seconds_per_iteration,
             1e3 * t.seconds_per_solve,
-            t.seconds_per_iteration / t.seconds_per_solve,
-            bandwidth / 1e9,
-            1e3 * bound,
-            t.seconds_per_solve / bound
         ));
-        let solves = t.seconds_per_solve * t.mean_iterations;
-        say(&format!(
-            "one step {:.2} ms = solves {:.2} + forces {:.2} + operator products {:.2} + the rest (vector updates, reductions, recording) {:.2}",
-            1e3 * t.seconds_per_step,
-            1e3 * solves,
-            1e3 * t.seconds_forces_per_step,
-            1e3 * t.seconds_products_per_step,
-            1e3 * (t.seconds_per_step - solves - t.seconds_forces_per_step - t.seconds_products_per_step)
-        ));
+        cost_table(&say, t, bw, petsc.size() as usize);
         say(&format!(
             "150,000 steps at this rate (measured on {} steps, extrapolated; one factorization included): {:.1} min (target < 30 min; the paper: 12 h)",
             t.steps,
@@ -198,7 +304,11 @@ fn main() {
             let n = (args.study_time / h).round() as usize;
             let dir = format!("study-{h_us}us");
             let t = Instant::now();
-            let s = run(&petsc, &scene(args.study_dofs, 60, h, n, 1e-7), &dir);
+            let s = run(
+                &petsc,
+                &scene(args.study_dofs, 60, h, n, 1e-7, "auto"),
+                &dir,
+            );
             (dir, t.elapsed().as_secs_f64(), s)
         };
         let (ref_dir, ref_seconds, _) = study(reference);

@@ -344,6 +344,19 @@ impl<'p> ContactModel<'p> {
         self.c_tan2.mult_transpose_add(wt2, out)
     }
 
+    /// Stored entries of the observation rows of each channel (normal, tangent, second
+    /// tangent, convection), summed over the ranks: the bytes a contact evaluation streams.
+    ///
+    /// # Collective
+    pub fn observation_entries(&self) -> Result<[f64; 4], LaError> {
+        Ok([
+            self.c_nor.stored_entries()?,
+            self.c_tan.stored_entries()?,
+            self.c_tan2.stored_entries()?,
+            self.c_conv.stored_entries()?,
+        ])
+    }
+
     pub(crate) fn observation(&self, c: Channel) -> &ObservationMatrix<'p> {
         match c {
             Channel::Nor => self.c_nor.as_ref(),

@@ -38,6 +38,11 @@ pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
 pub use solver::{DirectSolver, Factorization, FactorizationReport};
 pub use vector::Vector;
 
+/// Bytes of one stored sparse entry in PETSc's AIJ format: its value and its column index (what
+/// a product streams per entry).
+pub const SPARSE_ENTRY_BYTES: f64 =
+    (std::mem::size_of::<f64>() + std::mem::size_of::<ffi::PetscInt>()) as f64;
+
 /// PETSc and SLEPc, initialized on top of an rsmpi `Universe`; finalized on drop.
 pub struct Petsc<'u> {
     world: SimpleCommunicator,

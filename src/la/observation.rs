@@ -104,6 +104,17 @@ impl<'p> ObservationMatrix<'p> {
         (m as usize, n as usize)
     }
 
+    /// Stored entries, summed over the ranks (what one product streams, with their column
+    /// indices).
+    ///
+    /// # Collective
+    pub fn stored_entries(&self) -> Result<f64> {
+        // SAFETY: MatInfo is plain old data.
+        let mut info: ffi::MatInfo = unsafe { std::mem::zeroed() };
+        call!(MatGetInfo(self.raw, ffi::MAT_GLOBAL_SUM, &mut info))?;
+        Ok(info.nz_used)
+    }
+
     /// A vector with the row (point) layout.
     ///
     /// # Collective

@@ -124,6 +124,58 @@ pub struct TransientSummary {
     /// recording).
     pub seconds_forces_per_step: f64,
     pub seconds_products_per_step: f64,
+    pub cost: StepCost,
+}
+
+/// What a step's parts stream and how long they took: the cost model of benches/transient.rs
+/// (bytes from the stored entries each part reads; the bound is bytes over the bandwidth the
+/// bench measures in the same run).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StepCost {
+    pub unknowns: usize,
+    /// Solves with the factor: per step, bytes of the factor read per solve (values x passes:
+    /// LU reads L and U once, LDL^T reads L twice; indices left out), seconds per solve.
+    pub solves_per_step: f64,
+    pub bytes_per_solve: f64,
+    pub seconds_per_solve: f64,
+    /// The predictor's linear force (the product with K; with M and C only where the damping
+    /// needs them, not counted): bytes and seconds per step.
+    pub bytes_linear_force: f64,
+    pub seconds_linear_force: f64,
+    /// Contact force evaluations (5 products with observation rows, 3 with their
+    /// transposes): per step, bytes and seconds per evaluation.
+    pub force_evaluations_per_step: f64,
+    pub bytes_per_force_evaluation: f64,
+    pub seconds_per_force_evaluation: f64,
+    /// Products with the contact tangent (every channel forward and transposed): per step,
+    /// bytes and seconds per product.
+    pub tangent_products_per_step: f64,
+    pub bytes_per_tangent_product: f64,
+    pub seconds_per_tangent_product: f64,
+}
+
+impl StepCost {
+    fn of(t: &Transient) -> Self {
+        let steps = t.steps_run.max(1) as f64;
+        let entry = crate::la::SPARSE_ENTRY_BYTES;
+        let [nor, tan, tan2, conv] = t.observation_entries;
+        let per = |seconds: f64, calls: usize| seconds / calls.max(1) as f64;
+        let tangent_seconds = t.seconds_in_products - t.seconds_in_linear_force;
+        StepCost {
+            unknowns: t.unknowns,
+            solves_per_step: t.factor_solves as f64 / steps,
+            bytes_per_solve: t.factor_entries * t.factor_value_bytes * t.factor_passes,
+            seconds_per_solve: per(t.seconds_in_factor_solves, t.factor_solves),
+            bytes_linear_force: t.operator_entries * entry + 3.0 * 8.0 * t.unknowns as f64,
+            seconds_linear_force: t.seconds_in_linear_force / steps,
+            force_evaluations_per_step: t.force_evaluations as f64 / steps,
+            bytes_per_force_evaluation: (2.0 * nor + 3.0 * tan + 2.0 * tan2 + conv) * entry,
+            seconds_per_force_evaluation: per(t.seconds_in_forces, t.force_evaluations),
+            tangent_products_per_step: t.tangent_products as f64 / steps,
+            bytes_per_tangent_product: 2.0 * (nor + tan + tan2 + conv) * entry,
+            seconds_per_tangent_product: per(tangent_seconds, t.tangent_products),
+        }
+    }
 }
 
 /// A parameter sweep, for the summary.
@@ -333,6 +385,7 @@ impl TransientSummary {
             jacobian_solver: t.jacobian_solver,
             seconds_forces_per_step: t.seconds_in_forces / steps_run,
             seconds_products_per_step: t.seconds_in_products / steps_run,
+            cost: StepCost::of(t),
         }
     }
 }

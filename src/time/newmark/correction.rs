@@ -79,6 +79,7 @@ impl<'p> Newmark<'_, 'p> {
             let clock = std::time::Instant::now();
             extra.mult_add(&self.dq, &mut self.dz)?;
             report.product_seconds += clock.elapsed().as_secs_f64();
+            report.product_calls += 1;
         }
         Ok(())
     }

@@ -18,6 +18,7 @@ impl<'p> Newmark<'_, 'p> {
         let clock = std::time::Instant::now();
         forces(t1, &self.q1, &self.v1, &mut self.f)?;
         report.force_seconds += clock.elapsed().as_secs_f64();
+        report.force_calls += 1;
         self.r.copy_from(&self.z)?;
         self.r.axpy(-1.0, &self.f)?;
         let reference = self.f.norm2()?.max(self.z.norm2()?);

@@ -69,7 +69,13 @@ pub struct StepReport {
     /// a step is vector updates and reductions.
     pub solve_seconds: f64,
     pub force_seconds: f64,
+    /// The linear force at the predictor (products with M, C, K) and the products with the
+    /// Jacobian's extra part (the contact tangent through the observation rows).
+    pub linear_force_seconds: f64,
     pub product_seconds: f64,
+    /// Force evaluations and products with the Jacobian's extra part.
+    pub force_calls: usize,
+    pub product_calls: usize,
     /// The last force evaluation was at the accepted state (the caller may reuse what it
     /// computed there); false when the step ended on the correction criterion.
     pub forces_current: bool,
@@ -346,7 +352,10 @@ impl<'a, 'p> Newmark<'a, 'p> {
             reference: 0.0,
             solve_seconds: 0.0,
             force_seconds: 0.0,
-            product_seconds: clock.elapsed().as_secs_f64(),
+            linear_force_seconds: clock.elapsed().as_secs_f64(),
+            product_seconds: 0.0,
+            force_calls: 0,
+            product_calls: 0,
             forces_current: true,
             krylov_iterations: 0,
             factor_solves: 0,

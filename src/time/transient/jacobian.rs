@@ -50,6 +50,9 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     built_contact: Option<ContactState>,
     built_damping: f64,
     pub factor_entries: f64,
+    /// Bytes per factor value and passes over the factor per solve (LU 1, LDL^T 2), of the
+    /// last factorization.
+    pub factor_streaming: (f64, f64),
     pub built: usize,
     /// All factorizations, and those within the stepping loop.
     pub seconds_factorizing: f64,
@@ -91,6 +94,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             built_contact: None,
             built_damping: 0.0,
             factor_entries: 0.0,
+            factor_streaming: (8.0, 1.0),
             built: 0,
             seconds_factorizing: 0.0,
             seconds_in_loop: 0.0,
@@ -205,6 +209,17 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             _ => DirectSolver::factorize(self.petsc, &j, kind, "time_")?,
         };
         self.factor_entries = factor.report().factor_entries;
+        let value_bytes = if self.factor == JacobianFactor::Single {
+            4.0
+        } else {
+            8.0
+        };
+        // PETSc's per-rank LU factors whatever J is: one pass over L and U.
+        let passes = match (kind, self.factor) {
+            (Factorization::Cholesky, JacobianFactor::Distributed | JacobianFactor::Single) => 2.0,
+            _ => 1.0,
+        };
+        self.factor_streaming = (value_bytes, passes);
         self.built += 1;
         self.seconds_factorizing += t.elapsed().as_secs_f64();
         self.seconds_in_loop += t.elapsed().as_secs_f64();

@@ -91,6 +91,22 @@ pub struct Transient {
     /// tangent), steps and iterations.
     pub seconds_in_forces: f64,
     pub seconds_in_products: f64,
+    /// Of which the predictor's linear force (products with M, C, K), and how many force
+    /// evaluations and contact-tangent products there were.
+    pub seconds_in_linear_force: f64,
+    pub force_evaluations: usize,
+    pub tangent_products: usize,
+    /// What those stream (for the cost model of benches/transient.rs): the stored entries of
+    /// the stiffness the linear force multiplies (M and C are products too when the
+    /// damping needs them), of each contact channel's observation rows (normal, tangent,
+    /// second tangent, convection), and the unknowns.
+    pub operator_entries: f64,
+    pub observation_entries: [f64; 4],
+    pub unknowns: usize,
+    /// Bytes per value of the factor, and how often a solve reads it (LU: L then U, once
+    /// each; LDL^T: L twice), for the last factorization.
+    pub factor_value_bytes: f64,
+    pub factor_passes: f64,
     pub steps_run: usize,
     pub iterations_run: usize,
 }
@@ -129,6 +145,16 @@ impl Transient {
             .collect()
     }
 
+    /// What a step streams: the stiffness' and the observation rows' stored entries.
+    ///
+    /// # Collective
+    fn count_sizes(&mut self, k: &SparseMatrix, contact: &ContactModel) -> Result<(), LaError> {
+        self.operator_entries = k.info()?.nonzeros;
+        self.observation_entries = contact.observation_entries()?;
+        self.unknowns = k.global_rows();
+        Ok(())
+    }
+
     /// The Jacobian counts and times of a finished run (`seconds_start`: the mass
     /// factorization of the start).
     fn count_factorizations(
@@ -139,6 +165,7 @@ impl Transient {
     ) {
         self.factor_entries = b.factor_entries;
         self.jacobian_solver = b.solver_name();
+        (self.factor_value_bytes, self.factor_passes) = b.factor_streaming;
         self.seconds_factorizing = seconds_start + b.seconds_factorizing;
         self.seconds_jacobians = b.seconds_in_loop;
         self.cuts = control.cuts;
@@ -175,6 +202,14 @@ impl Transient {
             seconds_in_factor_solves: 0.0,
             seconds_in_forces: 0.0,
             seconds_in_products: 0.0,
+            seconds_in_linear_force: 0.0,
+            force_evaluations: 0,
+            tangent_products: 0,
+            operator_entries: 0.0,
+            observation_entries: [0.0; 4],
+            unknowns: 0,
+            factor_value_bytes: 8.0,
+            factor_passes: 1.0,
             steps_run: 0,
             iterations_run: 0,
             states: 0,
@@ -341,7 +376,10 @@ pub fn run<'p>(
             let out = &mut recorder.out;
             out.seconds_solving += report.solve_seconds;
             out.seconds_in_forces += report.force_seconds;
-            out.seconds_in_products += report.product_seconds;
+            out.seconds_in_products += report.product_seconds + report.linear_force_seconds;
+            out.seconds_in_linear_force += report.linear_force_seconds;
+            out.force_evaluations += report.force_calls;
+            out.tangent_products += report.product_calls;
             out.steps_run += 1;
             out.iterations_run += report.iterations;
             out.krylov_iterations += report.krylov_iterations;
@@ -439,6 +477,7 @@ pub fn run<'p>(
     let mut out = recorder.out;
     out.seconds_stepping = t.elapsed().as_secs_f64();
     out.count_factorizations(&builder.into_inner(), &control, seconds_start);
+    out.count_sizes(&k0, contact)?;
     Ok((out, result.err()))
 }
 
