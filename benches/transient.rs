@@ -1,12 +1,17 @@
 //! Transient benchmark, speed against error (run under mpirun by scripts/bench):
 //!
-//! 1. Memory bandwidth: a STREAM-like triad on every rank at once (the bound of a solve with
-//!    a factor that does not fit in cache: its bytes are read twice, forward and backward).
+//! 1. Memory bandwidth, measured in the same run as every figure compared with it: a read
+//!    (sum of one array) and a triad (a = b + s c), by rank 0 alone and by every rank at once.
 //! 2. The reduced brake: the superelement reduction of a brake of `--dofs` with `--modes` real
-//!    modes, then `--steps` steps of the nonlinear transient from the kicked static state:
-//!    reduction time, reduced size, factor size, seconds per step, iterations per step, one
-//!    fixed-Jacobian iteration against one solve with the same factor, the solve against its
-//!    bandwidth bound, and 150,000 steps extrapolated from the measured rate.
+//!    modes, then `--steps` steps of the nonlinear transient from the kicked static state, once
+//!    per `--factors` value (`jacobian_factor`: distributed, single, per-rank): reduction time,
+//!    reduced size, factor size, seconds per step and per iteration, and the cost model of a
+//!    step: for the solve, the linear force (K x), the contact evaluations and the contact
+//!    tangent's products, the calls per step, the bytes each call streams (stored entries x
+//!    (value + index) bytes; the factor's values x its passes), the bound (bytes over the
+//!    bandwidth of all ranks at once: a part perfectly split and streaming from memory; a
+//!    part that fits in cache can beat it) and the measured time, with their ratio; then
+//!    150,000 steps extrapolated from the measured rate.
 //! 3. Step size against error: the reduced brake of `--study-dofs` over `--study-time` with
 //!    steps `--study-steps` (µs) against a reference at a quarter of the smallest step: error
 //!    of a sensor's velocity (max over common sample times, relative to its largest value)
