@@ -147,22 +147,7 @@ impl<'p> SingleLu<'p> {
     ///
     /// # Collective
     pub fn solve(&mut self, b: &Vector, x: &mut Vector) -> Result<()> {
-        let (forward, reverse) = (ffi::SCATTER_FORWARD, ffi::SCATTER_REVERSE);
-        let insert = ffi::INSERT_VALUES;
-        call!(VecScatterBegin(
-            self.gather,
-            b.raw,
-            self.whole,
-            insert,
-            forward
-        ))?;
-        call!(VecScatterEnd(
-            self.gather,
-            b.raw,
-            self.whole,
-            insert,
-            forward
-        ))?;
+        self.scatter(b.raw, self.whole, ffi::SCATTER_FORWARD)?;
         let n = self.rhs.len();
         if n > 0 {
             let mut data = std::ptr::null_mut();
@@ -188,21 +173,16 @@ impl<'p> SingleLu<'p> {
             }
             call!(VecRestoreArray(self.whole, &mut data))?;
         }
-        call!(VecScatterBegin(
-            self.gather,
-            self.whole,
-            x.raw,
-            insert,
-            reverse
-        ))?;
-        call!(VecScatterEnd(
-            self.gather,
-            self.whole,
-            x.raw,
-            insert,
-            reverse
-        ))?;
-        Ok(())
+        self.scatter(self.whole, x.raw, ffi::SCATTER_REVERSE)
+    }
+
+    /// Moves `from` into `to` along the gather (forward: to rank 0; reverse: back).
+    ///
+    /// # Collective
+    fn scatter(&self, from: ffi::Vec, to: ffi::Vec, mode: ffi::ScatterMode) -> Result<()> {
+        let insert = ffi::INSERT_VALUES;
+        call!(VecScatterBegin(self.gather, from, to, insert, mode))?;
+        call!(VecScatterEnd(self.gather, from, to, insert, mode))
     }
 
     /// Runs a MUMPS job; a negative INFOG(1) is an error (on every rank: INFOG is global).

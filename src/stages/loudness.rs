@@ -119,14 +119,8 @@ impl<'p> Radiator<'p> {
         x: &Vector<'p>,
         omega: f64,
     ) -> Result<f64, LaError> {
-        let vn: Vec<(f64, f64)> = self
-            .normal_velocity(x)?
-            .iter()
-            .map(|v| (omega * v, 0.0))
-            .collect();
-        let mut erp = [erp_harmonic(&settings.air(), &self.weights, &vn)];
-        crate::parallel::sum_in_place(petsc.world(), &mut erp);
-        Ok(erp[0])
+        let vn = self.harmonic_velocity(x, omega)?;
+        Ok(self.power(petsc, settings, &vn))
     }
 
     /// The sound pressure amplitude (Pa) at `at` of the harmonic vibration q(t) = x cos(omega t)
@@ -141,15 +135,44 @@ impl<'p> Radiator<'p> {
         omega: f64,
         at: [f64; 3],
     ) -> Result<f64, LaError> {
-        let vn: Vec<(f64, f64)> = self
-            .normal_velocity(x)?
-            .iter()
-            .map(|v| (omega * v, 0.0))
-            .collect();
-        let p = rayleigh_pressure(&settings.air(), &self.local, &vn, omega, at);
+        let vn = self.harmonic_velocity(x, omega)?;
+        Ok(self.pressure(petsc, settings, &vn, omega, at))
+    }
+
+    /// The normal velocity amplitudes omega N x at this rank's points (real: in phase).
+    ///
+    /// # Collective
+    fn harmonic_velocity(&self, x: &Vector<'p>, omega: f64) -> Result<Vec<(f64, f64)>, LaError> {
+        let vn = self.normal_velocity(x)?;
+        Ok(vn.iter().map(|v| (omega * v, 0.0)).collect())
+    }
+
+    /// The mean power (W) of complex normal-velocity amplitudes at this rank's points, summed
+    /// over the ranks.
+    ///
+    /// # Collective
+    fn power(&self, petsc: &Petsc, settings: &LoudnessSettings, vn: &[(f64, f64)]) -> f64 {
+        let mut erp = [erp_harmonic(&settings.air(), &self.weights, vn)];
+        crate::parallel::sum_in_place(petsc.world(), &mut erp);
+        erp[0]
+    }
+
+    /// The pressure amplitude (Pa) at `at` of complex normal-velocity amplitudes at angular
+    /// frequency omega (Rayleigh integral over every rank's points).
+    ///
+    /// # Collective
+    fn pressure(
+        &self,
+        petsc: &Petsc,
+        settings: &LoudnessSettings,
+        vn: &[(f64, f64)],
+        omega: f64,
+        at: [f64; 3],
+    ) -> f64 {
+        let p = rayleigh_pressure(&settings.air(), &self.local, vn, omega, at);
         let mut sum = [p.0, p.1];
         crate::parallel::sum_in_place(petsc.world(), &mut sum);
-        Ok(sum[0].hypot(sum[1]))
+        sum[0].hypot(sum[1])
     }
 
     /// N v: the normal velocity at this rank's points.
@@ -306,8 +329,6 @@ fn mode_loudness<'p>(
     (name, eigenvalue, psi): (&str, Complex, &[Complex]),
     alpha_sat: Option<f64>,
 ) -> Result<ModeLoudness, RunError> {
-    let comm = petsc.world();
-    let air = settings.air();
     // psi has contact amplitude 1 (m per m): at amplitude alpha the velocity is
     // i omega alpha psi; its normal component at the points, per unit alpha.
     let (xr, xi) = expand(&nominal.modes.shapes, psi)?;
@@ -321,14 +342,10 @@ fn mode_loudness<'p>(
         .zip(&ni)
         .map(|(r, i)| (-omega * i, omega * r))
         .collect();
-    let mut erp = [erp_harmonic(&air, &radiator.weights, &per_alpha)];
-    crate::parallel::sum_in_place(comm, &mut erp);
+    let erp = radiator.power(petsc, settings, &per_alpha);
     let mut microphones = Vec::new();
     for (mic, at) in &settings.microphones {
-        let p = rayleigh_pressure(&air, &radiator.local, &per_alpha, omega, *at);
-        let mut sum = [p.0, p.1];
-        crate::parallel::sum_in_place(comm, &mut sum);
-        let amplitude = sum[0].hypot(sum[1]);
+        let amplitude = radiator.pressure(petsc, settings, &per_alpha, omega, *at);
         microphones.push((
             mic.clone(),
             pressure_level(amplitude * UNIT_AMPLITUDE),
@@ -340,8 +357,8 @@ fn mode_loudness<'p>(
         frequency_hz: omega / (2.0 * std::f64::consts::PI),
         growth: eigenvalue.0,
         alpha_sat,
-        power_per_unit: erp[0] * UNIT_AMPLITUDE * UNIT_AMPLITUDE,
-        power_at_sat: alpha_sat.map(|a| erp[0] * a * a),
+        power_per_unit: erp * UNIT_AMPLITUDE * UNIT_AMPLITUDE,
+        power_at_sat: alpha_sat.map(|a| erp * a * a),
         microphones,
     })
 }

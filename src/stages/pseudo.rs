@@ -72,6 +72,24 @@ fn most_unstable(pairs: &[DenseEigenpair], margin: f64, limit: Option<usize>) ->
     unstable
 }
 
+/// The projection at the static state and its complex modes (eigenvalues with coordinates).
+///
+/// # Collective
+fn nominal_modes(
+    petsc: &Petsc,
+    basis: Nominal,
+    linearization: LinearizationSettings,
+) -> Result<(ProjectedStability, Vec<DenseEigenpair>), RunError> {
+    let (contact, nominal) = (&basis.preload.contact, &basis.preload.state.contact);
+    let comm = petsc.world();
+    let stability =
+        ProjectedStability::new(comm, contact, basis.modes, nominal, linearization.damping)?;
+    let (kp, cp) = stability.operators_at(comm, contact, nominal);
+    let size = stability.projection.size;
+    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::from)?;
+    Ok((stability, pairs))
+}
+
 /// A mode unstable at the static state, at contact amplitude 1 (psi's coordinates on the
 /// real modes, normalized as the pseudo trajectories normalize them).
 pub struct UnitMode {
@@ -89,14 +107,10 @@ pub fn unstable_modes<'p>(
     basis: Nominal<'_, 'p>,
     linearization: LinearizationSettings,
 ) -> Result<Vec<UnitMode>, RunError> {
-    let (modes, preload) = (basis.modes, basis.preload);
-    let LinearizationSettings { damping, margin } = linearization;
-    let (contact, nominal) = (&preload.contact, &preload.state.contact);
+    let margin = linearization.margin;
+    let (contact, nominal) = (&basis.preload.contact, &basis.preload.state.contact);
     let comm = petsc.world();
-    let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
-    let (kp, cp) = stability.operators_at(comm, contact, nominal);
-    let size = stability.projection.size;
-    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::from)?;
+    let (stability, pairs) = nominal_modes(petsc, basis, linearization)?;
     let system = ContactPseudoSystem::new(comm, contact, nominal, &stability);
     let mut out = Vec::new();
     for k in most_unstable(&pairs, margin, None) {
@@ -124,14 +138,10 @@ pub fn pseudo_trajectories<'p>(
     comparison: Option<Comparison>,
 ) -> Result<PseudoReport, RunError> {
     let key = "post.pseudo_trajectory";
-    let (modes, preload) = (basis.modes, basis.preload);
-    let LinearizationSettings { damping, margin } = linearization;
-    let (contact, nominal) = (&preload.contact, &preload.state.contact);
+    let margin = linearization.margin;
+    let (contact, nominal) = (&basis.preload.contact, &basis.preload.state.contact);
     let comm = petsc.world();
-    let stability = ProjectedStability::new(comm, contact, modes, nominal, damping)?;
-    let (kp, cp) = stability.operators_at(comm, contact, nominal);
-    let size = stability.projection.size;
-    let pairs = projected_coordinates(size, &kp, &cp).map_err(crate::la::LaError::from)?;
+    let (stability, pairs) = nominal_modes(petsc, basis, linearization)?;
     let chosen: Vec<usize> = match &settings.modes {
         Some(names) => names
             .iter()
