@@ -35,15 +35,11 @@ pub struct StaticSettings {
     pub reuse_contraction: f64,
 }
 
-// Two pressure steps with the friction applied at once: half the LU factorizations of four
-// pressure steps then two friction steps (4,2: 17, 17, 21 on the 6k, 30k, 100k brakes; 2,0
-// with reuse 0.5: 7, 8, 9), the same braking torque to 7 digits
-// (benches/statics-results.md, 2026-11-26).
 fn default_pressure_steps() -> usize {
-    2
+    4
 }
 fn default_friction_steps() -> usize {
-    0
+    2
 }
 fn default_tolerance() -> f64 {
     // Round-off leaves about 1e-10 of the force on the brake (K0 q sums terms ~1e4 x larger).
@@ -53,10 +49,9 @@ fn default_max_iterations() -> usize {
     40
 }
 fn default_reuse_contraction() -> f64 {
-    // Fewer factorizations for more solves (benches/decisions-results.md, "statics-reuse";
-    // with the friction applied at once, 0.5 beat 0.3 on the 100k brake: 9 LU and 36 s
-    // against 11 LU and 44 s).
-    0.5
+    // Fewer factorizations for more solves, fastest of those measured on the 30k brake
+    // (benches/decisions-results.md, "statics-reuse").
+    0.3
 }
 
 impl Default for StaticSettings {
