@@ -157,6 +157,18 @@ pub struct RadiatingPoint {
     pub shape: Vec<f64>,
 }
 
+impl RadiatingPoint {
+    /// Distance (m) from the point to `at`.
+    pub fn distance_to(&self, at: [f64; 3]) -> f64 {
+        let r = [
+            at[0] - self.position[0],
+            at[1] - self.position[1],
+            at[2] - self.position[2],
+        ];
+        dot(r, r).sqrt()
+    }
+}
+
 /// The faces of the elements of `blocks` that no other element of those blocks shares: the
 /// outside of those components (element, face 1-based), in element order.
 pub fn exterior_faces(mesh: &Mesh, blocks: &[usize]) -> Vec<(usize, u8)> {
@@ -266,12 +278,7 @@ pub fn rayleigh_pressure(
     let k = omega / air.sound_speed;
     let (mut re, mut im) = (0.0, 0.0);
     for (p, v) in points.iter().zip(vn) {
-        let r = [
-            at[0] - p.position[0],
-            at[1] - p.position[1],
-            at[2] - p.position[2],
-        ];
-        let distance = dot(r, r).sqrt();
+        let distance = p.distance_to(at);
         let (c, s) = ((k * distance).cos(), -(k * distance).sin());
         // v exp(-ikR) / R, times the weight.
         let g = p.weight / distance;
@@ -358,12 +365,7 @@ pub fn pressure_series(
     let n = series.first().map_or(0, Vec::len);
     let mut p = vec![0.0; n.saturating_sub(first + 1)];
     for (point, v) in points.iter().zip(series) {
-        let r = [
-            at[0] - point.position[0],
-            at[1] - point.position[1],
-            at[2] - point.position[2],
-        ];
-        let distance = dot(r, r).sqrt();
+        let distance = point.distance_to(at);
         let gain = air.density * point.weight / (2.0 * PI * distance);
         let delay = distance / air.sound_speed / dt;
         let acceleration = |i: usize| (v[i + 1] - v[i - 1]) / (2.0 * dt);

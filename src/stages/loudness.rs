@@ -463,14 +463,7 @@ fn transient_microphones(
             let local_delay = radiator
                 .local
                 .iter()
-                .map(|p| {
-                    let r = [
-                        at[0] - p.position[0],
-                        at[1] - p.position[1],
-                        at[2] - p.position[2],
-                    ];
-                    (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt() / air.sound_speed
-                })
+                .map(|p| p.distance_to(*at) / air.sound_speed)
                 .fold(0.0, crate::measure::nan_max);
             let delay = crate::parallel::max(comm, local_delay);
             let first = (delay / dt).ceil() as usize + 2;
