@@ -13,6 +13,7 @@ pub mod fem;
 pub mod invalid;
 pub mod io;
 pub mod la;
+pub mod matrix;
 pub mod measure;
 pub mod mesh;
 pub mod parallel;

@@ -34,9 +34,24 @@ enum Command {
         /// <output>/checkpoint.h5; same scene otherwise, same number of ranks.
         #[arg(long)]
         restart: bool,
+        /// Compute only the K-th of N equal parts of the noise matrix' points (e.g. a SLURM
+        /// array task: --slice $((SLURM_ARRAY_TASK_ID + 1))/$SLURM_ARRAY_TASK_COUNT); then
+        /// `squeal merge` the slices' output directories.
+        #[arg(long, value_name = "K/N")]
+        slice: Option<squeal::matrix::sample::Slice>,
         /// PETSc/SLEPc options.
         #[arg(last = true)]
         petsc_options: Vec<String>,
+    },
+    /// Combine the output directories of the slices of one noise matrix (`run --slice`) into
+    /// one journal, results.h5, CSVs, figures and report.
+    Merge {
+        /// The slices' output directories (or their matrix-points.jsonl).
+        #[arg(required = true)]
+        slices: Vec<PathBuf>,
+        /// Where the merged results go.
+        #[arg(long, short)]
+        output: PathBuf,
     },
     /// Scene utilities.
     Scene {
@@ -61,15 +76,50 @@ fn main() -> ExitCode {
             scene,
             output,
             restart,
+            slice,
             petsc_options,
-        } => run_command(scene, output, restart, petsc_options),
+        } => {
+            let options = squeal::pipeline::RunOptions {
+                restart,
+                slice: slice.unwrap_or_default(),
+            };
+            run_command(scene, output, options, petsc_options)
+        }
+        Command::Merge { slices, output } => merge_command(&slices, &output),
+    }
+}
+
+fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("squeal: MPI was already initialized");
+        return ExitCode::FAILURE;
+    };
+    let world = universe.world();
+    use mpi::traits::Communicator;
+    if world.size() != 1 {
+        if world.rank() == 0 {
+            eprintln!("squeal merge: run it on one rank (it reads journals and writes one report)");
+        }
+        return ExitCode::FAILURE;
+    }
+    match squeal::pipeline::merge::merge(&world, slices, output) {
+        Ok(report) => {
+            println!("answer:\n    {}", report.answer_line());
+            print!("{}", report.text());
+            println!("merged into {}", output.display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
     }
 }
 
 fn run_command(
     scene_path: Option<PathBuf>,
     output: Option<PathBuf>,
-    restart: bool,
+    options: squeal::pipeline::RunOptions,
     petsc_options: Vec<String>,
 ) -> ExitCode {
     let Some(universe) = mpi::initialize() else {
@@ -125,7 +175,6 @@ fn run_command(
             petsc.size()
         );
     }
-    let options = squeal::pipeline::RunOptions { restart };
     let result = squeal::pipeline::run_with(
         &petsc,
         &scene,

@@ -37,6 +37,10 @@ pub struct Scene {
     /// A parameter sweep of the projected complex modes (needs [statics], [real_modes]).
     #[serde(default)]
     pub sweep: Option<crate::eigen::sweep::SweepSettings>,
+    /// The noise matrix: static state and projected complex modes at many operating points
+    /// (needs [statics], [real_modes]).
+    #[serde(default)]
+    pub matrix: Option<crate::matrix::MatrixSettings>,
     /// Nonlinear time response from the static state (needs [statics], [real_modes]).
     #[serde(default)]
     pub transient: Option<crate::time::transient::TransientSettings>,
@@ -222,6 +226,26 @@ impl Scene {
             .into_iter()
             .map(|(name, t)| (name, crate::fault::fnv1a(t.as_bytes())))
             .collect()
+    }
+
+    /// What a matrix point's result depends on, as one stable hash: the model, contact,
+    /// preload, damping, real modes, complex modes and the matrix itself. A journal, a slice
+    /// and a merge compare it (the output directory and the other analyses may differ).
+    pub fn matrix_fingerprint(&self) -> String {
+        let text = |value: Result<String, toml::ser::Error>| value.unwrap_or_default();
+        let tables = [
+            text(toml::to_string(&self.model)),
+            text(toml::to_string(&self.contact)),
+            text(toml::to_string(&self.statics)),
+            text(toml::to_string(&self.damping)),
+            text(toml::to_string(&self.real_modes)),
+            text(toml::to_string(&self.complex_modes)),
+            text(toml::to_string(&self.matrix)),
+        ];
+        format!(
+            "{:016x}",
+            crate::fault::fnv1a(tables.join("\n[]\n").as_bytes())
+        )
     }
 
     /// Parses and validates a scene; `file` names it in errors.
@@ -463,6 +487,15 @@ impl Scene {
             sw.validate()?;
             if self.statics.is_none() || self.real_modes.is_none() {
                 return Err(InvalidSetting::new("sweep", ": a sweep re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]"));
+            }
+        }
+        if let Some(m) = &self.matrix {
+            m.validate()?;
+            if self.statics.is_none() || self.real_modes.is_none() {
+                return Err(InvalidSetting::new("matrix", ": every point re-solves the static preload and re-projects on the real modes: it needs [statics] and [real_modes]"));
+            }
+            if self.damping.is_some_and(|d| d.has_modal()) {
+                return Err(InvalidSetting::new("damping.modal_ratio", ": modal damping is applied by [transient] only; the matrix uses the assembled operators (Rayleigh damping)"));
             }
         }
         if let Some(post) = &self.post {

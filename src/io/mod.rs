@@ -4,6 +4,7 @@
 //! is decided in `crate::report`.
 
 pub mod figure;
+pub mod matrix_journal;
 pub mod matrix_market;
 pub mod preview;
 pub mod results;

@@ -9,6 +9,8 @@ use std::time::Instant;
 
 mod after;
 mod front;
+mod matrix;
+pub mod merge;
 
 use crate::fault::checked;
 use crate::io::results::ResultsFile;
@@ -28,8 +30,10 @@ pub use crate::stages::model::build_model;
 #[derive(Debug, Clone, Default)]
 pub struct RunOptions {
     /// Resume the transient from output/checkpoint.h5 (everything before it is recomputed,
-    /// deterministically, and written again).
+    /// deterministically, and written again), and the noise matrix from its journal.
     pub restart: bool,
+    /// The part of the noise matrix' points this run computes.
+    pub slice: crate::matrix::sample::Slice,
 }
 
 /// Runs a scene. `scene_dir` resolves relative paths of model files; `scene_text` is stored
@@ -69,9 +73,16 @@ pub fn run_with(
     petsc_options: &[String],
     options: &RunOptions,
 ) -> Result<RunSummary, RunError> {
-    if options.restart && scene.transient.is_none() {
-        let message = "--restart resumes a transient: the scene has none";
+    if options.restart && scene.transient.is_none() && scene.matrix.is_none() {
+        let message = "--restart resumes a transient or a noise matrix: the scene has neither";
         return Err(RunError::scene("transient", message));
+    }
+    if options.slice != crate::matrix::sample::Slice::WHOLE && scene.matrix.is_none() {
+        let message = format!(
+            "--slice {} divides the points of a noise matrix: the scene has none",
+            options.slice
+        );
+        return Err(RunError::scene("matrix", message));
     }
     if petsc.rank() == 0 {
         checked(
@@ -99,6 +110,13 @@ pub fn run_with(
     ))?;
     let seconds_output = start.elapsed().as_secs_f64();
     file.flush()?;
+    let noise = matrix::noise_matrix(petsc, scene, scene_text, &a, output, options, &mut timings)?;
+    let start = Instant::now();
+    if let Some(m) = &noise {
+        checked(report::matrix::write_matrix(petsc.rank(), &file, m, output))?;
+        file.flush()?;
+    }
+    let seconds_output = seconds_output + start.elapsed().as_secs_f64();
 
     // The transient streams into transient.h5 (linked as /transient) while it runs.
     // A transient that fails to start or stops early still gets the summary and report of
@@ -172,6 +190,7 @@ pub fn run_with(
     summary.link = link;
     summary.pseudo = pseudo;
     summary.loudness = loudness;
+    summary.matrix = noise;
     summary.failure = failure.as_ref().map(ToString::to_string);
     write_report(petsc, &summary, scene_text, output)?;
     match failure {

@@ -51,6 +51,9 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
             }
         ));
     }
+    if let Some(m) = &s.matrix {
+        lines.push(m.answer_line());
+    }
     match (&s.limit_cycle, &s.transient) {
         (Some(r), _) => {
             let c = &r.cycle;

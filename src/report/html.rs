@@ -21,13 +21,14 @@ pub struct Section {
 }
 
 /// The report's section anchors, in order (tests compare them with the stages that ran).
-pub const SECTION_IDS: [&str; 15] = [
+pub const SECTION_IDS: [&str; 16] = [
     "answer",
     "model",
     "static-state",
     "real-modes",
     "complex-modes",
     "sweep",
+    "noise-matrix",
     "reduction",
     "transient",
     "modal-energy",
@@ -55,7 +56,23 @@ pub fn write_report(
     scene_text: &str,
     output: &Path,
 ) -> std::io::Result<PathBuf> {
-    let sections = sections(summary, scene_text, output)?;
+    let sections: Vec<(&str, String, String)> = sections(summary, scene_text, output)?
+        .into_iter()
+        .map(|s| (s.id, s.title, s.body))
+        .collect();
+    let intro = format!(
+        "{} DOF; results in <code>{}</code> (results.h5 with results.xdmf for ParaView).",
+        summary.dofs,
+        escape(&output.display().to_string())
+    );
+    let path = output.join("report.html");
+    std::fs::write(&path, page(output, &intro, &sections))?;
+    Ok(path)
+}
+
+/// A whole page: title, the intro paragraph (HTML), a navigation bar, the sections (anchor,
+/// heading, HTML body).
+pub(crate) fn page(output: &Path, intro: &str, sections: &[(&str, String, String)]) -> String {
     let mut html = String::new();
     html.push_str("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">");
     let _ = write!(
@@ -65,27 +82,21 @@ pub fn write_report(
     );
     let _ = write!(
         html,
-        "<h1>squeal: friction-induced instability analysis</h1><p>{} DOF; results in <code>{}</code> (results.h5 with results.xdmf for ParaView).</p><nav>",
-        summary.dofs,
-        escape(&output.display().to_string())
+        "<h1>squeal: friction-induced instability analysis</h1><p>{intro}</p><nav>"
     );
-    for s in &sections {
-        let _ = write!(html, "<a href=\"#{}\">{}</a>", s.id, escape(&s.title));
+    for (id, title, _) in sections {
+        let _ = write!(html, "<a href=\"#{id}\">{}</a>", escape(title));
     }
     html.push_str("</nav>");
-    for s in &sections {
+    for (id, title, body) in sections {
         let _ = writeln!(
             html,
-            "<section id=\"{}\"><h2>{}</h2>{}</section>",
-            s.id,
-            escape(&s.title),
-            s.body
+            "<section id=\"{id}\"><h2>{}</h2>{body}</section>",
+            escape(title)
         );
     }
     html.push_str("</body></html>\n");
-    let path = output.join("report.html");
-    std::fs::write(&path, html)?;
-    Ok(path)
+    html
 }
 
 /// The sections of the stages that ran, in [`SECTION_IDS`] order.
@@ -159,6 +170,14 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
         body += &figure(output, "sweep_real_part.png", "Real parts along the sweep.")?;
         body += &text(s, Part::Sweep);
         add("sweep", "Parameter sweep", body);
+    }
+    if let Some(m) = &s.matrix {
+        let body = crate::report::matrix::html_section(m, output)?;
+        add(
+            "noise-matrix",
+            "Noise matrix: squeal over the operating range",
+            body,
+        );
     }
     if s.reduction.is_some() {
         add("reduction", "Reduction", text(s, Part::Reduction));
@@ -242,7 +261,7 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
 
 /// A figure of the results folder embedded as a data URI, or nothing when the run did not
 /// draw it (e.g. a spectrogram of a run too short for one).
-fn figure(output: &Path, file: &str, caption: &str) -> std::io::Result<String> {
+pub(crate) fn figure(output: &Path, file: &str, caption: &str) -> std::io::Result<String> {
     let path = output.join(file);
     let bytes = match std::fs::read(&path) {
         Ok(b) => b,

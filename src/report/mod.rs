@@ -8,6 +8,7 @@ pub mod contact_map;
 pub mod html;
 pub mod link;
 pub mod loudness;
+pub mod matrix;
 pub mod modes;
 pub mod post;
 pub mod pseudo;

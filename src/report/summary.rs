@@ -51,6 +51,8 @@ pub struct RunSummary {
     pub pseudo: Option<crate::stages::pseudo::PseudoReport>,
     /// Radiated sound power and levels, when `[post.loudness]` asked for them.
     pub loudness: Option<crate::stages::loudness::LoudnessReport>,
+    /// The noise matrix, when `[matrix]` asked for one.
+    pub matrix: Option<crate::report::matrix::MatrixReport>,
     /// Why the run stopped early (the transient's error), when it did.
     pub failure: Option<String>,
 }
@@ -241,6 +243,7 @@ impl RunSummary {
             link: Default::default(),
             pseudo: None,
             loudness: None,
+            matrix: None,
             failure: None,
         }
     }
@@ -446,11 +449,12 @@ pub enum Part {
     DynamicStability,
     Pseudo,
     Loudness,
+    Matrix,
     Timings,
 }
 
 impl Part {
-    pub const ALL: [Part; 13] = [
+    pub const ALL: [Part; 14] = [
         Part::Model,
         Part::Statics,
         Part::Modes,
@@ -463,6 +467,7 @@ impl Part {
         Part::DynamicStability,
         Part::Pseudo,
         Part::Loudness,
+        Part::Matrix,
         Part::Timings,
     ];
 }
@@ -492,6 +497,7 @@ impl fmt::Display for SummaryPart<'_> {
                 .loudness
                 .as_ref()
                 .map_or(Ok(()), |l| super::text::fmt_loudness(l, f)),
+            Part::Matrix => s.matrix.as_ref().map_or(Ok(()), |m| f.write_str(&m.text())),
             Part::Timings => s.fmt_timings(f),
         }
     }

@@ -13,6 +13,7 @@
 pub mod complex;
 pub mod link;
 pub mod loudness;
+pub mod matrix;
 pub mod model;
 pub mod modes;
 pub mod operators;

@@ -916,7 +916,10 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
     let go = |text: &str, dir: &str, restart: bool| -> Result<std::path::PathBuf, String> {
         let s = squeal::scene::Scene::parse(text, dir).map_err(|e| e.to_string())?;
         let out = super::common::suite_dir().join(dir);
-        let options = squeal::pipeline::RunOptions { restart };
+        let options = squeal::pipeline::RunOptions {
+            restart,
+            ..Default::default()
+        };
         squeal::pipeline::run_with(
             petsc,
             &s,

@@ -1,0 +1,349 @@
+//! The virtual noise dynamometer (`[matrix]`, DESIGN.md §1 "sweeps"): operating points over
+//! brake pressure, disc speed, friction, the exponential law and temperature, a full grid or a
+//! seeded Sobol sample; per point the static state and the projected complex modes. The
+//! settings and the points here; the stage in `crate::stages::matrix`, the journal that makes
+//! a run resumable and sliceable in `crate::io::matrix_journal`, the statistics of the results
+//! in [`analysis`].
+
+pub mod analysis;
+pub mod point;
+pub mod sample;
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+use crate::eigen::sweep::SweepParameter;
+use crate::invalid::InvalidSetting;
+
+/// A parameter of the operating point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axis {
+    PressureBar,
+    /// rad/s.
+    DiscSpeed,
+    /// Friction coefficient of the sliding interfaces.
+    Mu,
+    /// p0 of the exponential law (Pa).
+    P0,
+    /// lambda of the exponential law (1/m).
+    Lambda,
+    /// Lining temperature (deg C): sets mu through `[matrix.temperature]`.
+    Temperature,
+}
+
+impl Axis {
+    pub fn name(self) -> &'static str {
+        match self {
+            Axis::Temperature => "temperature",
+            other => other.as_sweep().expect("not temperature").name(),
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Axis::Temperature => "lining temperature (deg C)",
+            other => other.as_sweep().expect("not temperature").label(),
+        }
+    }
+
+    /// The sweep parameter this axis sets directly (temperature sets mu through its table).
+    pub fn as_sweep(self) -> Option<SweepParameter> {
+        Some(match self {
+            Axis::PressureBar => SweepParameter::PressureBar,
+            Axis::DiscSpeed => SweepParameter::DiscSpeed,
+            Axis::Mu => SweepParameter::Mu,
+            Axis::P0 => SweepParameter::P0,
+            Axis::Lambda => SweepParameter::Lambda,
+            Axis::Temperature => return None,
+        })
+    }
+
+    /// Values an axis may take: mu and temperature (deg C above absolute zero) may be zero.
+    fn admits(self, v: f64) -> bool {
+        v.is_finite()
+            && match self {
+                Axis::Mu => v >= 0.0,
+                Axis::Temperature => v > -273.15,
+                _ => v > 0.0,
+            }
+    }
+}
+
+/// How the operating points are chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Sampling {
+    /// Every combination of the axes' values (full factorial).
+    #[default]
+    Grid,
+    /// `points` points of an Owen-scrambled Sobol sequence over the axes' ranges, from `seed`
+    /// (space-filling: every axis' range is stratified, also in projections).
+    Sobol,
+}
+
+/// One axis: a list of values, or `from`, `to` (and `points`, for a grid).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisRange {
+    #[serde(default)]
+    pub values: Vec<f64>,
+    #[serde(default)]
+    pub from: Option<f64>,
+    #[serde(default)]
+    pub to: Option<f64>,
+    #[serde(default)]
+    pub points: Option<usize>,
+}
+
+impl AxisRange {
+    /// The grid values of this axis.
+    pub fn values(&self) -> Vec<f64> {
+        if !self.values.is_empty() {
+            return self.values.clone();
+        }
+        match (self.from, self.to, self.points) {
+            (Some(a), Some(b), Some(1)) if a == b => vec![a],
+            (Some(a), Some(b), Some(n)) if n >= 2 => (0..n)
+                .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// The range sampled (smallest, largest value).
+    pub fn range(&self) -> (f64, f64) {
+        match (self.from, self.to) {
+            (Some(a), Some(b)) => (a.min(b), a.max(b)),
+            _ => {
+                let v = &self.values;
+                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                (lo, hi)
+            }
+        }
+    }
+}
+
+/// Properties of the lining against temperature, interpolated linearly between the rows.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TemperatureTable {
+    /// deg C, increasing.
+    pub celsius: Vec<f64>,
+    /// Friction coefficient at each temperature.
+    pub mu: Vec<f64>,
+}
+
+impl TemperatureTable {
+    /// mu at `t` (deg C), linear between the rows; None outside the table.
+    pub fn mu(&self, t: f64) -> Option<f64> {
+        let c = &self.celsius;
+        let k = c.windows(2).position(|w| w[0] <= t && t <= w[1])?;
+        let s = (t - c[k]) / (c[k + 1] - c[k]);
+        Some(self.mu[k] + s * (self.mu[k + 1] - self.mu[k]))
+    }
+
+    fn validate(&self) -> Result<(), InvalidSetting> {
+        let key = "matrix.temperature";
+        if self.celsius.len() < 2 || self.celsius.len() != self.mu.len() {
+            let detail = format!(
+                ": give 'celsius' and 'mu' of the same length, at least 2 rows (here {} and {})",
+                self.celsius.len(),
+                self.mu.len()
+            );
+            return Err(InvalidSetting::new(key, detail));
+        }
+        if !self.celsius.windows(2).all(|w| w[0] < w[1])
+            || self.celsius.iter().any(|t| !t.is_finite())
+        {
+            let detail = ": 'celsius' must be finite and strictly increasing";
+            return Err(InvalidSetting::new(key, detail));
+        }
+        if let Some(m) = self.mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
+            let detail = format!(": mu = {m} is not a friction coefficient (finite, >= 0)");
+            return Err(InvalidSetting::new(key, detail));
+        }
+        Ok(())
+    }
+}
+
+/// The `[matrix]` table of a scene.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatrixSettings {
+    #[serde(default)]
+    pub sampling: Sampling,
+    /// Number of points of a Sobol sample (a power of 2 stratifies best).
+    #[serde(default)]
+    pub points: Option<usize>,
+    /// Seed of the Sobol sample's scrambling: the same seed, the same points.
+    #[serde(default = "default_seed")]
+    pub seed: u32,
+    /// The axes (at least one); parameters not named keep the scene's value.
+    pub axes: BTreeMap<Axis, AxisRange>,
+    /// mu(T) of the sliding interfaces, for a temperature axis.
+    #[serde(default)]
+    pub temperature: Option<TemperatureTable>,
+}
+
+fn default_seed() -> u32 {
+    1
+}
+
+/// Largest sample: the Sobol sequence's index range.
+pub const MAX_POINTS: usize = 1 << 16;
+
+impl MatrixSettings {
+    /// The axes in their fixed order (the order of every point's values).
+    pub fn axis_list(&self) -> Vec<Axis> {
+        self.axes.keys().copied().collect()
+    }
+
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        if self.axes.is_empty() {
+            let detail = ": name at least one axis, e.g. [matrix.axes] pressure_bar = { from = 5.0, to = 40.0, points = 8 }";
+            return Err(InvalidSetting::new("matrix.axes", detail));
+        }
+        for (&axis, range) in &self.axes {
+            self.validate_axis(axis, range)?;
+        }
+        match (self.sampling, self.points) {
+            (Sampling::Sobol, Some(n)) if (1..=MAX_POINTS).contains(&n) => {}
+            (Sampling::Sobol, _) => {
+                let detail = format!(": a Sobol sample needs 'points' from 1 to {MAX_POINTS}");
+                return Err(InvalidSetting::new("matrix.points", detail));
+            }
+            (Sampling::Grid, Some(_)) => {
+                let detail = ": a grid has the product of its axes' points; 'points' is for sampling = \"sobol\"";
+                return Err(InvalidSetting::new("matrix.points", detail));
+            }
+            (Sampling::Grid, None) => {
+                let count: f64 = self
+                    .axes
+                    .values()
+                    .map(|r| r.values().len() as f64)
+                    .product();
+                if count > MAX_POINTS as f64 {
+                    let detail = format!(
+                        ": {count} grid points, more than {MAX_POINTS}: use sampling = \"sobol\""
+                    );
+                    return Err(InvalidSetting::new("matrix.axes", detail));
+                }
+            }
+        }
+        let temperature = self.axes.contains_key(&Axis::Temperature);
+        match (&self.temperature, temperature) {
+            (None, true) => {
+                let detail = ": a temperature axis needs the table [matrix.temperature] celsius = [...], mu = [...]";
+                return Err(InvalidSetting::new("matrix.temperature", detail));
+            }
+            (Some(_), false) => {
+                let detail = ": a temperature table without a temperature axis in [matrix.axes]";
+                return Err(InvalidSetting::new("matrix.temperature", detail));
+            }
+            (Some(table), true) => {
+                table.validate()?;
+                if self.axes.contains_key(&Axis::Mu) {
+                    let detail = ": temperature sets mu through its table: give either a mu axis or a temperature axis";
+                    return Err(InvalidSetting::new("matrix.axes.mu", detail));
+                }
+                let (lo, hi) = self.axes[&Axis::Temperature].range();
+                let (first, last) = (table.celsius[0], table.celsius[table.celsius.len() - 1]);
+                if lo < first || hi > last {
+                    let detail = format!(": the axis spans {lo} to {hi} deg C, the table only {first} to {last} (no extrapolation)");
+                    return Err(InvalidSetting::new("matrix.axes.temperature", detail));
+                }
+            }
+            (None, false) => {}
+        }
+        Ok(())
+    }
+
+    fn validate_axis(&self, axis: Axis, range: &AxisRange) -> Result<(), InvalidSetting> {
+        let key = format!("matrix.axes.{}", axis.name());
+        let has_range = range.from.is_some() || range.to.is_some();
+        if !range.values.is_empty() && (has_range || range.points.is_some()) {
+            let detail =
+                ": give either 'values' or 'from'/'to' (and 'points' for a grid), not both";
+            return Err(InvalidSetting::new(key, detail));
+        }
+        let usable = match self.sampling {
+            Sampling::Grid => !range.values().is_empty(),
+            Sampling::Sobol => range.from.is_some() && range.to.is_some() && range.points.is_none(),
+        };
+        if !usable {
+            let detail = match self.sampling {
+                Sampling::Grid => ": give 'values = [...]' or 'from', 'to' and 'points' (at least 2)",
+                Sampling::Sobol => ": a Sobol sample draws from a range: give 'from' and 'to' (no 'points' or 'values')",
+            };
+            return Err(InvalidSetting::new(key, detail));
+        }
+        let ends = [range.from, range.to].into_iter().flatten();
+        if let Some(v) = range
+            .values
+            .iter()
+            .copied()
+            .chain(ends)
+            .find(|&v| !axis.admits(v))
+        {
+            let detail = format!(
+                ": {v} is not a valid {} ({})",
+                axis.name(),
+                match axis {
+                    Axis::Mu => "finite, non-negative",
+                    Axis::Temperature => "finite, above -273.15",
+                    _ => "finite, positive",
+                }
+            );
+            return Err(InvalidSetting::new(key, detail));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> MatrixSettings {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn validation_names_the_key() {
+        let ok =
+            parse("sampling = \"sobol\"\npoints = 64\n[axes]\nmu = { from = 0.3, to = 0.6 }\n");
+        ok.validate().unwrap();
+        for (text, key) in [
+            ("[axes]\n", "matrix.axes"),
+            ("[axes]\nmu = { from = 0.3, to = 0.6 }\n", "matrix.axes.mu"),
+            ("sampling = \"sobol\"\n[axes]\nmu = { from = 0.3, to = 0.6 }\n", "matrix.points"),
+            ("[axes]\npressure_bar = { values = [10.0, -1.0] }\n", "matrix.axes.pressure_bar"),
+            ("[axes]\ntemperature = { values = [20.0, 100.0] }\n", "matrix.temperature"),
+            (
+                "[axes]\ntemperature = { values = [20.0, 400.0] }\n[temperature]\ncelsius = [0.0, 300.0]\nmu = [0.4, 0.3]\n",
+                "matrix.axes.temperature",
+            ),
+            (
+                "[axes]\ntemperature = { values = [20.0] }\nmu = { values = [0.4] }\n[temperature]\ncelsius = [0.0, 300.0]\nmu = [0.4, 0.3]\n",
+                "matrix.axes.mu",
+            ),
+        ] {
+            let err = parse(text).validate().unwrap_err();
+            assert_eq!(err.key, key, "{text}");
+        }
+    }
+
+    #[test]
+    fn temperature_table_interpolates_inside_and_refuses_outside() {
+        let t = TemperatureTable {
+            celsius: vec![20.0, 100.0, 300.0],
+            mu: vec![0.40, 0.44, 0.34],
+        };
+        assert!((t.mu(60.0).unwrap() - 0.42).abs() < 1e-15);
+        assert!((t.mu(300.0).unwrap() - 0.34).abs() < 1e-15);
+        assert_eq!(t.mu(301.0), None);
+    }
+}

@@ -1,0 +1,103 @@
+//! What a matrix point found: its parameters, and its complex modes or why it failed. These
+//! records are the journal's lines (`crate::io::matrix_journal`), so a killed run resumes and
+//! slices merge from them alone.
+
+use serde::{Deserialize, Serialize};
+
+use crate::eigen::complex_modes::{damping_ratio, frequency_hz, Complex};
+
+/// A complex mode at a point, labelled by the nominal mode it continues (by MAC).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PointMode {
+    /// C<label> of the nominal state's projected complex modes (1-based), when paired.
+    pub label: Option<usize>,
+    /// Re(s) (1/s).
+    pub re: f64,
+    /// Im(s) (rad/s).
+    pub im: f64,
+    /// MAC with the nominal mode it continues (0 when unpaired).
+    pub mac: f64,
+}
+
+impl PointMode {
+    pub fn s(&self) -> Complex {
+        (self.re, self.im)
+    }
+
+    pub fn frequency_hz(&self) -> f64 {
+        frequency_hz(self.s())
+    }
+
+    pub fn damping_ratio(&self) -> f64 {
+        damping_ratio(self.s())
+    }
+
+    /// "C12" or "new" (no nominal mode continues into it).
+    pub fn name(&self) -> String {
+        self.label.map_or_else(|| "new".into(), |l| format!("C{l}"))
+    }
+}
+
+/// A point's static state and complex modes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SolvedPoint {
+    /// The complex modes (below the complex modes' f_max when set), by frequency.
+    pub modes: Vec<PointMode>,
+    /// Newton iterations of the static state.
+    pub newton_iterations: usize,
+    /// LU factorizations of the static state.
+    pub factorizations: usize,
+    /// The warm start failed and the static state was solved from the unloaded state.
+    pub cold_restart: bool,
+    pub seconds_statics: f64,
+    pub seconds_modes: f64,
+}
+
+/// A point's outcome.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "snake_case")]
+pub enum Outcome {
+    Solved(SolvedPoint),
+    /// Recorded, and the matrix goes on.
+    Failed {
+        reason: String,
+    },
+}
+
+/// One operating point of the matrix.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PointResult {
+    /// Index among all the matrix' points (from 0).
+    pub index: usize,
+    /// The axes' values (the order of `MatrixSettings::axis_list`).
+    pub values: Vec<f64>,
+    pub outcome: Outcome,
+}
+
+impl PointResult {
+    pub fn solved(&self) -> Option<&SolvedPoint> {
+        match &self.outcome {
+            Outcome::Solved(s) => Some(s),
+            Outcome::Failed { .. } => None,
+        }
+    }
+
+    /// The modes unstable beyond `margin` (damping ratio < -margin).
+    pub fn unstable(&self, margin: f64) -> impl Iterator<Item = &PointMode> {
+        self.solved()
+            .into_iter()
+            .flat_map(|s| s.modes.iter())
+            .filter(move |m| m.damping_ratio() < -margin)
+    }
+
+    /// The largest Re(s) of the point's modes (NaN for a failed point): the squeal
+    /// propensity, positive where a mode is unstable.
+    pub fn largest_real_part(&self) -> f64 {
+        self.solved().map_or(f64::NAN, |s| {
+            s.modes
+                .iter()
+                .map(|m| m.re)
+                .fold(f64::NEG_INFINITY, f64::max)
+        })
+    }
+}

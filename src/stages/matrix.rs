@@ -1,0 +1,330 @@
+//! Stage 5c: the noise matrix. Per operating point (pressure, speed, friction, contact law,
+//! temperature) the static state is re-solved, warm-started from the nearest finished point
+//! (from the unloaded state when that fails), the contact tangent re-projected on the fixed
+//! real modes of the nominal state and the dense complex modes solved; each mode is labelled
+//! by the nominal mode it continues (MAC), so a label means the same at every point whatever
+//! the order, the slice or the resumption that computed it. A point that fails is recorded
+//! with its reason and the matrix goes on.
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use super::statics::Preloaded;
+use super::RunError;
+use crate::contact::ResolvedInterface;
+use crate::eigen::complex_modes::{
+    frequency_hz, projected_coordinates, ComplexModeSettings, DampingSettings, DenseEigenpair,
+};
+use crate::eigen::real_modes::RealModes;
+use crate::eigen::stability::ProjectedStability;
+use crate::eigen::sweep::{apply_to_laws, SweepParameter};
+use crate::eigen::tracking::pair_modes;
+use crate::fem::dofmap::DofMap;
+use crate::la::{Petsc, SparseMatrix, Vector};
+use crate::matrix::point::{Outcome, PointMode, PointResult, SolvedPoint};
+use crate::matrix::sample::{points, warm_order, Slice};
+use crate::matrix::{Axis, MatrixSettings, Sampling};
+use crate::statics::StaticSettings;
+
+/// What the matrix needs from the earlier stages.
+pub struct MatrixInputs<'a, 'p> {
+    pub k0: &'a SparseMatrix<'p>,
+    pub dofs: &'a DofMap,
+    pub modes: &'a RealModes<'p>,
+    pub preload: &'a Preloaded<'p>,
+    /// The scene's brake pressure (bar): the load scales from it.
+    pub pressure_bar: f64,
+    pub statics: &'a StaticSettings,
+    pub complex: &'a ComplexModeSettings,
+    pub damping: DampingSettings,
+}
+
+/// Which points this run computes: a slice, less those a journal already holds.
+pub struct MatrixRun {
+    pub slice: Slice,
+    /// Points finished by an earlier run of this slice (from its journal).
+    pub done: Vec<PointResult>,
+}
+
+/// The points of one run (a slice, or the whole matrix).
+#[derive(Debug, Clone)]
+pub struct MatrixOutput {
+    pub axes: Vec<Axis>,
+    pub sampling: Sampling,
+    pub slice: Slice,
+    /// Points of the whole matrix.
+    pub total: usize,
+    /// This slice's points by index: those resumed and those computed.
+    pub points: Vec<PointResult>,
+    /// Of which taken from the journal.
+    pub resumed: usize,
+    /// The nominal parameter values (the scene's), in axis order.
+    pub nominal: Vec<f64>,
+    /// Damping ratio below -margin counts as unstable.
+    pub margin: f64,
+}
+
+/// The scene's value of each axis (temperature: none, NaN).
+pub fn nominal_values(axes: &[Axis], input: &MatrixInputs) -> Vec<f64> {
+    let contact = &input.preload.contact;
+    let sliding = contact
+        .interfaces()
+        .iter()
+        .find(|i| i.friction.is_sliding());
+    axes.iter()
+        .map(|a| match a {
+            Axis::PressureBar => input.pressure_bar,
+            Axis::DiscSpeed => contact.disc_speed(),
+            Axis::Mu => sliding.map_or(f64::NAN, |i| i.friction.mu()),
+            Axis::P0 | Axis::Lambda => sliding.map_or(f64::NAN, |i| match i.normal {
+                crate::contact::law::NormalLaw::Exponential { p0, lambda, .. } => {
+                    if *a == Axis::P0 {
+                        p0
+                    } else {
+                        lambda
+                    }
+                }
+                _ => f64::NAN,
+            }),
+            Axis::Temperature => f64::NAN,
+        })
+        .collect()
+}
+
+/// The contact laws, disc speed and load scale of a point.
+fn point_laws(
+    settings: &MatrixSettings,
+    axes: &[Axis],
+    values: &[f64],
+    input: &MatrixInputs,
+) -> Result<(Vec<ResolvedInterface>, f64, f64), RunError> {
+    let contact = &input.preload.contact;
+    let (mut laws, mut speed, mut scale) =
+        (contact.interfaces().to_vec(), contact.disc_speed(), 1.0);
+    for (&axis, &v) in axes.iter().zip(values) {
+        let (parameter, value) = match axis {
+            Axis::PressureBar => {
+                scale = v / input.pressure_bar;
+                continue;
+            }
+            Axis::DiscSpeed => {
+                speed = v;
+                continue;
+            }
+            Axis::Temperature => {
+                let table = settings.temperature.as_ref().expect("validated: a table");
+                let mu = table.mu(v).expect("validated: inside the table");
+                (SweepParameter::Mu, mu)
+            }
+            other => (other.as_sweep().expect("a law parameter"), v),
+        };
+        apply_to_laws(parameter, value, &mut laws)
+            .map_err(|e| RunError::scene("matrix.axes", e.to_string()))?;
+    }
+    Ok((laws, speed, scale))
+}
+
+/// Runs the matrix' points of `run.slice` that `run.done` lacks, in warm-start order, handing
+/// each finished point to `record` (the journal) before the next starts.
+///
+/// # Collective
+pub fn matrix<'p>(
+    petsc: &'p Petsc,
+    settings: &MatrixSettings,
+    input: MatrixInputs<'_, 'p>,
+    run: MatrixRun,
+    mut record: impl FnMut(&PointResult) -> Result<(), RunError>,
+) -> Result<MatrixOutput, RunError> {
+    let axes = settings.axis_list();
+    let values = points(settings);
+    let nominal = nominal_values(&axes, &input);
+    // A law the axes cannot set fails here, before any point.
+    point_laws(settings, &axes, &values[0], &input)?;
+    let done: HashMap<usize, PointResult> = run.done.into_iter().map(|p| (p.index, p)).collect();
+    let todo: Vec<usize> = run
+        .slice
+        .range(values.len())
+        .filter(|i| !done.contains_key(i))
+        .collect();
+    let ranges: Vec<(f64, f64)> = settings.axes.values().map(|r| r.range()).collect();
+    // The nominal point itself, where the scene's value of an axis is inside its range
+    // (temperature has none: the range's middle).
+    let start: Vec<f64> = nominal
+        .iter()
+        .zip(&ranges)
+        .map(|(&v, &(lo, hi))| if v.is_finite() { v } else { 0.5 * (lo + hi) })
+        .collect();
+    let order = warm_order(&values, &todo, &start, &ranges);
+    let statics_state = &input.preload.state.displacement;
+    let solver = PointSolver::new(petsc, input)?;
+    let mut kept: HashMap<usize, Vector<'p>> = HashMap::new();
+    // The last use of each point's static state as a warm start (then it is dropped).
+    let mut last_use: HashMap<usize, usize> = HashMap::new();
+    for (k, &(_, from)) in order.iter().enumerate() {
+        if let Some(f) = from {
+            last_use.insert(f, k);
+        }
+    }
+    let mut bar = crate::progress::Progress::new("matrix", order.len(), petsc.rank());
+    let mut computed = Vec::with_capacity(order.len());
+    for (k, &(i, from)) in order.iter().enumerate() {
+        let warm = from.and_then(|f| kept.get(&f)).unwrap_or(statics_state);
+        let (result, state) = solver.point(petsc, settings, &axes, i, &values[i], warm)?;
+        record(&result)?;
+        if let (Some(q), true) = (state, last_use.contains_key(&i)) {
+            kept.insert(i, q);
+        }
+        if let Some(f) = from {
+            if last_use.get(&f) == Some(&k) {
+                kept.remove(&f);
+            }
+        }
+        computed.push(result);
+        bar.update(k + 1, &format!("point {}", i + 1));
+    }
+    bar.finish();
+    let resumed = done.len();
+    let mut all: Vec<PointResult> = done.into_values().chain(computed).collect();
+    all.sort_by_key(|p| p.index);
+    Ok(MatrixOutput {
+        axes,
+        sampling: settings.sampling,
+        slice: run.slice,
+        total: values.len(),
+        points: all,
+        resumed,
+        nominal,
+        margin: solver.input.complex.instability_margin,
+    })
+}
+
+/// The fixed parts of every point: the projection basis and the nominal modes that label.
+struct PointSolver<'a, 'p> {
+    input: MatrixInputs<'a, 'p>,
+    stability: ProjectedStability,
+    nominal: Vec<DenseEigenpair>,
+}
+
+impl<'a, 'p> PointSolver<'a, 'p> {
+    /// # Collective
+    fn new(petsc: &'p Petsc, input: MatrixInputs<'a, 'p>) -> Result<Self, RunError> {
+        let comm = petsc.world();
+        let (contact, state) = (&input.preload.contact, &input.preload.state.contact);
+        let stability = ProjectedStability::new(comm, contact, input.modes, state, input.damping)?;
+        let (kp, cp) = stability.operators_at(comm, contact, state);
+        let nominal = projected_coordinates(stability.projection.size, &kp, &cp)
+            .map_err(crate::la::LaError::from)?;
+        Ok(PointSolver {
+            input,
+            stability,
+            nominal,
+        })
+    }
+
+    /// One point: its result, and its static displacement when solved.
+    ///
+    /// # Collective
+    fn point(
+        &self,
+        petsc: &'p Petsc,
+        settings: &MatrixSettings,
+        axes: &[Axis],
+        index: usize,
+        values: &[f64],
+        warm: &Vector<'p>,
+    ) -> Result<(PointResult, Option<Vector<'p>>), RunError> {
+        let input = &self.input;
+        let (laws, speed, scale) = point_laws(settings, axes, values, input)?;
+        let contact = input.preload.contact.with_laws(laws, speed)?;
+        let mut f = input.preload.load.duplicate()?;
+        f.copy_from(&input.preload.load)?;
+        f.scale(scale)?;
+        let solve = |start| {
+            crate::statics::solve(
+                petsc,
+                input.k0,
+                input.dofs,
+                &contact,
+                &f,
+                input.statics,
+                start,
+                |_| {},
+            )
+        };
+        let t = Instant::now();
+        let failed = |reason: String| PointResult {
+            index,
+            values: values.to_vec(),
+            outcome: Outcome::Failed { reason },
+        };
+        let (state, cold_restart) = match solve(Some(warm)) {
+            Ok(s) => (s, false),
+            Err(warm_error) => match solve(None) {
+                Ok(s) => (s, true),
+                Err(cold) => {
+                    let reason = format!("static state: from the nearest point: {warm_error}; from the unloaded state: {cold}");
+                    return Ok((failed(reason), None));
+                }
+            },
+        };
+        let seconds_statics = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let pairs = match self
+            .stability
+            .modes_at(petsc.world(), &contact, &state.contact)
+        {
+            Ok(p) => p,
+            Err(e) => {
+                return Ok((
+                    failed(format!("complex modes: {e}")),
+                    Some(state.displacement),
+                ))
+            }
+        };
+        let modes = self.labelled(pairs);
+        if modes
+            .iter()
+            .any(|m| !(m.re.is_finite() && m.im.is_finite()))
+        {
+            let reason = "complex modes: an eigenvalue is not finite (NaN or Inf)".to_string();
+            return Ok((failed(reason), Some(state.displacement)));
+        }
+        let solved = SolvedPoint {
+            modes,
+            newton_iterations: state.log.iter().filter(|r| r.step_length > 0.0).count(),
+            factorizations: state.factorizations,
+            cold_restart,
+            seconds_statics,
+            seconds_modes: t.elapsed().as_secs_f64(),
+        };
+        let result = PointResult {
+            index,
+            values: values.to_vec(),
+            outcome: Outcome::Solved(solved),
+        };
+        Ok((result, Some(state.displacement)))
+    }
+
+    /// The modes below f_max by frequency, each labelled by the nominal mode it continues.
+    fn labelled(&self, mut pairs: Vec<DenseEigenpair>) -> Vec<PointMode> {
+        pairs.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1).then(a.0 .0.total_cmp(&b.0 .0)));
+        let mut label = vec![None; pairs.len()];
+        for (n, paired) in pair_modes(&self.nominal, &pairs).into_iter().enumerate() {
+            if let Some((j, mac)) = paired {
+                label[j] = Some((n + 1, mac));
+            }
+        }
+        let f_max = self.input.complex.f_max_hz;
+        pairs
+            .iter()
+            .zip(label)
+            .filter(|(p, _)| f_max.is_none_or(|f| frequency_hz(p.0) <= f))
+            .map(|(p, l)| PointMode {
+                label: l.map(|l| l.0),
+                re: p.0 .0,
+                im: p.0 .1,
+                mac: l.map_or(0.0, |l| l.1),
+            })
+            .collect()
+    }
+}
