@@ -209,6 +209,8 @@ mod tests {
                         im: 18296.5,
                         mac: 0.987654321,
                     }],
+                    braking_torque: 471.5,
+                    normal_force: 9000.25,
                     newton_iterations: 3,
                     factorizations: 1,
                     cold_restart: false,

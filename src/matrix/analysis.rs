@@ -303,6 +303,8 @@ mod tests {
                         mac: 1.0,
                     })
                     .collect(),
+                braking_torque: 1.0,
+                normal_force: 1.0,
                 newton_iterations: 1,
                 factorizations: 1,
                 cold_restart: false,
@@ -343,10 +345,13 @@ mod tests {
         // Their frequencies: 1,100 Hz (band 1,000 Hz: 891-1,122) and 1,200 Hz (1,250 Hz).
         let bands: Vec<(f64, usize)> = a.bands.iter().map(|b| (b.nominal, b.points)).collect();
         assert_eq!(bands, vec![(1000.0, 1), (1250.0, 2)]);
+        // Three cells squeal at every point (one point each); the tie goes to the last, the
+        // top third of both ranges.
         let worst = a.worst_region.unwrap();
-        assert_eq!((worst.points, worst.squealing), (2, 2));
-        assert_eq!(worst.bounds[0].0, Axis::PressureBar);
+        assert_eq!((worst.points, worst.squealing), (1, 1));
+        assert_eq!((worst.bounds[0].0, worst.bounds[1].0), (Axis::PressureBar, Axis::Mu));
         assert!((worst.bounds[0].1 - 4.0 / 3.0).abs() < 1e-12);
+        assert!((worst.bounds[1].1 - 2.0 / 3.0).abs() < 1e-12);
     }
 
     /// A Sobol sample of Y = x1 (x2 without effect): the index of x1 near 1 and of x2 near 0,

@@ -43,6 +43,10 @@ impl PointMode {
 pub struct SolvedPoint {
     /// The complex modes (below the complex modes' f_max when set), by frequency.
     pub modes: Vec<PointMode>,
+    /// Braking torque of the static state (N m), summed over the interfaces.
+    pub braking_torque: f64,
+    /// Normal contact force of the static state (N), summed over the interfaces.
+    pub normal_force: f64,
     /// Newton iterations of the static state.
     pub newton_iterations: usize,
     /// LU factorizations of the static state.

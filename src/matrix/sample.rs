@@ -245,9 +245,13 @@ mod tests {
         let mut seen: Vec<usize> = order.iter().map(|o| o.0).collect();
         seen.sort();
         assert_eq!(seen, todo);
-        for &(i, from) in &order[1..] {
-            let from = from.unwrap();
-            assert_eq!((i as i64 - from as i64).abs(), 1, "{order:?}");
+        // Each starts from the nearest of the nominal point and the points before it.
+        let at = |o: Option<usize>| o.map_or(6.2, |j| j as f64);
+        for (k, &(i, from)) in order.iter().enumerate() {
+            let d = (i as f64 - at(from)).abs();
+            let before = order[..k].iter().map(|o| Some(o.0)).chain([None]);
+            let best = before.map(|o| (i as f64 - at(o)).abs()).fold(f64::INFINITY, f64::min);
+            assert_eq!(d, best, "{order:?}");
         }
     }
 }

@@ -65,6 +65,7 @@ pub(super) fn noise_matrix<'p>(
     };
     let path = output.join(JOURNAL);
     let done = crate::fault::checked(earlier_points(&path, &header, options.restart))?;
+
     let mut writer = None;
     if petsc.rank() == 0 {
         let opened = match &done {
@@ -103,6 +104,29 @@ pub(super) fn noise_matrix<'p>(
 
 fn journal_error(e: matrix_journal::JournalError) -> RunError {
     RunError::scene("matrix", format!("journal: {e}"))
+}
+
+/// Fails early (before the model is built) where the journal in `output` would be refused.
+pub(super) fn check_journal(
+    scene: &Scene,
+    output: &Path,
+    options: &RunOptions,
+) -> Result<(), RunError> {
+    let Some(settings) = &scene.matrix else {
+        return Ok(());
+    };
+    let header = JournalHeader {
+        squeal_matrix: FORMAT,
+        fingerprint: scene.matrix_fingerprint(),
+        sampling: settings.sampling,
+        total: crate::matrix::sample::points(settings).len(),
+        slice: options.slice.to_string(),
+        nominal: Vec::new(),
+        margin: 0.0,
+        scene: String::new(),
+        axes: settings.axis_list(),
+    };
+    earlier_points(&output.join(JOURNAL), &header, options.restart).map(|_| ())
 }
 
 /// The points an earlier run of this scene and slice left in the journal (with `--restart`);

@@ -84,6 +84,7 @@ pub fn run_with(
         );
         return Err(RunError::scene("matrix", message));
     }
+    checked(matrix::check_journal(scene, output, options))?;
     if petsc.rank() == 0 {
         checked(
             std::fs::create_dir_all(output).map_err(|source| RunError::Io {

@@ -330,7 +330,7 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
     let run = &r.run;
     let names: Vec<&str> = run.axes.iter().map(|a| a.name()).collect();
     let mut points = format!(
-        "point,{},status,unstable_modes,largest_re_s,most_unstable,most_unstable_hz,reason\n",
+        "point,{},status,braking_torque_nm,unstable_modes,largest_re_s,most_unstable,most_unstable_hz,reason\n",
         names.join(",")
     );
     let mut modes = format!(
@@ -345,8 +345,9 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
                 let worst = p.unstable(run.margin).max_by(|a, b| a.re.total_cmp(&b.re));
                 let _ = writeln!(
                     points,
-                    "{},{values},solved,{},{:.10e},{},{},",
+                    "{},{values},solved,{:.10e},{},{:.10e},{},{},",
                     p.index + 1,
+                    s.braking_torque,
                     p.unstable(run.margin).count(),
                     p.largest_real_part(),
                     worst.map_or(String::new(), |m| m.name()),
@@ -369,7 +370,7 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
             Outcome::Failed { reason } => {
                 let _ = writeln!(
                     points,
-                    "{},{values},failed,,,,,\"{}\"",
+                    "{},{values},failed,,,,,,\"{}\"",
                     p.index + 1,
                     reason.replace('"', "'")
                 );

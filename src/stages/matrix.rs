@@ -291,6 +291,8 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         }
         let solved = SolvedPoint {
             modes,
+            braking_torque: state.summaries.iter().map(|i| i.torque).sum(),
+            normal_force: state.summaries.iter().map(|i| i.normal_force).sum(),
             newton_iterations: state.log.iter().filter(|r| r.step_length > 0.0).count(),
             factorizations: state.factorizations,
             cold_restart,

@@ -9,6 +9,7 @@ pub mod growth;
 pub mod link;
 pub mod loudness;
 pub mod mode_coupling;
+pub mod noise_matrix;
 pub mod parallel_and_solvers;
 pub mod pseudo_trajectory;
 pub mod real_modes_verification;
@@ -43,6 +44,7 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(growth::tests());
     v.extend(link::tests());
     v.extend(pseudo_trajectory::tests());
+    v.extend(noise_matrix::tests());
     v
 }
 

@@ -1,0 +1,331 @@
+//! The noise matrix (DESIGN.md §1 sweeps, issue "virtual noise dynamometer").
+//!
+//! - A matrix point is the scene run at that point's parameters: its static state (braking
+//!   torque, normal force) equals the one a separate run of the scene with those parameters
+//!   finds from the unloaded state, within what the static tolerance allows (1e-9 of the
+//!   force residual; asserted 1e-6 relative in torque and force, a bound on the state's
+//!   error for a contact tangent of condition <= 1e3 relative to the load); at the scene's own
+//!   parameters its complex modes are the projected complex-modes stage's (same basis, same
+//!   state: 1e-7 relative in s, as the sweep's nominal point) and each carries its own label.
+//!   The other points' modes are compared with nothing independent here: the projected route
+//!   is verified against the full one and the dense reference elsewhere in the suite.
+//! - Slices merged (`--slice 1/2`, `2/2`, `squeal merge`) hold the same points as the
+//!   unsliced run (parameters bit for bit, results to the static tolerance: the warm starts
+//!   differ); a killed run resumed with `--restart` computes only the points its journal lacks
+//!   and ends with the same results; a journal of another scene, or one that holds points
+//!   without `--restart`, is refused with an error naming the file.
+//! - 1 and 2 ranks agree (the points' torques and eigenvalues, to the static tolerance).
+
+use std::path::{Path, PathBuf};
+
+use squeal::io::matrix_journal::{self, JOURNAL};
+use squeal::la::Petsc;
+use squeal::matrix::point::PointResult;
+use squeal::matrix::sample::Slice;
+use squeal::measure::{exceeds, nan_max};
+use squeal::pipeline::{RunOptions, RunSummary};
+
+use super::common::{one_rank_values, rel, say, suite_dir};
+
+pub fn tests() -> Vec<super::NamedTest> {
+    vec![
+        (
+            "noise_matrix_points_equal_single_scene_runs_and_the_nominal_modes",
+            points_equal_single_runs,
+        ),
+        (
+            "noise_matrix_slices_merge_to_the_whole_and_a_killed_run_resumes",
+            slices_and_resume,
+        ),
+    ]
+}
+
+/// The small brake with a 30-mode basis.
+fn brake(pressure_bar: f64, mu: f64) -> String {
+    format!(
+        "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = {pressure_bar:?}\n\
+         [contact]\ndisc_speed = 6.2832\n\
+         [contact.sliding]\nnormal = {{ law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }}\n\
+         friction = {{ law = \"coulomb\", mu = {mu:?}, slip_speed = 1.0e-2 }}\n\
+         [statics]\n[damping]\nrayleigh_beta = 1.0e-7\n[real_modes]\ncount = 30\n\
+         [complex_modes]\nmethod = \"projected\"\n"
+    )
+}
+
+fn run(petsc: &Petsc, text: &str, name: &str, options: &RunOptions) -> Result<RunSummary, String> {
+    let scene = squeal::scene::Scene::parse(text, name).map_err(|e| e.to_string())?;
+    let out = suite_dir().join(name);
+    squeal::pipeline::run_with(petsc, &scene, text, Path::new("."), &out, &[], options)
+        .map_err(|e| e.to_string())
+}
+
+/// A fresh output directory (a journal left by an earlier suite run would be refused).
+fn fresh(petsc: &Petsc, name: &str) -> PathBuf {
+    let dir = suite_dir().join(name);
+    if petsc.rank() == 0 {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    squeal::parallel::barrier(petsc.world());
+    dir
+}
+
+fn points(summary: &RunSummary) -> Result<Vec<PointResult>, String> {
+    Ok(summary
+        .matrix
+        .as_ref()
+        .ok_or("no matrix in the summary")?
+        .run
+        .points
+        .clone())
+}
+
+/// Torque, normal force and every eigenvalue of a solved point, in order.
+fn figures(p: &PointResult) -> Result<Vec<f64>, String> {
+    let s = p
+        .solved()
+        .ok_or(format!("point {} failed: {:?}", p.index + 1, p.outcome))?;
+    let mut v = vec![s.braking_torque, s.normal_force];
+    v.extend(s.modes.iter().flat_map(|m| [m.re, m.im]));
+    Ok(v)
+}
+
+/// Largest relative difference of two points' figures (eigenvalues relative to |s|).
+fn difference(a: &PointResult, b: &PointResult) -> Result<f64, String> {
+    let (x, y) = (figures(a)?, figures(b)?);
+    if x.len() != y.len() {
+        return Err(format!(
+            "point {}: {} against {} figures",
+            a.index + 1,
+            x.len(),
+            y.len()
+        ));
+    }
+    let mut worst = nan_max(rel(x[0], y[0]), rel(x[1], y[1]));
+    for k in (2..x.len()).step_by(2) {
+        let scale = y[k].hypot(y[k + 1]);
+        worst = nan_max(worst, (x[k] - y[k]).hypot(x[k + 1] - y[k + 1]) / scale);
+    }
+    Ok(worst)
+}
+
+fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
+    let matrix = "[matrix]\nsampling = \"grid\"\n[matrix.axes]\n\
+                  pressure_bar = { values = [10.0, 20.0] }\nmu = { values = [0.3, 0.4] }\n";
+    fresh(petsc, "matrix-grid");
+    let summary = run(
+        petsc,
+        &(brake(20.0, 0.4) + matrix),
+        "matrix-grid",
+        &RunOptions::default(),
+    )?;
+    let pts = points(&summary)?;
+    if pts.len() != 4 {
+        return Err(format!("{} points, expected the 2 x 2 grid", pts.len()));
+    }
+    // The nominal point (20 bar, mu 0.4) is the last of the grid (the last axis fastest).
+    let nominal = &summary
+        .complex
+        .first()
+        .ok_or("no projected complex modes")?
+        .modes;
+    let at = pts[3].solved().ok_or("the nominal point failed")?;
+    if pts[3].values != [20.0, 0.4] || at.modes.len() != nominal.len() {
+        return Err(format!(
+            "nominal point {:?} with {} modes, the stage has {}",
+            pts[3].values,
+            at.modes.len(),
+            nominal.len()
+        ));
+    }
+    let mut worst_mode = 0.0f64;
+    for (k, (m, n)) in at.modes.iter().zip(nominal).enumerate() {
+        let s = n.eigenvalue;
+        worst_mode = nan_max(worst_mode, (m.re - s.0).hypot(m.im - s.1) / s.0.hypot(s.1));
+        if m.label != Some(k + 1) || m.mac.is_nan() || m.mac <= 0.999 {
+            return Err(format!(
+                "nominal point: mode {} labelled {:?} with MAC {}",
+                k + 1,
+                m.label,
+                m.mac
+            ));
+        }
+    }
+    // The other points against runs of the scene at their parameters (statics from zero).
+    let mut worst_static = 0.0f64;
+    for p in &pts[..3] {
+        let (pressure, mu) = (p.values[0], p.values[1]);
+        let name = format!("matrix-single-{pressure}-{mu}");
+        let single = run(
+            petsc,
+            &brake(pressure, mu).replace(
+                "[real_modes]\ncount = 30\n[complex_modes]\nmethod = \"projected\"\n",
+                "",
+            ),
+            &name,
+            &RunOptions::default(),
+        )?;
+        let st = single.statics.as_ref().ok_or("no static summary")?;
+        let torque: f64 = st.interfaces.iter().map(|(_, i)| i.torque).sum();
+        let normal: f64 = st.interfaces.iter().map(|(_, i)| i.normal_force).sum();
+        let s = p.solved().ok_or(format!("point {:?} failed", p.values))?;
+        worst_static = nan_max(
+            worst_static,
+            nan_max(rel(s.braking_torque, torque), rel(s.normal_force, normal)),
+        );
+        say(petsc, &format!("pressure {pressure} bar, mu {mu}: torque {:.6} N m (single run {torque:.6}), {} unstable modes", s.braking_torque, p.unstable(1e-4).count()));
+    }
+    say(petsc, &format!("nominal point's modes against the stage: {worst_mode:.1e}; static states against single runs: {worst_static:.1e}"));
+    if exceeds(worst_mode, 1e-7) || exceeds(worst_static, 1e-6) {
+        return Err(format!("nominal modes off by {worst_mode:e} (bound 1e-7), static states by {worst_static:e} (bound 1e-6)"));
+    }
+    let all: Vec<f64> = pts
+        .iter()
+        .map(figures)
+        .collect::<Result<Vec<_>, _>>()?
+        .concat();
+    if let Some(one) = one_rank_values(petsc, "noise-matrix-grid", &all)? {
+        let d = one
+            .iter()
+            .zip(&all)
+            .map(|(a, b)| rel(*b, *a))
+            .fold(0.0, nan_max);
+        say(petsc, &format!("1 vs {} ranks: {d:.1e}", petsc.size()));
+        if exceeds(d, 1e-6) {
+            return Err(format!("1 vs {} ranks differ by {d:e}", petsc.size()));
+        }
+    }
+    Ok(())
+}
+
+fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
+    let matrix = "[matrix]\nsampling = \"sobol\"\npoints = 8\nseed = 5\n[matrix.axes]\n\
+                  pressure_bar = { from = 10.0, to = 30.0 }\ndisc_speed = { from = 2.0, to = 12.0 }\n";
+    let text = brake(20.0, 0.4) + matrix;
+    let whole_dir = fresh(petsc, "matrix-whole");
+    let whole = points(&run(petsc, &text, "matrix-whole", &RunOptions::default())?)?;
+    let mut slice_dirs = Vec::new();
+    for k in 1..=2 {
+        let name = format!("matrix-slice-{k}");
+        slice_dirs.push(fresh(petsc, &name));
+        let options = RunOptions {
+            slice: Slice { index: k, count: 2 },
+            ..Default::default()
+        };
+        let part = points(&run(petsc, &text, &name, &options)?)?;
+        let expected = Slice { index: k, count: 2 }.range(8);
+        if part.iter().map(|p| p.index).collect::<Vec<_>>() != expected.clone().collect::<Vec<_>>()
+        {
+            return Err(format!(
+                "slice {k}/2 computed {:?}",
+                part.iter().map(|p| p.index).collect::<Vec<_>>()
+            ));
+        }
+    }
+    let merged_dir = fresh(petsc, "matrix-merged");
+    let merged = squeal::pipeline::merge::merge(petsc.world(), &slice_dirs, &merged_dir)
+        .map_err(|e| e.to_string())?;
+    let worst_merge = compare(&whole, &merged.run.points)?;
+
+    // A run killed after 3 points (its journal cut in the 4th line), resumed.
+    let resumed_dir = fresh(petsc, "matrix-resumed");
+    if petsc.rank() == 0 {
+        std::fs::create_dir_all(&resumed_dir).map_err(|e| e.to_string())?;
+        let full = std::fs::read_to_string(whole_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+        let lines: Vec<&str> = full.lines().collect();
+        let cut = format!(
+            "{}\n{}",
+            lines[..4].join("\n"),
+            &lines[4][..lines[4].len() / 2]
+        );
+        std::fs::write(resumed_dir.join(JOURNAL), cut).map_err(|e| e.to_string())?;
+    }
+    squeal::parallel::barrier(petsc.world());
+    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+    let kept: Vec<usize> = journal.points.iter().map(|p| p.index).collect();
+    let refused = run(petsc, &text, "matrix-resumed", &RunOptions::default());
+    match refused {
+        Err(e) if e.contains("--restart") && e.contains(JOURNAL) => {}
+        other => {
+            return Err(format!(
+                "a journal with points, no --restart: {:?}",
+                other.map(|_| "ran")
+            ))
+        }
+    }
+    let restart = RunOptions {
+        restart: true,
+        ..Default::default()
+    };
+    let summary = run(petsc, &text, "matrix-resumed", &restart)?;
+    let report = summary.matrix.as_ref().ok_or("no matrix")?;
+    if report.run.resumed != 3 || kept.len() != 3 || report.run.points.len() != 8 {
+        return Err(format!(
+            "resumed {} (journal kept {kept:?}), {} points in all",
+            report.run.resumed,
+            report.run.points.len()
+        ));
+    }
+    for p in &report.run.points {
+        if kept.contains(&p.index) && Some(p) != whole.iter().find(|w| w.index == p.index) {
+            return Err(format!("resumed point {} changed", p.index + 1));
+        }
+    }
+    let worst_resume = compare(&whole, &report.run.points)?;
+    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+    if journal.points.len() != 8 || journal.truncated {
+        return Err(format!(
+            "the resumed journal holds {} points (cut: {})",
+            journal.points.len(),
+            journal.truncated
+        ));
+    }
+    // Another scene (another seed) on this journal: refused, naming the file.
+    let other = text.replace("seed = 5", "seed = 6");
+    match run(petsc, &other, "matrix-resumed", &restart) {
+        Err(e) if e.contains("another scene") && e.contains(JOURNAL) => {}
+        other => {
+            return Err(format!(
+                "restart with another scene: {:?}",
+                other.map(|_| "ran")
+            ))
+        }
+    }
+    say(
+        petsc,
+        &format!("merged slices vs whole: {worst_merge:.1e}; resumed vs whole: {worst_resume:.1e}"),
+    );
+    Ok(())
+}
+
+/// The same points (indices, parameters bit for bit, labels) with results within 1e-6
+/// relative (torque, force, eigenvalues); returns the largest difference.
+fn compare(whole: &[PointResult], other: &[PointResult]) -> Result<f64, String> {
+    if whole.len() != other.len() {
+        return Err(format!("{} points against {}", other.len(), whole.len()));
+    }
+    let mut worst = 0.0f64;
+    for (a, b) in whole.iter().zip(other) {
+        if a.index != b.index || a.values != b.values {
+            return Err(format!(
+                "point {} {:?} against {} {:?}",
+                b.index + 1,
+                b.values,
+                a.index + 1,
+                a.values
+            ));
+        }
+        let d = difference(b, a)?;
+        let (sa, sb) = (a.solved().ok_or("failed")?, b.solved().ok_or("failed")?);
+        let labels = |s: &squeal::matrix::point::SolvedPoint| {
+            s.modes.iter().map(|m| m.label).collect::<Vec<_>>()
+        };
+        if labels(sa) != labels(sb) {
+            return Err(format!("point {}: labels differ", a.index + 1));
+        }
+        worst = nan_max(worst, d);
+    }
+    if exceeds(worst, 1e-6) {
+        return Err(format!("results differ by {worst:e} (bound 1e-6)"));
+    }
+    Ok(worst)
+}
