@@ -201,7 +201,7 @@ mod tests {
         let points = vec![
             PointResult {
                 index: 3,
-                values: vec![12.345678901234567, 0.1 + 0.2],
+                values: vec![11.413238048553469, 0.1 + 0.2],
                 outcome: Outcome::Solved(SolvedPoint {
                     modes: vec![PointMode {
                         label: Some(35),

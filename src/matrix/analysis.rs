@@ -349,7 +349,10 @@ mod tests {
         // top third of both ranges.
         let worst = a.worst_region.unwrap();
         assert_eq!((worst.points, worst.squealing), (1, 1));
-        assert_eq!((worst.bounds[0].0, worst.bounds[1].0), (Axis::PressureBar, Axis::Mu));
+        assert_eq!(
+            (worst.bounds[0].0, worst.bounds[1].0),
+            (Axis::PressureBar, Axis::Mu)
+        );
         assert!((worst.bounds[0].1 - 4.0 / 3.0).abs() < 1e-12);
         assert!((worst.bounds[1].1 - 2.0 / 3.0).abs() < 1e-12);
     }

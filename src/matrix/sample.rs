@@ -250,7 +250,9 @@ mod tests {
         for (k, &(i, from)) in order.iter().enumerate() {
             let d = (i as f64 - at(from)).abs();
             let before = order[..k].iter().map(|o| Some(o.0)).chain([None]);
-            let best = before.map(|o| (i as f64 - at(o)).abs()).fold(f64::INFINITY, f64::min);
+            let best = before
+                .map(|o| (i as f64 - at(o)).abs())
+                .fold(f64::INFINITY, f64::min);
             assert_eq!(d, best, "{order:?}");
         }
     }

@@ -126,6 +126,14 @@ const LONG_TESTS: &[(&str, u64)] = &[
     ), // 18 s
     ("brake_mu_sweep_reproduces_the_nominal_projected_modes", 90), // 17 s
     (
+        "noise_matrix_slices_merge_to_the_whole_and_a_killed_run_resumes",
+        170,
+    ), // 34 s (beside another 2-rank job)
+    (
+        "noise_matrix_points_equal_single_scene_runs_and_the_nominal_modes",
+        110,
+    ), // 22 s (beside another 2-rank job)
+    (
         "brake_transient_impulse_start_moves_along_the_impulse_and_scales_with_it",
         90,
     ), // 16 s
