@@ -215,6 +215,7 @@ mod tests {
                     factorizations: 1,
                     cold_restart: false,
                     seconds_statics: 0.25,
+                    seconds_factorizing: 0.125,
                     seconds_modes: 0.01,
                 }),
             },

@@ -307,6 +307,43 @@ impl<'p> DirectSolver<'p> {
         self.report
     }
 
+    /// Whether this is a MUMPS (or other PETSc) factor of the matrix `a` itself, which
+    /// [`Self::refactorize`] can renew.
+    pub fn factors(&self, a: &SparseMatrix) -> Result<bool> {
+        if self.single.is_some() {
+            return Ok(false);
+        }
+        let (mut amat, mut pmat) = (std::ptr::null_mut(), std::ptr::null_mut());
+        call!(KSPGetOperators(self.raw, &mut amat, &mut pmat))?;
+        Ok(pmat == a.raw)
+    }
+
+    /// Factorizes `a` again after its values changed in place (same matrix, same nonzero
+    /// pattern): the numerical factorization only, on the ordering and symbolic analysis of
+    /// the first (MUMPS' analysis is a large part of a factorization: a Newton iteration that
+    /// refreshes its tangent pays it once). PETSc redoes the analysis itself if the pattern
+    /// grew. `a` must be the matrix this solver factored ([`Self::factors`]).
+    ///
+    /// # Collective
+    pub fn refactorize(&mut self, a: &SparseMatrix) -> Result<()> {
+        if !self.factors(a)? {
+            return Err(LaError::Invalid(
+                "refactorize: not a PETSc factor of this matrix".into(),
+            ));
+        }
+        call!(KSPSetReusePreconditioner(self.raw, ffi::PETSC_FALSE))?;
+        call!(KSPSetOperators(self.raw, a.raw, a.raw))?;
+        call!(KSPSetUp(self.raw))?;
+        call!(KSPSetReusePreconditioner(self.raw, ffi::PETSC_TRUE))?;
+        let mut pc = std::ptr::null_mut();
+        call!(KSPGetPC(self.raw, &mut pc))?;
+        self.report = match mumps_factor(pc)? {
+            Some(factor) => mumps_report(factor, &self.prefix)?,
+            None => other_report(pc)?,
+        };
+        Ok(())
+    }
+
     /// Solves `A x = b` with the stored factors.
     ///
     /// # Collective

@@ -254,8 +254,17 @@ fn worst_region(
         cells[c].1 += usize::from(s);
     }
     let share = |c: &(usize, usize)| c.1 as f64 / c.0.max(1) as f64;
+    // A cell with fewer than half the mean count per occupied cell says little (one point
+    // that squeals is 100 %): such cells compete only when no cell is better filled.
+    let occupied = cells.iter().filter(|c| c.0 > 0).count().max(1);
+    let enough = (values.len() / (2 * occupied)).max(1);
+    let filled = if cells.iter().any(|c| c.0 >= enough && c.1 > 0) {
+        enough
+    } else {
+        1
+    };
     let best = (0..cells.len())
-        .filter(|&c| cells[c].0 > 0)
+        .filter(|&c| cells[c].0 >= filled)
         .max_by(|&a, &b| {
             share(&cells[a])
                 .total_cmp(&share(&cells[b]))
@@ -309,6 +318,7 @@ mod tests {
                 factorizations: 1,
                 cold_restart: false,
                 seconds_statics: 0.0,
+                seconds_factorizing: 0.0,
                 seconds_modes: 0.0,
             }),
         }

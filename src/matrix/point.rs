@@ -54,6 +54,9 @@ pub struct SolvedPoint {
     /// The warm start failed and the static state was solved from the unloaded state.
     pub cold_restart: bool,
     pub seconds_statics: f64,
+    /// Of which in LU factorizations.
+    #[serde(default)]
+    pub seconds_factorizing: f64,
     pub seconds_modes: f64,
 }
 

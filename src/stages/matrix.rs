@@ -24,7 +24,7 @@ use crate::la::{Petsc, SparseMatrix, Vector};
 use crate::matrix::point::{Outcome, PointMode, PointResult, SolvedPoint};
 use crate::matrix::sample::{points, warm_order, Slice};
 use crate::matrix::{Axis, MatrixSettings, Sampling};
-use crate::statics::StaticSettings;
+use crate::statics::{Factored, Start, StaticSettings};
 
 /// What the matrix needs from the earlier stages.
 pub struct MatrixInputs<'a, 'p> {
@@ -156,7 +156,7 @@ pub fn matrix<'p>(
         .collect();
     let order = warm_order(&values, &todo, &start, &ranges);
     let statics_state = &input.preload.state.displacement;
-    let solver = PointSolver::new(petsc, input)?;
+    let mut solver = PointSolver::new(petsc, input)?;
     let mut kept: HashMap<usize, Vector<'p>> = HashMap::new();
     // The last use of each point's static state as a warm start (then it is dropped).
     let mut last_use: HashMap<usize, usize> = HashMap::new();
@@ -203,6 +203,8 @@ struct PointSolver<'a, 'p> {
     input: MatrixInputs<'a, 'p>,
     stability: ProjectedStability,
     nominal: Vec<DenseEigenpair>,
+    /// The last point's LU factor of its tangent.
+    factor: Option<Factored<'p>>,
 }
 
 impl<'a, 'p> PointSolver<'a, 'p> {
@@ -218,6 +220,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             input,
             stability,
             nominal,
+            factor: None,
         })
     }
 
@@ -225,7 +228,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     ///
     /// # Collective
     fn point(
-        &self,
+        &mut self,
         petsc: &'p Petsc,
         settings: &MatrixSettings,
         axes: &[Axis],
@@ -239,27 +242,25 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         let mut f = input.preload.load.duplicate()?;
         f.copy_from(&input.preload.load)?;
         f.scale(scale)?;
-        let solve = |start| {
-            crate::statics::solve(
-                petsc,
-                input.k0,
-                input.dofs,
-                &contact,
-                &f,
-                input.statics,
-                start,
-                |_| {},
-            )
-        };
         let t = Instant::now();
         let failed = |reason: String| PointResult {
             index,
             values: values.to_vec(),
             outcome: Outcome::Failed { reason },
         };
-        let (state, cold_restart) = match solve(Some(warm)) {
+        // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
+        // (numerical phase only) when it stops contracting. From the unloaded state afresh.
+        let solve = |displacement, factor: &mut Option<Factored<'p>>| {
+            let start = Start {
+                displacement,
+                factor,
+            };
+            let (k0, dofs, statics) = (input.k0, input.dofs, input.statics);
+            crate::statics::solve_from(petsc, k0, dofs, &contact, &f, statics, start, |_| {})
+        };
+        let (state, cold_restart) = match solve(Some(warm), &mut self.factor) {
             Ok(s) => (s, false),
-            Err(warm_error) => match solve(None) {
+            Err(warm_error) => match solve(None, &mut self.factor) {
                 Ok(s) => (s, true),
                 Err(cold) => {
                     let reason = format!("static state: from the nearest point: {warm_error}; from the unloaded state: {cold}");
@@ -297,6 +298,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             factorizations: state.factorizations,
             cold_restart,
             seconds_statics,
+            seconds_factorizing: state.seconds_factorizing,
             seconds_modes: t.elapsed().as_secs_f64(),
         };
         let result = PointResult {

@@ -226,10 +226,6 @@ pub fn pressure_load<'p>(
 
 /// Solves for the preloaded state. `k0` must be AIJ (LU). `progress` receives each record.
 ///
-/// About 180 lines, on purpose: load stepping with cutting around a modified Newton loop with
-/// factor refresh; the iterate, the factor and the residual pass between the two loops, which
-/// read best in one view (the factorization and the line search are their own functions).
-///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // the operators, the load, the settings, a start, a log
 pub fn solve<'p>(
@@ -240,15 +236,60 @@ pub fn solve<'p>(
     f_ext: &Vector<'p>,
     settings: &StaticSettings,
     start_from: Option<&Vector<'p>>,
+    progress: impl FnMut(&NewtonRecord),
+) -> Result<StaticState<'p>, StaticError> {
+    let start = Start {
+        displacement: start_from,
+        factor: &mut None,
+    };
+    solve_from(petsc, k0, dofs, contact, f_ext, settings, start, progress)
+}
+
+/// Where a static solve starts: a displacement (None: unloaded, with the load schedule) and
+/// the tangent of a nearby state with its LU factor to begin the modified Newton iteration
+/// with (a matrix' previous point, on the same contact points). The tangent and factor in use
+/// at the end are left in `factor` for the next solve, whose refactorizations then skip the
+/// analysis.
+pub struct Start<'a, 'p> {
+    pub displacement: Option<&'a Vector<'p>>,
+    pub factor: &'a mut Option<Factored<'p>>,
+}
+
+/// A tangent matrix (K0's pattern joined with the contacts) and its LU factor.
+pub struct Factored<'p> {
+    jac: SparseMatrix<'p>,
+    solver: DirectSolver<'p>,
+}
+
+/// [`solve`] from `start_at`.
+///
+/// About 190 lines, on purpose: load stepping with cutting around a modified Newton loop with
+/// factor refresh; the iterate, the factor and the residual pass between the two loops, which
+/// read best in one view (the factorization and the line search are their own functions).
+///
+/// # Collective
+#[allow(clippy::too_many_arguments)] // as solve
+pub fn solve_from<'p>(
+    petsc: &'p Petsc,
+    k0: &SparseMatrix<'p>,
+    dofs: &DofMap,
+    contact: &ContactModel<'p>,
+    f_ext: &Vector<'p>,
+    settings: &StaticSettings,
+    start_at: Start<'_, 'p>,
     mut progress: impl FnMut(&NewtonRecord),
 ) -> Result<StaticState<'p>, StaticError> {
+    let (start_from, factor) = (start_at.displacement, start_at.factor);
     let start = Instant::now();
     let friction = contact
         .interfaces()
         .iter()
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
         && contact.disc_speed() != 0.0;
-    let mut jac = contact.joined_matrix(petsc, k0)?;
+    let (mut jac, mut solver) = match factor.take() {
+        Some(f) => (f.jac, Some(f.solver)),
+        None => (contact.joined_matrix(petsc, k0)?, None),
+    };
     let mut q = k0.new_vector()?;
     if let Some(start) = start_from {
         q.copy_from(start)?;
@@ -261,7 +302,7 @@ pub fn solve<'p>(
     let load_norm = f_ext.norm2()?;
     let mut log = Vec::new();
     let (mut factorizations, mut factor_entries, mut seconds_factorizing) = (0usize, 0.0, 0.0);
-    let (mut solver, mut refresh, mut solves) = (None::<DirectSolver>, true, 0usize);
+    let (mut refresh, mut solves) = (solver.is_none(), 0usize);
     let mut cut_steps = 0usize;
 
     // R = K0 q - f_c(q) - f; returns (|R|, reference force, state).
@@ -328,10 +369,9 @@ pub fn solve<'p>(
             // stopped contracting well (or a line search with it failed).
             let fresh = refresh || solver.is_none();
             if fresh {
-                // Free the old factor before the new one is built (peak memory).
-                drop(solver.take());
                 let t = Instant::now();
-                let factored = factorize_tangent(petsc, &mut jac, k0, contact, &state)?;
+                let factored =
+                    factorize_tangent(petsc, &mut jac, k0, contact, &state, solver.take())?;
                 seconds_factorizing += t.elapsed().as_secs_f64();
                 factorizations += 1;
                 factor_entries = factored.report().factor_entries;
@@ -405,6 +445,7 @@ pub fn solve<'p>(
         }
     }
     let state = last_state.expect("at least one load step");
+    *factor = solver.map(|solver| Factored { jac, solver });
     let summaries = contact.summarize(petsc, &state);
     Ok(StaticState {
         displacement: q,
@@ -425,7 +466,8 @@ pub fn solve<'p>(
 type Evaluation = (f64, f64, ContactState);
 
 /// J = K0 + the contact tangent at `state` (normal, stick, friction, stick coupling) into
-/// `jac` (K0's pattern joined with the contacts), LU-factorized.
+/// `jac` (K0's pattern joined with the contacts), LU-factorized: by `old` again (numerical
+/// phase only) when it is a factor of `jac`, else anew (`old` freed first: peak memory).
 ///
 /// # Collective
 fn factorize_tangent<'p>(
@@ -434,6 +476,7 @@ fn factorize_tangent<'p>(
     k0: &SparseMatrix<'p>,
     contact: &ContactModel<'p>,
     state: &ContactState,
+    old: Option<DirectSolver<'p>>,
 ) -> Result<DirectSolver<'p>, LaError> {
     jac.copy_values_from(k0)?;
     let parts = [
@@ -444,7 +487,16 @@ fn factorize_tangent<'p>(
     ];
     contact.add_tangent(state, &parts, jac)?;
     jac.assemble()?;
-    DirectSolver::factorize(petsc, jac, Factorization::Lu, "static_")
+    match old {
+        Some(mut solver) if solver.factors(jac)? => {
+            solver.refactorize(jac)?;
+            Ok(solver)
+        }
+        other => {
+            drop(other);
+            DirectSolver::factorize(petsc, jac, Factorization::Lu, "static_")
+        }
+    }
 }
 
 /// Backtracking along `dq` from `q` (residual norm `r`): the first step length with
