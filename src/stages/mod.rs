@@ -2,7 +2,8 @@
 //! the previous stages' typed results to its own, callable from tests:
 //!
 //! Scene -> [`model::Model`] -> [`operators::Operators`] -> [`statics::Preloaded`] ->
-//! [`modes::real_modes`] -> [`complex::complex_modes`] | [`sweep::SweepOutput`] ->
+//! [`modes::real_modes`] -> [`complex::complex_modes`] | [`sweep::SweepOutput`] |
+//! [`matrix::MatrixOutput`] ->
 //! [`reduce::Reduced`] -> [`transient::Trajectory`]
 //!
 //! Stages compute and return; they never write. `crate::pipeline` is the driver of a whole
