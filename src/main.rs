@@ -39,6 +39,11 @@ enum Command {
         /// `squeal merge` the slices' output directories.
         #[arg(long, value_name = "K/N")]
         slice: Option<squeal::matrix::sample::Slice>,
+        /// Split the ranks into G groups that compute the noise matrix' points side by side,
+        /// each on its own copy of the model (for a model too small to gain from more ranks
+        /// per solve); rank 0 merges their results into the output directory.
+        #[arg(long, value_name = "G", default_value_t = 1)]
+        groups: usize,
         /// PETSc/SLEPc options.
         #[arg(last = true)]
         petsc_options: Vec<String>,
@@ -77,13 +82,14 @@ fn main() -> ExitCode {
             output,
             restart,
             slice,
+            groups,
             petsc_options,
         } => {
             let options = squeal::pipeline::RunOptions {
                 restart,
                 slice: slice.unwrap_or_default(),
             };
-            run_command(scene, output, options, petsc_options)
+            run_command(scene, output, options, groups.max(1), petsc_options)
         }
         Command::Merge { slices, output } => merge_command(&slices, &output),
     }
@@ -102,7 +108,8 @@ fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
         }
         return ExitCode::FAILURE;
     }
-    match squeal::pipeline::merge::merge(&world, slices, output) {
+    let whole = squeal::matrix::sample::Slice::WHOLE;
+    match squeal::pipeline::merge::merge(&world, slices, output, whole) {
         Ok(report) => {
             println!("answer:\n    {}", report.answer_line());
             print!("{}", report.text());
@@ -119,7 +126,8 @@ fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
 fn run_command(
     scene_path: Option<PathBuf>,
     output: Option<PathBuf>,
-    options: squeal::pipeline::RunOptions,
+    mut options: squeal::pipeline::RunOptions,
+    groups: usize,
     petsc_options: Vec<String>,
 ) -> ExitCode {
     let Some(universe) = mpi::initialize() else {
@@ -163,16 +171,51 @@ fn run_command(
             Err(e) => return fail(e.to_string()),
         },
     };
-    let petsc = match Petsc::initialize(&universe, &petsc_options) {
+    use mpi::traits::Communicator;
+    use squeal::pipeline::groups;
+    let world = universe.world();
+    let size = world.size() as usize;
+    if groups > 1 {
+        if let Some(why) = groups::refusal(&scene, groups, size) {
+            return fail(why);
+        }
+    }
+    let output = output.unwrap_or_else(|| scene.output.directory.clone());
+    let group = groups::group_of(rank as usize, size, groups);
+    let color = mpi::topology::Color::with_value(group as i32);
+    let communicator = world.split_by_color(color).expect("every rank has a color");
+    let petsc = match Petsc::initialize_in(&universe, communicator, &petsc_options) {
         Ok(p) => p,
         Err(e) => return fail(e.to_string()),
     };
-    let output = output.unwrap_or_else(|| scene.output.directory.clone());
-    if rank == 0 {
+    let run_output = if groups > 1 {
+        options.slice = groups::group_slice(options.slice, group, groups);
+        groups::group_dir(&output, group, groups)
+    } else {
+        output.clone()
+    };
+    if group > 0 && petsc.rank() == 0 {
+        // Only rank 0 prints: the other groups' roots keep their console in their folder.
+        let kept = std::fs::create_dir_all(&run_output)
+            .and_then(|()| squeal::la::redirect_stdout(&run_output.join("console.log")));
+        if let Err(e) = kept {
+            return fail(format!("{}: {e}", run_output.display()));
+        }
+    }
+    if petsc.rank() == 0 {
         println!(
-            "squeal {}: {name} on {} rank(s)",
+            "squeal {}: {name} on {} rank(s){}",
             env!("CARGO_PKG_VERSION"),
-            petsc.size()
+            petsc.size(),
+            if groups > 1 {
+                format!(
+                    " x {groups} groups (group {} of {groups}: {})",
+                    group + 1,
+                    run_output.display()
+                )
+            } else {
+                String::new()
+            }
         );
     }
     let result = squeal::pipeline::run_with(
@@ -180,13 +223,44 @@ fn run_command(
         &scene,
         &text,
         &dir,
-        &output,
+        &run_output,
         &petsc_options,
         &options,
     );
+    let result = match (result, groups > 1) {
+        (Ok(summary), true) => {
+            // Every group done (a failed one ended the run through fault::agree), rank 0 merges.
+            squeal::parallel::barrier(&world);
+            if rank == 0 {
+                print!("{summary}");
+                let dirs: Vec<PathBuf> = (0..groups)
+                    .map(|g| groups::group_dir(&output, g, groups))
+                    .collect();
+                let whole_slice = squeal::matrix::sample::Slice {
+                    index: (options.slice.index - 1) / groups + 1,
+                    count: options.slice.count / groups,
+                };
+                let own = mpi::topology::SimpleCommunicator::self_comm();
+                match squeal::pipeline::merge::merge(&own, &dirs, &output, whole_slice) {
+                    Ok(report) => {
+                        println!(
+                            "groups merged into {}:\n    {}",
+                            output.display(),
+                            report.answer_line()
+                        );
+                        print!("{}", report.text());
+                    }
+                    Err(e) => return fail(format!("merging the groups: {e}")),
+                }
+            }
+            Ok(None)
+        }
+        (Ok(summary), false) => Ok(Some(summary)),
+        (Err(e), _) => Err(e),
+    };
     let code = match result {
         Ok(summary) => {
-            if rank == 0 {
+            if let (Some(summary), 0) = (summary, rank) {
                 print!("{summary}");
             }
             ExitCode::SUCCESS

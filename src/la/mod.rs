@@ -58,13 +58,50 @@ pub struct Petsc<'u> {
     _universe: PhantomData<&'u Universe>,
 }
 
+/// Sends this process' standard output to `path` (appended): the root of a group of ranks
+/// that is not the run's rank 0 keeps its console in a file instead of printing beside rank 0
+/// (only rank 0 prints). Here because it needs `unsafe` (dup2).
+pub fn redirect_stdout(path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Write as _;
+    use std::os::fd::AsRawFd;
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)?;
+    std::io::stdout().flush()?;
+    // SAFETY: both descriptors are open; descriptor 1 is replaced by a copy of the file's,
+    // which stays open after `file` is dropped.
+    let done = unsafe { libc::dup2(file.as_raw_fd(), 1) };
+    if done < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(())
+}
+
 impl<'u> Petsc<'u> {
     /// Initializes PETSc and SLEPc on MPI_COMM_WORLD. `options` are PETSc command-line options
     /// (for example `-eps_ncv 300 -st_mat_mumps_icntl_7 4`), usually those after `--`.
     ///
     /// # Collective
     pub fn initialize(universe: &'u Universe, options: &[String]) -> Result<Self> {
-        let world = universe.world();
+        Self::initialize_in(universe, universe.world(), options)
+    }
+
+    /// Initializes PETSc and SLEPc on `world`, a part of MPI_COMM_WORLD (a group of ranks that
+    /// works on its own: every PETSc object of this session lives on it).
+    ///
+    /// # Collective (on every rank of MPI_COMM_WORLD, each with its group)
+    pub fn initialize_in(
+        _universe: &'u Universe,
+        world: SimpleCommunicator,
+        options: &[String],
+    ) -> Result<Self> {
+        {
+            use mpi::raw::AsRaw;
+            // SAFETY: set before PetscInitialize, which reads it (PETSc's documented way to run
+            // on a subcommunicator); the communicator outlives the session (kept in `world`).
+            unsafe { ffi::PETSC_COMM_WORLD = world.as_raw() };
+        }
         // PETSc's signal handlers would override Rust's (a broken pipe would end in MPI_Abort).
         let key = CString::new("-no_signal_handler").unwrap();
         call!(PetscOptionsSetValue(

@@ -43,6 +43,13 @@ fn journal_of(dir: &Path) -> Result<Journal, MergeError> {
     } else {
         dir.to_path_buf()
     };
+    if !path.is_file() {
+        let detail = format!(
+            "no {JOURNAL} here: give the output directories of `squeal run --slice K/N` (or their journals)"
+        );
+        let dir = dir.to_path_buf();
+        return Err(MergeError::Refused { dir, detail });
+    }
     Ok(matrix_journal::read(&path)?)
 }
 
@@ -106,13 +113,15 @@ pub fn combine(journals: &[Journal]) -> Result<(JournalHeader, Vec<PointResult>)
     Ok((h0.clone(), points.into_values().collect()))
 }
 
-/// Merges the slices in `dirs` into `output`.
+/// Merges the slices in `dirs` into `output`, as the points of `slice` of the matrix (the
+/// whole matrix for `squeal merge`; a run's slice for the groups of that run).
 ///
 /// # Collective (results.h5 is written by every rank of `comm`; run it on one)
 pub fn merge(
     comm: &SimpleCommunicator,
     dirs: &[PathBuf],
     output: &Path,
+    slice: Slice,
 ) -> Result<MatrixReport, MergeError> {
     use mpi::traits::Communicator;
     let journals = dirs
@@ -125,7 +134,7 @@ pub fn merge(
         source,
     })?;
     let merged = JournalHeader {
-        slice: Slice::WHOLE.to_string(),
+        slice: slice.to_string(),
         ..header.clone()
     };
     let journal_path = output.join(JOURNAL);
@@ -145,7 +154,7 @@ pub fn merge(
     let run = MatrixOutput {
         axes: header.axes.clone(),
         sampling: header.sampling,
-        slice: Slice::WHOLE,
+        slice,
         total: header.total,
         resumed: points.len(),
         points,

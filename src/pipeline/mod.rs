@@ -9,6 +9,7 @@ use std::time::Instant;
 
 mod after;
 mod front;
+pub mod groups;
 mod matrix;
 pub mod merge;
 

@@ -222,8 +222,9 @@ fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
         }
     }
     let merged_dir = fresh(petsc, "matrix-merged");
-    let merged = squeal::pipeline::merge::merge(petsc.world(), &slice_dirs, &merged_dir)
-        .map_err(|e| e.to_string())?;
+    let merged =
+        squeal::pipeline::merge::merge(petsc.world(), &slice_dirs, &merged_dir, Slice::WHOLE)
+            .map_err(|e| e.to_string())?;
     let worst_merge = compare(&whole, &merged.run.points)?;
 
     // A run killed after 3 points (its journal cut in the 4th line), resumed.
