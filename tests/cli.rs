@@ -486,3 +486,99 @@ fn written_inp_reimported_gives_the_same_modes() {
     assert_eq!(a.len(), 8, "{a:?}");
     assert_eq!(a, b, "generated and re-imported models differ");
 }
+
+/// The small brake's noise matrix (8 Sobol points, a 20-mode basis).
+fn matrix_scene() -> String {
+    let matrix = "[matrix]\nsampling = \"sobol\"\npoints = 8\nseed = 3\n[matrix.axes]\n\
+                  pressure_bar = { from = 10.0, to = 30.0 }\nmu = { from = 0.3, to = 0.5 }\n";
+    default_scene()
+        .split("[reduction]")
+        .next()
+        .unwrap()
+        .replace("count = 60", "count = 20")
+        + matrix
+}
+
+/// The points' lines of a journal by index (a run writes them in the order it computes
+/// them): (index, parameters) and their results as numbers.
+fn journal_points(path: &Path) -> Vec<(String, Vec<f64>)> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut points: Vec<(u64, (String, Vec<f64>))> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let solved = &v["outcome"];
+            let mut numbers = vec![solved["braking_torque"].as_f64().unwrap()];
+            for m in solved["modes"].as_array().unwrap() {
+                numbers.push(m["re"].as_f64().unwrap());
+                numbers.push(m["im"].as_f64().unwrap());
+            }
+            let index = v["index"].as_u64().unwrap();
+            (index, (format!("{index} {}", v["values"]), numbers))
+        })
+        .collect();
+    points.sort_by_key(|p| p.0);
+    points.into_iter().map(|p| p.1).collect()
+}
+
+/// `--groups 2` on 2 ranks (each group one rank, half the points) merges into the same points
+/// as one group of 2 ranks: parameters exactly, torques and eigenvalues to the static
+/// tolerance (1e-6 relative; the warm starts differ); `squeal merge` of a folder without a
+/// journal names it.
+#[test]
+fn noise_matrix_in_two_groups_equals_one_group() {
+    let dir = scratch("matrix-groups");
+    std::fs::write(dir.join("scene.toml"), matrix_scene()).unwrap();
+    let one = mpirun(2, &["run", "scene.toml", "-o", "one"], &dir);
+    let stdout = String::from_utf8_lossy(&one.stdout);
+    assert!(
+        one.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&one.stderr)
+    );
+    let two = mpirun(
+        2,
+        &["run", "scene.toml", "-o", "two", "--groups", "2"],
+        &dir,
+    );
+    let stdout = String::from_utf8_lossy(&two.stdout);
+    assert!(
+        two.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&two.stderr)
+    );
+    assert!(stdout.contains("groups merged into two"), "{stdout}");
+    assert!(
+        !stdout.contains("group 2 of 2"),
+        "only rank 0 prints:\n{stdout}"
+    );
+    assert!(dir.join("two/group-2-of-2/console.log").exists());
+    let (a, b) = (
+        journal_points(&dir.join("one/matrix-points.jsonl")),
+        journal_points(&dir.join("two/matrix-points.jsonl")),
+    );
+    assert_eq!(a.len(), 8);
+    let mut worst = 0.0f64;
+    for ((ka, va), (kb, vb)) in a.iter().zip(&b) {
+        assert_eq!(ka, kb);
+        assert_eq!(va.len(), vb.len(), "{ka}");
+        for (x, y) in va.iter().zip(vb) {
+            worst = nan_max(worst, (x - y).abs() / x.abs().max(1.0));
+        }
+    }
+    assert!(worst <= 1e-6, "groups against one group: {worst:e}");
+    let report = std::fs::read_to_string(dir.join("two/report.html")).unwrap();
+    assert!(report.contains("noise-matrix") && report.contains("matrix_bands.png"));
+    let out = mpirun(
+        1,
+        &["merge", "one/group-1-of-2", "--output", "merged"],
+        &dir,
+    );
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("one/group-1-of-2") && stderr.contains("matrix-points.jsonl"),
+        "{stderr}"
+    );
+}
