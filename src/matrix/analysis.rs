@@ -5,6 +5,7 @@
 
 use super::point::PointResult;
 use super::{Axis, Sampling};
+use crate::measure::{greatest, smallest};
 use crate::post::loudness::third_octave_bands;
 
 /// Occurrences of unstable modes in one 1/3-octave band.
@@ -231,10 +232,7 @@ fn worst_region(
         .iter()
         .map(|&d| {
             let v = values.iter().map(|p| p[d]);
-            (
-                v.clone().fold(f64::INFINITY, f64::min),
-                v.fold(f64::NEG_INFINITY, f64::max),
-            )
+            (smallest(v.clone()), greatest(v))
         })
         .collect();
     let third = |v: f64, (lo, hi): (f64, f64)| {

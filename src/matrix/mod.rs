@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::eigen::sweep::SweepParameter;
 use crate::invalid::InvalidSetting;
+use crate::measure::{greatest, smallest};
 
 /// A parameter of the operating point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -118,8 +119,8 @@ impl AxisRange {
             (Some(a), Some(b)) => (a.min(b), a.max(b)),
             _ => {
                 let v = &self.values;
-                let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-                let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                let lo = smallest(v.iter().copied());
+                let hi = greatest(v.iter().copied());
                 (lo, hi)
             }
         }

@@ -101,10 +101,7 @@ impl PointResult {
     /// propensity, positive where a mode is unstable.
     pub fn largest_real_part(&self) -> f64 {
         self.solved().map_or(f64::NAN, |s| {
-            s.modes
-                .iter()
-                .map(|m| m.re)
-                .fold(f64::NEG_INFINITY, f64::max)
+            crate::measure::greatest(s.modes.iter().map(|m| m.re))
         })
     }
 }

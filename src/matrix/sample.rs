@@ -252,7 +252,7 @@ mod tests {
             let before = order[..k].iter().map(|o| Some(o.0)).chain([None]);
             let best = before
                 .map(|o| (i as f64 - at(o)).abs())
-                .fold(f64::INFINITY, f64::min);
+                .fold(f64::INFINITY, crate::measure::nan_min);
             assert_eq!(d, best, "{order:?}");
         }
     }

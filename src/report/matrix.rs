@@ -11,6 +11,7 @@ use crate::io::figure::{padded, Figure, BLACK, BLUE, GREY};
 use crate::io::results::ResultsFile;
 use crate::matrix::analysis::{analyse, MatrixAnalysis};
 use crate::matrix::point::Outcome;
+use crate::measure::{greatest, largest, smallest};
 use crate::stages::matrix::MatrixOutput;
 
 /// A matrix run (or merge) with its statistics.
@@ -102,8 +103,8 @@ impl MatrixReport {
             .enumerate()
             .map(|(d, x)| {
                 let v = r.points.iter().map(|p| p.values[d]);
-                let lo = v.clone().fold(f64::INFINITY, f64::min);
-                let hi = v.fold(f64::NEG_INFINITY, f64::max);
+                let lo = smallest(v.clone());
+                let hi = greatest(v);
                 format!("{} {}-{}", x.name(), number(lo), number(hi))
             })
             .collect();
@@ -433,21 +434,16 @@ fn plot_propensity(r: &MatrixReport, d: usize, output: &Path) -> Result<(), Writ
     let run = &r.run;
     let axis = run.axes[d];
     let solved = || run.points.iter().filter_map(|p| p.solved().map(|s| (p, s)));
-    let f_top = solved()
-        .flat_map(|(_, s)| s.modes.iter().map(|m| m.frequency_hz()))
-        .fold(0.0, f64::max);
+    let f_top = largest(solved().flat_map(|(_, s)| s.modes.iter().map(|m| m.frequency_hz())));
     let x = run.points.iter().map(|p| p.values[d]);
-    let (lo, hi) = (
-        x.clone().fold(f64::INFINITY, f64::min),
-        x.fold(f64::NEG_INFINITY, f64::max),
-    );
+    let (lo, hi) = (smallest(x.clone()), greatest(x));
     let unstable: Vec<(f64, f64, f64)> = solved()
         .flat_map(|(p, _)| {
             p.unstable(run.margin)
                 .map(move |m| (p.values[d], m.frequency_hz(), m.re))
         })
         .collect();
-    let re_max = unstable.iter().map(|u| u.2).fold(0.0, f64::max);
+    let re_max = largest(unstable.iter().map(|u| u.2));
     let title = format!(
         "squeal propensity against {}: unstable modes coloured by Re(s)",
         axis.name()
