@@ -65,6 +65,8 @@ pub(super) fn noise_matrix<'p>(
     };
     let path = output.join(JOURNAL);
     let done = crate::fault::checked(earlier_points(&path, &header, options.restart))?;
+    // Every rank has read the journal before rank 0 rewrites it.
+    crate::parallel::barrier(petsc.world());
 
     let mut writer = None;
     if petsc.rank() == 0 {

@@ -482,7 +482,7 @@ pub fn html_section(r: &MatrixReport, output: &Path) -> std::io::Result<String> 
         "Noise-dynamometer chart: operating points with an unstable mode, per 1/3-octave band.";
     let mut body = figure(output, "matrix_bands.png", caption)?;
     for a in &r.run.axes {
-        let caption = format!("Squeal propensity against {}: frequencies of the unstable modes (coloured by Re(s)) over the points; stable modes grey.", a.label());
+        let caption = format!("Squeal propensity against {}: frequencies of the unstable modes (coloured by Re(s)) over the points; stable modes grey when there are at most 20,000.", a.label());
         body += &figure(output, &format!("matrix_{}.png", a.name()), &caption)?;
     }
     body += &format!("<pre>{}</pre>", escape(&r.text()));
