@@ -99,15 +99,27 @@ impl SweepSettings {
     }
 
     pub fn values(&self) -> Vec<f64> {
-        if !self.values.is_empty() {
-            return self.values.clone();
-        }
-        match (self.from, self.to, self.points) {
-            (Some(a), Some(b), Some(n)) if n >= 2 => (0..n)
-                .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
-                .collect(),
-            _ => Vec::new(),
-        }
+        listed_or_spaced(&self.values, self.from, self.to, self.points)
+    }
+}
+
+/// The values of a swept axis: the list when given, else `points` evenly spaced from `from`
+/// to `to` (one point when from = to); empty when neither is complete.
+pub fn listed_or_spaced(
+    values: &[f64],
+    from: Option<f64>,
+    to: Option<f64>,
+    points: Option<usize>,
+) -> Vec<f64> {
+    if !values.is_empty() {
+        return values.to_vec();
+    }
+    match (from, to, points) {
+        (Some(a), Some(b), Some(1)) if a == b => vec![a],
+        (Some(a), Some(b), Some(n)) if n >= 2 => (0..n)
+            .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
+            .collect(),
+        _ => Vec::new(),
     }
 }
 

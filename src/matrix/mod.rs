@@ -101,16 +101,7 @@ pub struct AxisRange {
 impl AxisRange {
     /// The grid values of this axis.
     pub fn values(&self) -> Vec<f64> {
-        if !self.values.is_empty() {
-            return self.values.clone();
-        }
-        match (self.from, self.to, self.points) {
-            (Some(a), Some(b), Some(1)) if a == b => vec![a],
-            (Some(a), Some(b), Some(n)) if n >= 2 => (0..n)
-                .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
-                .collect(),
-            _ => Vec::new(),
-        }
+        crate::eigen::sweep::listed_or_spaced(&self.values, self.from, self.to, self.points)
     }
 
     /// The range sampled (smallest, largest value).

@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::io::matrix_journal::{self, Journal, JournalHeader, JournalWriter, FORMAT, JOURNAL};
 use crate::la::Petsc;
 use crate::matrix::point::PointResult;
+use crate::matrix::MatrixSettings;
 use crate::report::matrix::MatrixReport;
 use crate::scene::Scene;
 use crate::stages::matrix::{matrix, MatrixInputs, MatrixRun};
@@ -47,21 +48,15 @@ pub(super) fn noise_matrix<'p>(
         complex: &complex,
         damping: scene.damping.unwrap_or_default(),
     };
-    let axes = settings.axis_list();
-    let nominal = crate::stages::matrix::nominal_values(&axes, &input);
+    let nominal = crate::stages::matrix::nominal_values(&settings.axis_list(), &input);
     let header = JournalHeader {
-        squeal_matrix: FORMAT,
-        fingerprint: scene.matrix_fingerprint(),
-        sampling: settings.sampling,
-        total: crate::matrix::sample::points(settings).len(),
-        slice: options.slice.to_string(),
         nominal: nominal
             .iter()
             .map(|v| v.is_finite().then_some(*v))
             .collect(),
         margin: complex.instability_margin,
         scene: scene_text.to_string(),
-        axes,
+        ..journal_header(scene, settings, options)
     };
     let path = output.join(JOURNAL);
     let done = crate::fault::checked(earlier_points(&path, &header, options.restart))?;
@@ -108,16 +103,10 @@ fn journal_error(e: matrix_journal::JournalError) -> RunError {
     RunError::scene("matrix", format!("journal: {e}"))
 }
 
-/// Fails early (before the model is built) where the journal in `output` would be refused.
-pub(super) fn check_journal(
-    scene: &Scene,
-    output: &Path,
-    options: &RunOptions,
-) -> Result<(), RunError> {
-    let Some(settings) = &scene.matrix else {
-        return Ok(());
-    };
-    let header = JournalHeader {
+/// The journal header's identity of a run: what a resumption, a slice and a merge compare
+/// (the nominal values, margin and scene text are filled in by the run).
+fn journal_header(scene: &Scene, settings: &MatrixSettings, options: &RunOptions) -> JournalHeader {
+    JournalHeader {
         squeal_matrix: FORMAT,
         fingerprint: scene.matrix_fingerprint(),
         sampling: settings.sampling,
@@ -127,7 +116,19 @@ pub(super) fn check_journal(
         margin: 0.0,
         scene: String::new(),
         axes: settings.axis_list(),
+    }
+}
+
+/// Fails early (before the model is built) where the journal in `output` would be refused.
+pub(super) fn check_journal(
+    scene: &Scene,
+    output: &Path,
+    options: &RunOptions,
+) -> Result<(), RunError> {
+    let Some(settings) = &scene.matrix else {
+        return Ok(());
     };
+    let header = journal_header(scene, settings, options);
     earlier_points(&output.join(JOURNAL), &header, options.restart).map(|_| ())
 }
 
