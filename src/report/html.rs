@@ -182,6 +182,28 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
     if s.reduction.is_some() {
         add("reduction", "Reduction", text(s, Part::Reduction));
     }
+    time_sections(s, output, &mut out)?;
+    let scene = format!("<pre>{}</pre>", escape(scene_text));
+    for (id, title, body) in [
+        ("run", "Speed against accuracy", run_table(s)),
+        ("scene", "Scene", scene),
+    ] {
+        let title = title.into();
+        out.push(Section { id, title, body });
+    }
+    Ok(out)
+}
+
+/// The sections of the transient and of the analyses of its states and of the pseudo
+/// trajectories and loudness, in [`SECTION_IDS`] order, appended to `out`.
+fn time_sections(s: &RunSummary, output: &Path, out: &mut Vec<Section>) -> std::io::Result<()> {
+    let mut add = |id: &'static str, title: &str, body: String| {
+        out.push(Section {
+            id,
+            title: title.into(),
+            body,
+        })
+    };
     if s.transient.is_some() {
         let mut body = figure(output, "torque.png", "Braking torque.")?;
         body += &figure(
@@ -250,13 +272,7 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
     if let Some(l) = &s.loudness {
         add("how-loud", "How loud", loudness_section(s, l, output)?);
     }
-    add("run", "Speed against accuracy", run_table(s));
-    add(
-        "scene",
-        "Scene",
-        format!("<pre>{}</pre>", escape(scene_text)),
-    );
-    Ok(out)
+    Ok(())
 }
 
 /// A figure of the results folder embedded as a data URI, or nothing when the run did not
