@@ -67,11 +67,7 @@ impl MatrixReport {
             line.push(')');
         }
         if let Some(r) = &a.worst_region {
-            let cell: Vec<String> = r
-                .bounds
-                .iter()
-                .map(|(x, lo, hi)| format!("{} {}-{}", x.name(), number(*lo), number(*hi)))
-                .collect();
+            let cell = bounds_text(r);
             let _ = write!(
                 line,
                 "; worst region {} ({} of {} points)",
@@ -183,11 +179,7 @@ impl MatrixReport {
             list.join(", ")
         );
         if let Some(w) = &a.worst_region {
-            let cell: Vec<String> = w
-                .bounds
-                .iter()
-                .map(|(x, lo, hi)| format!("{} {}-{}", x.name(), number(*lo), number(*hi)))
-                .collect();
+            let cell = bounds_text(w);
             let _ = writeln!(t, "  worst region (thirds of the most influential ranges): {}: {} of {} points squeal", cell.join(", "), w.squealing, w.points);
         }
         for p in &r.points {
@@ -202,6 +194,14 @@ impl MatrixReport {
         }
         t
     }
+}
+
+/// "pressure_bar 5-16.667" per axis of a region.
+fn bounds_text(r: &crate::matrix::analysis::Region) -> Vec<String> {
+    r.bounds
+        .iter()
+        .map(|(x, lo, hi)| format!("{} {}-{}", x.name(), number(*lo), number(*hi)))
+        .collect()
 }
 
 fn percent(part: usize, whole: usize) -> f64 {
