@@ -204,6 +204,7 @@ impl Scene {
             t.newton = defaults.newton;
             t.max_cuts = defaults.max_cuts;
             t.refresh = defaults.refresh;
+            t.update_factor = defaults.update_factor;
             t.jacobian_factor = defaults.jacobian_factor;
             t.tolerance = defaults.tolerance;
             t.max_iterations = defaults.max_iterations;

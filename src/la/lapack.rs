@@ -1,8 +1,9 @@
 //! Dense LAPACK/BLAS (the library PETSc links, OpenBLAS here) for the small dense problems of
 //! the projected complex modes and the reduction: the general eigenproblem of the companion
 //! matrix (dgeev, with its balancing; also without eigenvectors), the symmetric one of a Gram
-//! matrix (dsyev) and matrix products (dgemm, and dsyrk for symmetric ones). Column-major
-//! storage throughout.
+//! matrix (dsyev), matrix products (dgemm, and dsyrk for symmetric ones) and the LU of a small
+//! real system (dgetrf, dgetrs: the transient's low-rank update). Column-major storage
+//! throughout.
 
 use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
@@ -50,6 +51,25 @@ extern "C" {
         c: *mut f64,
         ldc: *const c_int,
     );
+    fn dgetrf_(
+        m: *const c_int,
+        n: *const c_int,
+        a: *mut f64,
+        lda: *const c_int,
+        ipiv: *mut c_int,
+        info: *mut c_int,
+    );
+    fn dgetrs_(
+        trans: *const c_char,
+        n: *const c_int,
+        nrhs: *const c_int,
+        a: *const f64,
+        lda: *const c_int,
+        ipiv: *const c_int,
+        b: *mut f64,
+        ldb: *const c_int,
+        info: *mut c_int,
+    );
     fn dsyrk_(
         uplo: *const c_char,
         trans: *const c_char,
@@ -84,6 +104,92 @@ pub(crate) fn lapack(
         info,
         order,
         meaning,
+    }
+}
+
+/// The LU factors (dgetrf) of a real n x n matrix, for solves (dgetrs).
+#[derive(Debug, Clone)]
+pub struct RealLu {
+    n: usize,
+    factors: Vec<f64>,
+    pivots: Vec<c_int>,
+}
+
+impl RealLu {
+    /// Factors the column-major n x n matrix `a` (consumed). Errs on a singular matrix (a zero
+    /// pivot) or non-finite entries.
+    pub fn new(n: usize, mut a: Vec<f64>) -> Result<Self, DenseError> {
+        if a.len() != n * n {
+            return Err(DenseError::Shape {
+                what: "real LU",
+                found: a.len(),
+                order: n,
+            });
+        }
+        if a.iter().any(|x| !x.is_finite()) {
+            return Err(DenseError::NotFinite { what: "real LU" });
+        }
+        let ni = dim(n.max(1))?;
+        let mut pivots: Vec<c_int> = vec![0; n];
+        let mut info: c_int = 0;
+        if n > 0 {
+            // SAFETY: a is n x n with leading dimension n, pivots has n entries.
+            unsafe {
+                dgetrf_(
+                    &ni,
+                    &ni,
+                    a.as_mut_ptr(),
+                    &ni,
+                    pivots.as_mut_ptr(),
+                    &mut info,
+                )
+            };
+        }
+        if info != 0 {
+            let meaning = if info > 0 { "singular" } else { "bad argument" };
+            return Err(lapack("dgetrf", info, n, meaning));
+        }
+        Ok(RealLu {
+            n,
+            factors: a,
+            pivots,
+        })
+    }
+
+    /// Solves A x = b in place (b of length n).
+    pub fn solve(&self, b: &mut [f64]) -> Result<(), DenseError> {
+        let n = self.n;
+        if n == 0 {
+            return Ok(());
+        }
+        if b.len() != n {
+            return Err(DenseError::Shape {
+                what: "real LU solve",
+                found: b.len(),
+                order: n,
+            });
+        }
+        let (ni, one) = (dim(n)?, 1 as c_int);
+        let trans = b'N' as c_char;
+        let mut info: c_int = 0;
+        // SAFETY: the factors and pivots come from dgetrf of order n; b has n entries.
+        unsafe {
+            dgetrs_(
+                &trans,
+                &ni,
+                &one,
+                self.factors.as_ptr(),
+                &ni,
+                self.pivots.as_ptr(),
+                b.as_mut_ptr(),
+                &ni,
+                &mut info,
+            );
+        }
+        if info != 0 {
+            return Err(lapack("dgetrs", info, n, "bad argument"));
+        }
+        Ok(())
     }
 }
 

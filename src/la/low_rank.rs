@@ -8,16 +8,16 @@
 //! (benches/decisions-results.md, "low-rank"). Those points' columns make the preconditioner nearly exact, at one solve per
 //! new column, cached for the factor's life.
 
-use num_complex::Complex64;
-
-use super::lapack_complex::ComplexLu;
+use super::lapack::RealLu;
 use super::{DirectSolver, LaError, Operator, SparseMatrix, Vector};
 
 /// One column u of a change's explicit part: (global row of a contact point, channel), the
 /// column being that channel's observation row of the point, transposed.
 pub type ColumnKey = (usize, u8);
 
-/// The dominant part of a change as U D U^T: D (s x s, row-major) over the keys' columns.
+/// The dominant part of a change as U D U^T: D (s x s, row-major) over the keys' columns; a
+/// point's keys are consecutive, and D is block-diagonal by point where the change is a sum
+/// of point terms (the update then costs O(s^2), else O(s^3)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dominant {
     pub keys: Vec<ColumnKey>,
@@ -48,29 +48,37 @@ pub trait TangentChange<'p>: Operator<'p> {
 
 impl<'p> TangentChange<'p> for SparseMatrix<'p> {}
 
-/// Points at most in an update (the small brake needs ~16), and columns at most cached per
-/// factor (256 solves cost about one factorization of the small brake's reduced J; beyond
-/// that the cache starts over).
+/// Points at most in an update (the small brake needs ~16-25).
 pub const MAX_POINTS: usize = 32;
 pub const HELD_FRACTION: f64 = 0.9999;
-pub const MAX_CACHED_COLUMNS: usize = 256;
+
+/// Columns at most cached per factor (beyond that the cache starts over): as many as
+/// COLUMN_CACHE_BYTES hold (u and w, 16 bytes per unknown each, the whole length counted on
+/// every rank), between 256 and 2,048 (the U^T W table then holds 32 MB). Where the factor
+/// is kept updated for thousands of steps, the dominant points move over the whole contact
+/// zone (the small brake's 352 points hold 1,408 columns): a cache of 256 started over
+/// every few dozen steps, and its column solves were ~40 % of all solves.
+pub const COLUMN_CACHE_BYTES: f64 = 512e6;
+pub fn max_cached_columns(unknowns: usize) -> usize {
+    ((COLUMN_CACHE_BYTES / (16.0 * unknowns.max(1) as f64)) as usize).clamp(256, 2048)
+}
 
 /// F^-1 updated by the dominant part of a tangent change; belongs to one factor.
 #[derive(Default)]
 pub struct LowRankUpdate<'p> {
-    /// Columns u with w = F^-1 u, by key, and u_i . w_j between every two of them (row-major
-    /// over the cache, grown as columns come: independent of the iterate, so an update over
-    /// cached columns costs no reduction).
-    keys: Vec<ColumnKey>,
+    /// Columns u with w = F^-1 u, their index by key, and u_i . w_j (NaN until an update
+    /// needs it; independent of the iterate, so an update over known pairs costs no
+    /// reduction).
+    position: std::collections::HashMap<ColumnKey, usize>,
     us: Vec<Vector<'p>>,
     ws: Vec<Vector<'p>>,
     g: Vec<Vec<f64>>,
-    /// The active columns (indices into the cache), D, and the LU of I + D U^T W (LAPACK's,
-    /// through the complex LU the near-shift eigen-solve already uses: a real system of order
-    /// <= 128 once per Newton iteration, the complex arithmetic costs nothing that shows).
+    /// The active columns (indices into the cache), D, and the LU of I + D U^T W (LAPACK's
+    /// dgetrf: a real system of order <= 128 once per Newton iteration; the complex LU used
+    /// here before took ~8 % of a saturated transient's time).
     active: Vec<usize>,
     d: Vec<f64>,
-    lu: Option<ComplexLu>,
+    lu: Option<RealLu>,
 }
 
 impl<'p> LowRankUpdate<'p> {
@@ -96,42 +104,60 @@ impl<'p> LowRankUpdate<'p> {
         let new = dominant
             .keys
             .iter()
-            .filter(|k| !self.keys.contains(k))
+            .filter(|k| !self.position.contains_key(k))
             .count();
-        if self.keys.len() + new > MAX_CACHED_COLUMNS {
-            self.keys.clear();
+        if self.position.len() + new > max_cached_columns(like.global_len()) {
+            self.position.clear();
             self.us.clear();
             self.ws.clear();
             self.g.clear();
         }
         let mut solves = 0;
         for key in &dominant.keys {
-            if !self.keys.contains(key) {
+            if !self.position.contains_key(key) {
                 self.add_column(factor, change, *key, like)?;
                 solves += 1;
             }
         }
         for key in &dominant.keys {
-            self.active.push(
-                self.keys
-                    .iter()
-                    .position(|k| k == key)
-                    .expect("cached above"),
-            );
+            self.active.push(self.position[key]);
         }
+        self.fill_products()?;
         let s = self.active.len();
-        // I + D G with G = U^T W over the active columns (column-major for LAPACK).
-        let mut m = vec![Complex64::new(0.0, 0.0); s * s];
-        for r in 0..s {
-            for c in 0..s {
-                let dg: f64 = (0..s)
-                    .map(|k| dominant.d[r * s + k] * self.g[self.active[k]][self.active[c]])
-                    .sum();
-                m[c * s + r] = Complex64::new(f64::from(u8::from(r == c)) + dg, 0.0);
+        // I + D G with G = U^T W over the active columns (column-major for LAPACK). D is
+        // block-diagonal by point (a point's channels are consecutive keys): row r of D G
+        // sums over r's own block only, 4 s^2 products instead of s^3.
+        let g: Vec<f64> = self
+            .active
+            .iter()
+            .flat_map(|&k| self.active.iter().map(move |&c| (k, c)))
+            .map(|(k, c)| self.g[k][c])
+            .collect();
+        let point = |i: usize| dominant.keys[i].0;
+        // Blocks of consecutive keys of one point; all of D as one block if it has entries
+        // between points (not what the contact tangent hands over, but the trait allows it).
+        let blocks =
+            (0..s).all(|r| (0..s).all(|k| point(k) == point(r) || dominant.d[r * s + k] == 0.0));
+        let mut m = vec![0.0; s * s];
+        let mut first = 0;
+        while first < s {
+            let last = if blocks {
+                (first..s).find(|&i| point(i) != point(first)).unwrap_or(s)
+            } else {
+                s
+            };
+            for r in first..last {
+                for c in 0..s {
+                    let dg: f64 = (first..last)
+                        .map(|k| dominant.d[r * s + k] * g[k * s + c])
+                        .sum();
+                    m[c * s + r] = f64::from(u8::from(r == c)) + dg;
+                }
             }
+            first = last;
         }
         // Singular or not finite: F^-1 alone.
-        self.lu = ComplexLu::new(s, m).ok();
+        self.lu = RealLu::new(s, m).ok();
         if self.lu.is_some() {
             self.d = dominant.d;
         } else {
@@ -140,8 +166,7 @@ impl<'p> LowRankUpdate<'p> {
         Ok(solves)
     }
 
-    /// Caches the column of `key`, w = F^-1 u, and its products with the cached columns
-    /// (two reductions).
+    /// Caches the column of `key` and w = F^-1 u.
     ///
     /// # Collective
     fn add_column(
@@ -155,19 +180,59 @@ impl<'p> LowRankUpdate<'p> {
         change.column(key, &mut u)?;
         let mut w = like.duplicate()?;
         factor.solve(&u, &mut w)?;
-        self.keys.push(key);
+        self.position.insert(key, self.us.len());
         self.us.push(u);
         self.ws.push(w);
-        let n = self.keys.len();
-        let (u, w) = (&self.us[n - 1], &self.ws[n - 1]);
-        // Row n-1: u_new . w_j; column n-1: u_i . w_new (both include the diagonal).
-        let row = u.mdot(&self.ws.iter().collect::<Vec<_>>())?;
-        let column = w.mdot(&self.us.iter().collect::<Vec<_>>())?;
-        for (i, g) in self.g.iter_mut().enumerate() {
-            g.push(column[i]);
+        // Its row and column of U^T W are filled when an update needs them.
+        for g in self.g.iter_mut() {
+            g.push(f64::NAN);
         }
-        self.g.push(row);
+        self.g.push(vec![f64::NAN; self.us.len()]);
         Ok(())
+    }
+
+    /// Fills the entries u_i . w_j of U^T W between the active columns not computed yet (one
+    /// reduction per row with missing entries). Computing them all when a column comes cost
+    /// two products with every cached column: 70 MB of traffic per new column with 2,048
+    /// cached columns of the small brake, where an update needs the pairs of points that
+    /// change together.
+    ///
+    /// # Collective
+    fn fill_products(&mut self) -> Result<(), LaError> {
+        for &i in &self.active {
+            let missing: Vec<usize> = self
+                .active
+                .iter()
+                .copied()
+                .filter(|&j| self.g[i][j].is_nan())
+                .collect();
+            if missing.is_empty() {
+                continue;
+            }
+            let ws: Vec<&Vector<'p>> = missing.iter().map(|&j| &self.ws[j]).collect();
+            let products = self.us[i].mdot(&ws)?;
+            for (j, p) in missing.into_iter().zip(products) {
+                self.g[i][j] = p;
+            }
+        }
+        Ok(())
+    }
+
+    /// y += U D U^T x over the active columns (the update's own part of P = F + U D U^T:
+    /// what a correction solved with P changed beyond F).
+    ///
+    /// # Collective
+    pub fn mult_add_update(&self, x: &Vector<'p>, y: &mut Vector<'p>) -> Result<(), LaError> {
+        let s = self.active.len();
+        if s == 0 {
+            return Ok(());
+        }
+        let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.us[i]).collect();
+        let t = x.mdot(&us)?;
+        let dt: Vec<f64> = (0..s)
+            .map(|r| (0..s).map(|k| self.d[r * s + k] * t[k]).sum())
+            .collect();
+        y.maxpy(&dt, &us)
     }
 
     /// y = P^-1 v: one solve with the factor, then the low-rank correction.
@@ -186,13 +251,13 @@ impl<'p> LowRankUpdate<'p> {
         }
         let us: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.us[i]).collect();
         let t = y.mdot(&us)?;
-        let mut x: Vec<Complex64> = (0..s)
-            .map(|r| Complex64::new((0..s).map(|k| self.d[r * s + k] * t[k]).sum(), 0.0))
+        let mut x: Vec<f64> = (0..s)
+            .map(|r| (0..s).map(|k| self.d[r * s + k] * t[k]).sum())
             .collect();
         let lu = self.lu.as_ref().expect("active columns have their LU");
         lu.solve(&mut x)?;
         let ws: Vec<&Vector<'p>> = self.active.iter().map(|&i| &self.ws[i]).collect();
-        let negated: Vec<f64> = x.iter().map(|x| -x.re).collect();
+        let negated: Vec<f64> = x.iter().map(|x| -x).collect();
         y.maxpy(&negated, &ws)
     }
 }

@@ -153,7 +153,7 @@ impl RunSummary {
     pub(super) fn fmt_transient(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(t) = &self.transient {
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.3} ms ({} solves; ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s); one iteration {:.2} ms vs one solve with the factor {:.3} ms ({} solves; ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -161,9 +161,12 @@ impl RunSummary {
                 1e3 * t.seconds_per_step,
                 t.cuts,
                 t.refreshes,
+                t.updated_retries,
                 t.krylov_retries,
                 t.krylov_iterations,
                 t.full_newton_retries,
+                t.all_iterations_per_step,
+                t.all_solves_per_step,
                 t.factorizations,
                 t.jacobian_solver,
                 t.factor_entries,

@@ -114,6 +114,11 @@ pub struct TransientSummary {
     pub krylov_retries: usize,
     pub full_newton_retries: usize,
     pub krylov_iterations: usize,
+    pub updated_retries: usize,
+    /// Per step of this process's run, counting the attempts that failed too: iterations
+    /// and solves with the factor (GMRES' and the update's column solves included).
+    pub all_iterations_per_step: f64,
+    pub all_solves_per_step: f64,
     pub factorizations: usize,
     /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
     pub seconds_per_iteration: f64,
@@ -381,6 +386,9 @@ impl TransientSummary {
             krylov_retries: t.krylov_retries,
             full_newton_retries: t.full_newton_retries,
             krylov_iterations: t.krylov_iterations,
+            updated_retries: t.updated_retries,
+            all_iterations_per_step: (t.iterations_run + t.failed_iterations) as f64 / steps_run,
+            all_solves_per_step: (t.factor_solves + t.failed_solves) as f64 / steps_run,
             factorizations: t.factorizations,
             seconds_per_iteration: stepping / iterations_run,
             seconds_per_solve: t.seconds_in_factor_solves / t.factor_solves.max(1) as f64,

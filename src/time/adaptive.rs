@@ -1,6 +1,7 @@
-//! Adaptive stepping around the Newmark integrator: how a stalled step is retried (refreshed
-//! Jacobian, Newton-Krylov, full Newton where Newton-Krylov's linear solves were inexact, each
-//! with line search) before it is cut, and the step control a checkpoint carries.
+//! Adaptive stepping around the Newmark integrator: how a stalled step is retried (the factor
+//! updated at the contact points whose tangent changed most, a refreshed Jacobian,
+//! Newton-Krylov, a full Newton where Newton-Krylov's linear solves were inexact, each with
+//! line search) before it is cut, and the step control a checkpoint carries.
 
 use super::newmark::{
     Correction, Damping, Factorize, Forces, Linearize, Newmark, NewmarkSettings, State, StepReport,
@@ -28,12 +29,25 @@ pub struct StepControl {
     pub fresh: bool,
     /// Steps retried on the consistent tangent after the refreshed Jacobian stalled: by
     /// Newton-Krylov (the factor, updated by the dominant contact points, as preconditioner),
-    /// then by a full Newton, each with line search; and where the current step stands (0
-    /// fixed J, 1 Newton-Krylov, 2 full Newton).
+    /// then by a full Newton, each with line search; and how the current step is corrected
+    /// (FIXED, UPDATED, KRYLOV, FULL).
     pub krylov_retries: usize,
     pub full_newton_retries: usize,
     pub fallback: u8,
+    /// Steps retried with the factor updated at the dominant contact points.
+    pub updated_retries: usize,
+    /// Iterations and solves with a factor of the attempts that failed (the accepted
+    /// attempts' are in each step's report).
+    pub failed_iterations: usize,
+    pub failed_solves: usize,
 }
+
+/// How a step is corrected (`StepControl::fallback`): the fixed factor, the factor updated at
+/// the dominant contact points, Newton-Krylov, a full Newton.
+pub const FIXED: u8 = 0;
+pub const UPDATED: u8 = 1;
+pub const KRYLOV: u8 = 2;
+pub const FULL: u8 = 3;
 
 /// How an adaptive run reacts to failed steps.
 #[derive(Debug, Clone, Copy)]
@@ -45,19 +59,87 @@ pub struct Adaptivity {
     pub refresh: bool,
     /// A full Newton (J at every iterate) instead of the fixed Jacobian.
     pub full_newton: bool,
+    /// Where the fixed factor stalls, update it at the contact points whose tangent changed
+    /// most (needs a linearization) before refactorizing.
+    pub update: bool,
+}
+
+/// What a failed step attempt is followed by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Next {
+    /// J rebuilt at the current state, the step retried with the same correction.
+    Refresh,
+    /// The step retried with another correction (no new factor).
+    Retry(u8),
+    /// The step halved (new factor).
+    Cut,
+}
+
+/// What the run has to retry a step with.
+#[derive(Clone, Copy)]
+struct Options {
+    adaptivity: Adaptivity,
+    linearize: bool,
+    matrix: bool,
+    krylov_exhausted: bool,
+}
+
+/// The next attempt after a failed one, in order of cost: the factor updated where the
+/// tangent changed (no factorization), J rebuilt at the current state, Newton-Krylov on the
+/// consistent tangent (needs the assembled J), a full Newton only where a GMRES solve ended
+/// inexact (otherwise its iterates are Newton-Krylov's own, each at a factorization's price),
+/// a halved step; None: nothing is left.
+fn next_attempt(control: &StepControl, o: Options) -> Option<Next> {
+    let a = o.adaptivity;
+    let update = a.update && o.linearize && !a.full_newton;
+    let escalate = if control.fallback == FIXED && update {
+        Some(Next::Retry(UPDATED))
+    } else if control.fallback <= UPDATED {
+        Some(Next::Retry(if o.linearize && o.matrix {
+            KRYLOV
+        } else {
+            FULL
+        }))
+    } else if control.fallback == KRYLOV && o.krylov_exhausted {
+        Some(Next::Retry(FULL))
+    } else {
+        None
+    };
+    if a.refresh && !control.fresh {
+        // The update first where there is one: it may do without a factorization.
+        return Some(match escalate {
+            Some(Next::Retry(UPDATED)) => Next::Retry(UPDATED),
+            _ => Next::Refresh,
+        });
+    }
+    match escalate {
+        Some(next) if a.refresh && !a.full_newton => Some(next),
+        _ => ((control.level as usize) < a.max_cuts).then_some(Next::Cut),
+    }
+}
+
+/// The correction of the attempt that just failed, for the log.
+fn attempt_name(control: &StepControl, full_newton: bool) -> &'static str {
+    match control.fallback {
+        _ if full_newton => "the full Newton",
+        FULL => "the full Newton",
+        KRYLOV => "Newton-Krylov",
+        UPDATED => "the updated factor",
+        _ if control.fresh => "the refreshed Jacobian",
+        _ => "the fixed Jacobian",
+    }
 }
 
 /// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's
-/// fixed-Jacobian iterations fail, J is first rebuilt with the tangent of the current state
-/// (when `refresh` is set) and the step retried; if that fails, the step is retried on the
-/// consistent tangent with line search: by Newton-Krylov (when `linearize` is given and J is
-/// kept), then by a full Newton only if a GMRES solve ended inexact (otherwise the full
-/// Newton's iterates are Newton-Krylov's own, each at the price of a factorization); if that
-/// fails too, the step is halved (J refactorized) and retried from the same state, at most
-/// `max_cuts` levels deep; after `restore_after` good steps the step is doubled back towards the nominal one. Once refreshed,
-/// every later factorization uses the current state's tangent. Every change goes to `log`.
-/// Only when the smallest step fails too is the error returned. `control` starts at its
-/// default, or where a checkpoint left it.
+/// iterations fail, it is retried as [`next_attempt`] says: with the factor updated at the
+/// dominant contact points (when `update` is set and `linearize` given), with J rebuilt at the
+/// current state (when `refresh` is set), by Newton-Krylov, by a full Newton, each with line
+/// search; last the step is halved (J refactorized) and retried from the same state, at most
+/// `max_cuts` levels deep; after `restore_after` good steps the step is doubled back towards
+/// the nominal one and the fixed factor tried again. Once refreshed, every later factorization
+/// uses the current state's tangent. Every change goes to `log`. Only when the smallest step
+/// fails too is the error returned. `control` starts at its default, or where a checkpoint
+/// left it.
 ///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // operators, factor builder, state, forces, controls, sinks
@@ -77,10 +159,10 @@ pub fn integrate_adaptive<'p>(
     log: &mut dyn FnMut(&str),
 ) -> Result<(), TimeError> {
     let Adaptivity {
-        max_cuts,
         restore_after,
-        refresh,
         full_newton,
+        update,
+        ..
     } = adaptivity;
     let nominal = settings.step;
     let step_of = |level: u32| nominal / f64::from(1u32 << level);
@@ -97,24 +179,34 @@ pub fn integrate_adaptive<'p>(
                 break;
             }
             let step = match (full_newton, control.fallback, &mut linearize) {
-                (true, _, _) | (_, 2, _) => {
+                (true, _, _) | (_, FULL, _) => {
                     integrator.step_with(state, forces, Correction::Full(&mut *factorize), true)
                 }
-                (_, 1, Some(l)) if factor.matrix.is_some() => {
+                (_, KRYLOV, Some(l)) if factor.matrix.is_some() => {
                     integrator.step_with(state, forces, Correction::Krylov(&mut **l), true)
+                }
+                (_, UPDATED, Some(l)) => {
+                    integrator.step_with(state, forces, Correction::Updated(&mut **l), true)
                 }
                 _ => integrator.step(state, forces),
             };
             match step {
                 Ok(report) => {
-                    // Newton-Krylov stays on for the steps that follow (a point that crossed
-                    // the friction band crosses back within the cycle); the fixed J is tried
-                    // again after `restore_after` good steps.
-                    // (after a full-Newton rescue, back to Newton-Krylov where there is one).
+                    // The updated factor stays on for the steps that follow (a point that
+                    // crossed the friction band crosses back within the cycle), Newton-Krylov
+                    // and the full Newton are rescues of one step; the fixed J is tried again
+                    // after `restore_after` good steps.
+                    let updated = if update && linearize.is_some() {
+                        UPDATED
+                    } else if linearize.is_some() && control.fallback >= KRYLOV {
+                        KRYLOV
+                    } else {
+                        FIXED
+                    };
                     if control.good + 1 >= restore_after {
-                        control.fallback = 0;
-                    } else if control.fallback == 2 {
-                        control.fallback = u8::from(linearize.is_some());
+                        control.fallback = FIXED;
+                    } else if control.fallback > UPDATED {
+                        control.fallback = control.fallback.min(updated);
                     }
                     control.steps += 1;
                     control.fresh = false;
@@ -137,69 +229,77 @@ pub fn integrate_adaptive<'p>(
                 }
                 Err(TimeError::NotConverged {
                     residual, target, ..
-                }) if refresh && !control.fresh => {
-                    control.refreshed = true;
-                    control.fresh = true;
-                    control.good = 0;
-                    control.refreshes += 1;
-                    log(&format!(
-                        "t = {:.6e} s: fixed-Jacobian iterations stalled (residual {residual:.3e} vs {target:.3e}); Jacobian rebuilt with the current contact tangent",
-                        state.time
-                    ));
-                    break;
-                }
-                // A Newton-Krylov whose linear solves converged took the full Newton's own
-                // iterates (the same consistent tangent, the same line search): only a
-                // smaller step can help then.
-                Err(TimeError::NotConverged {
-                    residual, target, ..
-                }) if refresh
-                    && !full_newton
-                    && (control.fallback == 0
-                        || (control.fallback == 1 && integrator.krylov_exhausted())) =>
-                {
-                    // Newton-Krylov needs the assembled J and a linearization; without them
-                    // straight to the full Newton.
-                    let krylov =
-                        control.fallback == 0 && linearize.is_some() && factor.matrix.is_some();
-                    control.fallback = if krylov { 1 } else { 2 };
-                    let how = if krylov {
-                        control.krylov_retries += 1;
-                        "Newton-Krylov (GMRES on the consistent tangent, preconditioned by the factor updated at the points that changed most)"
-                    } else {
-                        control.full_newton_retries += 1;
-                        "a full Newton (the consistent tangent factorized at every iterate)"
+                }) => {
+                    let (iterations, solves) = integrator.failed_attempt();
+                    control.failed_iterations += iterations;
+                    control.failed_solves += solves;
+                    let failed = attempt_name(control, full_newton);
+                    let next = next_attempt(
+                        control,
+                        Options {
+                            adaptivity,
+                            linearize: linearize.is_some(),
+                            matrix: factor.matrix.is_some(),
+                            krylov_exhausted: integrator.krylov_exhausted(),
+                        },
+                    );
+                    let Some(next) = next else {
+                        return Err(TimeError::NotConverged {
+                            step: state.step + 1,
+                            time: state.time + step_settings.step,
+                            iterations,
+                            residual,
+                            target,
+                        });
                     };
-                    log(&format!(
-                        "t = {:.6e} s: stalled with {} (residual {residual:.3e} vs {target:.3e}); retrying the step with {how} and line search",
-                        state.time,
-                        ["the refreshed Jacobian", "Newton-Krylov"][control.fallback as usize - 1]
-                    ));
-                }
-                Err(TimeError::NotConverged {
-                    residual, target, ..
-                }) if (control.level as usize) < max_cuts => {
-                    // What failed last, for the log.
-                    let failed = if full_newton || control.fallback == 2 {
-                        "the full Newton"
-                    } else if control.fallback == 1 {
-                        "Newton-Krylov"
-                    } else if control.fresh {
-                        "the refreshed Jacobian"
-                    } else {
-                        "the fixed Jacobian"
-                    };
-                    control.fallback = 0;
-                    control.level += 1;
-                    control.cuts += 1;
-                    control.good = 0;
-                    control.fresh = control.refreshed;
-                    log(&format!(
-                        "t = {:.6e} s: stalled with {failed} (residual {residual:.3e} vs {target:.3e}); step cut to {:.3e} s, Jacobian refactorized",
-                        state.time,
-                        step_of(control.level)
-                    ));
-                    break;
+                    let t = state.time;
+                    let tail = format!("(residual {residual:.3e} vs {target:.3e})");
+                    match next {
+                        Next::Refresh => {
+                            control.refreshed = true;
+                            control.fresh = true;
+                            control.good = 0;
+                            control.refreshes += 1;
+                            log(&format!(
+                                "t = {t:.6e} s: stalled with {failed} {tail}; Jacobian rebuilt with the current contact tangent"
+                            ));
+                            break;
+                        }
+                        Next::Retry(fallback) => {
+                            // The retry's correction then stays for `restore_after` steps.
+                            control.fallback = fallback;
+                            control.good = 0;
+                            let how = match fallback {
+                                UPDATED => {
+                                    control.updated_retries += 1;
+                                    "the factor updated at the contact points whose tangent changed most"
+                                }
+                                KRYLOV => {
+                                    control.krylov_retries += 1;
+                                    "Newton-Krylov (GMRES on the consistent tangent, preconditioned by the factor updated at the points that changed most)"
+                                }
+                                _ => {
+                                    control.full_newton_retries += 1;
+                                    "a full Newton (the consistent tangent factorized at every iterate)"
+                                }
+                            };
+                            log(&format!(
+                                "t = {t:.6e} s: stalled with {failed} {tail}; retrying the step with {how} and line search"
+                            ));
+                        }
+                        Next::Cut => {
+                            control.fallback = FIXED;
+                            control.level += 1;
+                            control.cuts += 1;
+                            control.good = 0;
+                            control.fresh = control.refreshed;
+                            log(&format!(
+                                "t = {t:.6e} s: stalled with {failed} {tail}; step cut to {:.3e} s, Jacobian refactorized",
+                                step_of(control.level)
+                            ));
+                            break;
+                        }
+                    }
                 }
                 Err(e) => return Err(e),
             }

@@ -337,7 +337,9 @@ fn tangent_operator_equals_assembled<'p>(
 /// (1) every point's columns and channel block rebuild the contact tangent operator
 /// (U D U^T x = T x, to round-off); (2) the factor of J0 (the static Newton tangent) updated by
 /// 20 points' part of T inverts J0 + that part (Woodbury), here applied to
-/// (J0 + U D U^T) x and compared with x.
+/// (J0 + U D U^T) x and compared with x; (3) the update's own part U D U^T x (the transient's
+/// updated-factor correction carries it into the linear force) equals the change applied to
+/// x, to round-off.
 fn low_rank_update_of_the_tangent<'p>(
     petsc: &'p Petsc,
     contact: &ContactModel<'p>,
@@ -432,10 +434,18 @@ fn low_rank_update_of_the_tangent<'p>(
     update.apply(&factor, &b, &mut w).map_err(e)?;
     w.axpy(-1.0, &x).map_err(e)?;
     let inverted = w.norm2().map_err(e)? / x.norm2().map_err(e)?;
+    // (3) The update's own part, U D U^T x (what a correction solved with P changes beyond
+    // the factor), equals the change applied to x.
+    let (mut own, mut applied) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
+    update.mult_add_update(&x, &mut own).map_err(e)?;
+    change.mult_add(&x, &mut applied).map_err(e)?;
+    let own_scale = applied.norm2().map_err(e)?;
+    own.axpy(-1.0, &applied).map_err(e)?;
+    let own_part = own.norm2().map_err(e)? / own_scale;
     say(
         petsc,
         &format!(
-            "tangent from its explicit columns ({} of {} points): {rebuilt:.1e}; factor updated by 20 points ({} columns, {solves} solves) inverts J0 + their part: {inverted:.1e}",
+            "tangent from its explicit columns ({} of {} points): {rebuilt:.1e}; factor updated by 20 points ({} columns, {solves} solves) inverts J0 + their part: {inverted:.1e}; the update's part U D U^T x: {own_part:.1e}",
             all.keys.iter().map(|k| k.0).collect::<std::collections::BTreeSet<_>>().len(),
             contact.points().len(),
             update.rank()
@@ -444,9 +454,9 @@ fn low_rank_update_of_the_tangent<'p>(
     // (1) is the same sums in another order: round-off. (2) Woodbury on a direct factor:
     // the error is the factor's (cond(J0) eps, ~1e-10 for this stiffness) amplified by the
     // small system's conditioning; 1e-8 leaves room for both and fails on any wrong column.
-    if !(rebuilt < 1e-12 && inverted < 1e-8 && update.rank() > 20) {
+    if !(rebuilt < 1e-12 && inverted < 1e-8 && own_part < 1e-12 && update.rank() > 20) {
         return Err(format!(
-            "explicit columns rebuild the tangent to {rebuilt:e}, the updated factor inverts to {inverted:e} with {} columns",
+            "explicit columns rebuild the tangent to {rebuilt:e}, the updated factor inverts to {inverted:e} with {} columns, its own part {own_part:e}",
             update.rank()
         ));
     }

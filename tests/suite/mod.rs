@@ -119,6 +119,10 @@ const LONG_TESTS: &[(&str, u64)] = &[
         180,
     ), // 32 s
     ("brake_transient_fixed_jacobian_follows_full_newton", 180), // 32 s
+    (
+        "brake_transient_updated_factor_follows_full_newton_where_contact_opens",
+        180,
+    ), // ~25 s
     ("newmark_exponential_contact_oscillator_periods", 120), // 24 s
     (
         "brake_pseudo_trajectory_starts_at_the_nominal_mode_and_agrees_on_1_and_2_ranks",

@@ -446,6 +446,7 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
             restore_after: 100,
             refresh: true,
             full_newton: false,
+            update: true,
         },
         &mut control,
         &mut on_step,

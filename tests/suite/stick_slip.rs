@@ -207,6 +207,7 @@ fn run(
             restore_after: 100,
             refresh: true,
             full_newton: false,
+            update: true,
         },
         &mut control,
         &mut on_step,

@@ -1,6 +1,7 @@
-//! How a step's iterate is corrected: modified Newton with the step's fixed factor, a full
-//! Newton with J rebuilt at every iterate, or Newton-Krylov (`krylov.rs`); and what a
-//! correction changes in the carried linear force.
+//! How a step's iterate is corrected: modified Newton with the step's fixed factor, the same
+//! factor updated at the contact points whose tangent changed most, a full Newton with J
+//! rebuilt at every iterate, or Newton-Krylov (`krylov.rs`); and what a correction changes in
+//! the carried linear force.
 
 use super::{Jacobian, Newmark, NewmarkSettings, State, StepReport};
 use crate::la::{DirectSolver, LaError, LowRankUpdate, TangentChange, Vector};
@@ -21,6 +22,12 @@ pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<B
 pub enum Correction<'r, 'f, 'p> {
     /// With the factor of the step's fixed J (modified Newton).
     Fixed,
+    /// With the fixed factor updated at every iterate by the consistent tangent's change at
+    /// its dominant contact points (Woodbury, `la::LowRankUpdate`): a Newton step on the
+    /// tangent's dominant part for one solve with the factor (plus one per new point column,
+    /// cached for the factor's life), converging nearly as a full Newton where the change sits
+    /// on a few points, which the saturated regime's does.
+    Updated(&'r mut Linearize<'f, 'p>),
     /// Newton-Krylov: GMRES on the consistent tangent at every iterate, right-preconditioned
     /// by the fixed factor (a few solves where J differs in a few contact points).
     Krylov(&'r mut Linearize<'f, 'p>),
@@ -66,6 +73,26 @@ impl SolveCount {
 }
 
 impl<'p> Newmark<'_, 'p> {
+    /// dq = P^-1 R with P the factor updated by `tangent`'s dominant part (U D U^T), and
+    /// dz = -(J - X) dq = -(P dq - U D U^T dq - X dq) = -R + U D U^T dq + X dq.
+    ///
+    /// # Collective
+    pub(super) fn updated_correction(
+        &mut self,
+        tangent: &dyn TangentChange<'p>,
+        report: &mut StepReport,
+    ) -> Result<(), LaError> {
+        let t = std::time::Instant::now();
+        self.solves.solves += self
+            .low_rank
+            .prepare(&self.jacobian.factor, tangent, &self.q1)?;
+        self.solves.seconds += t.elapsed().as_secs_f64();
+        self.solves
+            .precondition(&self.low_rank, &self.jacobian.factor, &self.r, &mut self.dq)?;
+        self.linear_change(self.jacobian, report)?;
+        self.low_rank.mult_add_update(&self.dq, &mut self.dz)
+    }
+
     /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to
     /// the factor's accuracy): -R + X dq.
     pub(super) fn linear_change(

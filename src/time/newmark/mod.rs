@@ -199,6 +199,8 @@ pub struct Newmark<'a, 'p> {
     /// Newton-Krylov's preconditioner: the factor updated by the tangent change's dominant
     /// points (their columns cached for this factor's life).
     low_rank: LowRankUpdate<'p>,
+    /// Iterations of the last attempt that did not converge (its solves: `solves`).
+    failed_iterations: usize,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -232,6 +234,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             krylov_exhausted: false,
             solves: SolveCount::default(),
             low_rank: LowRankUpdate::default(),
+            failed_iterations: 0,
             q1,
         })
     }
@@ -390,6 +393,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             let k = history.len();
             let stalled = k > 8 && r > 0.5 * history[k - 5];
             if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
+                self.failed_iterations = report.iterations;
                 return Err(TimeError::NotConverged {
                     step: state.step + 1,
                     time: t1,
@@ -414,6 +418,10 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     self.solves
                         .solve(&self.jacobian.factor, &self.r, &mut self.dq)?;
                     self.linear_change(self.jacobian, &mut report)?;
+                }
+                Correction::Updated(linearize) => {
+                    let tangent = linearize(&self.settings, &iterate(self)?)?;
+                    self.updated_correction(tangent.as_ref(), &mut report)?;
                 }
                 Correction::Full(build) => {
                     let fresh = build(&self.settings, Some(&iterate(self)?))?;
@@ -454,6 +462,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
             }
         }
+    }
+
+    /// Iterations and solves with a factor of the last step attempt that did not converge
+    /// (what a retry cost beyond the accepted attempt's report).
+    pub fn failed_attempt(&self) -> (usize, usize) {
+        (self.failed_iterations, self.solves.solves)
     }
 
     /// The state becomes (q1, v1, a1) at t1.

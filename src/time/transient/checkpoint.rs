@@ -85,6 +85,9 @@ impl<'p> Checkpoint<'p> {
                 ("krylov_retries", c.krylov_retries as f64),
                 ("full_newton_retries", c.full_newton_retries as f64),
                 ("fallback", f64::from(c.fallback)),
+                ("updated_retries", c.updated_retries as f64),
+                ("failed_iterations", c.failed_iterations as f64),
+                ("failed_solves", c.failed_solves as f64),
                 ("signal_rows", out.time.len() as f64),
                 ("state_rows", out.states as f64),
                 ("jacobian_state", f64::from(u8::from(jacobian_at.is_some()))),
@@ -241,6 +244,10 @@ file: path.to_path_buf(),
             krylov_retries: number("krylov_retries")? as usize,
             full_newton_retries: number("full_newton_retries")? as usize,
             fallback: number("fallback")? as u8,
+            // (Absent from checkpoints written before these counts existed.)
+            updated_retries: number("updated_retries").unwrap_or(0.0) as usize,
+            failed_iterations: number("failed_iterations").unwrap_or(0.0) as usize,
+            failed_solves: number("failed_solves").unwrap_or(0.0) as usize,
         };
         let state_rows = number("state_rows")? as usize;
         let mut checkpoint = Checkpoint {

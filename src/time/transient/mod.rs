@@ -72,6 +72,12 @@ pub struct Transient {
     /// Steps retried on the consistent tangent with line search: Newton-Krylov, full Newton.
     pub krylov_retries: usize,
     pub full_newton_retries: usize,
+    /// Steps retried with the factor updated at the dominant contact points, and the
+    /// iterations and solves with a factor of every attempt that failed (beyond the accepted
+    /// attempts' `iterations_run` and `factor_solves`).
+    pub updated_retries: usize,
+    pub failed_iterations: usize,
+    pub failed_solves: usize,
     /// GMRES iterations of the Newton-Krylov retries.
     pub krylov_iterations: usize,
     pub factorizations: usize,
@@ -172,6 +178,7 @@ impl Transient {
         self.refreshes = control.refreshes;
         self.krylov_retries = control.krylov_retries;
         self.full_newton_retries = control.full_newton_retries;
+        self.updated_retries = control.updated_retries;
         self.factorizations = control.factorizations.max(b.built);
     }
 
@@ -190,6 +197,9 @@ impl Transient {
             refreshes: 0,
             krylov_retries: 0,
             full_newton_retries: 0,
+            updated_retries: 0,
+            failed_iterations: 0,
+            failed_solves: 0,
             krylov_iterations: 0,
             factorizations: 0,
             factor_entries: 0.0,
@@ -344,6 +354,7 @@ pub fn run<'p>(
     let mut control = StepControl::default();
     let (mut recorder, restart_at) =
         open_record(petsc, settings, &input, files, &mut state, &mut control)?;
+    let failed_before = (control.failed_iterations, control.failed_solves);
     let builder = RefCell::new(JacobianBuilder::new(
         petsc,
         contact,
@@ -448,6 +459,7 @@ pub fn run<'p>(
             restore_after: 100,
             refresh: settings.refresh,
             full_newton: settings.newton == Newton::Full,
+            update: settings.update_factor,
         },
         &mut control,
         &mut on_step,
@@ -477,6 +489,9 @@ pub fn run<'p>(
     let mut out = recorder.out;
     out.seconds_stepping = t.elapsed().as_secs_f64();
     out.count_factorizations(&builder.into_inner(), &control, seconds_start);
+    // This process's part, like `iterations_run` and `factor_solves`.
+    out.failed_iterations = control.failed_iterations - failed_before.0;
+    out.failed_solves = control.failed_solves - failed_before.1;
     out.count_sizes(&k0, contact)?;
     Ok((out, result.err()))
 }

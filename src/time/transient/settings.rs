@@ -39,6 +39,12 @@ pub struct TransientSettings {
     /// (normal and stick stiffness, friction damping of nearly sticking points).
     #[serde(default = "default_refresh")]
     pub refresh: bool,
+    /// Where the fixed Jacobian's iterations stall, first update its factor at the contact
+    /// points whose tangent changed most (Woodbury: one solve per iteration, one per new
+    /// point, no factorization) and keep it updated for the next steps; false: the fixed
+    /// factor, then a refreshed one (the behaviour before this key, for comparison).
+    #[serde(default = "default_refresh")]
+    pub update_factor: bool,
     /// `"modified"` (default): the fixed Jacobian; `"full"`: J rebuilt with the contact tangent
     /// at every iterate (the reference the fixed-Jacobian iterations are checked against).
     #[serde(default)]
