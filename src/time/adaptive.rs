@@ -141,6 +141,10 @@ fn attempt_name(control: &StepControl, full_newton: bool) -> &'static str {
 /// fails too is the error returned. `control` starts at its default, or where a checkpoint
 /// left it.
 ///
+/// About 165 lines, on purpose: the factor's loop and the step's loop share the integrator
+/// (which borrows the factor) and the control; what to do after a failure is decided in
+/// [`next_attempt`], what stays here is each outcome's bookkeeping and its log line.
+///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // operators, factor builder, state, forces, controls, sinks
 pub fn integrate_adaptive<'p>(
