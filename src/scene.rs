@@ -201,6 +201,7 @@ impl Scene {
                 toml::from_str("steps = 0").expect("the transient's defaults parse");
             t.steps = 0;
             t.checkpoint_every = 0;
+            t.stop_after_saturation = None;
             t.newton = defaults.newton;
             t.max_cuts = defaults.max_cuts;
             t.refresh = defaults.refresh;

@@ -8,6 +8,7 @@ pub mod dense_quadratic;
 pub mod eigen;
 pub(crate) mod error;
 pub mod fem_assembly;
+pub mod gmres;
 pub mod hessenberg;
 pub mod lapack;
 pub mod lapack_complex;

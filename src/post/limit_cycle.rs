@@ -233,6 +233,15 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     out
 }
 
+/// Whether signal `y` (times `t`, grid `dt`) has saturated and run at least `cycles` cycles
+/// since, by [`characterize`]'s detector with its default settings: the amplitude grew tenfold,
+/// no longer grows over the last fifth of the signal, and `cycles` upward crossings of the mean
+/// followed the saturation time. A transient ends on it (`transient.stop_after_saturation`).
+pub fn saturated_for(t: &[f64], y: &[f64], dt: f64, cycles: usize) -> bool {
+    let found = characterize(t, y, dt, &LimitCycleSettings::default());
+    found.saturation_time.is_some() && found.amplitudes.len() >= cycles
+}
+
 /// The growth rate, window and frequency of the linear phase (ln amplitude against time,
 /// `linear`) when it spans at least 4 windows and one e-fold; `u`: the signal from `t0` on the
 /// grid `dt`.
@@ -482,5 +491,39 @@ mod tests {
         let mut bad = wave(&|_| 1.0);
         bad[100] = f64::NAN;
         assert!(!characterize(&t, &bad, dt, &s).reached);
+    }
+    /// The transient's stop rule on a signal that grows at 800 1/s from 1e-3 and saturates
+    /// at 1 (a logistic envelope, saturated near 8.6 ms, 3 kHz): not before the saturation,
+    /// not while the cycles after it are fewer than asked, and yes once there are enough;
+    /// never on pure growth or with a NaN.
+    #[test]
+    fn a_run_stops_only_after_enough_saturated_cycles() {
+        let dt = 2e-6;
+        let signal = |n: usize, f: &dyn Fn(f64) -> f64| -> (Vec<f64>, Vec<f64>) {
+            let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+            let y = t
+                .iter()
+                .map(|&t| f(t) * (2.0 * std::f64::consts::PI * 3000.0 * t).sin())
+                .collect();
+            (t, y)
+        };
+        let logistic = |t: f64| {
+            let e = (800.0 * t).exp();
+            1e-3 * e / (1.0 + 1e-6 * (e * e - 1.0)).sqrt()
+        };
+        // 6 ms: still growing. 12 ms: saturated ~3 ms ago (~9 cycles). 30 ms: ~60 cycles.
+        let (t, y) = signal(3_000, &logistic);
+        assert!(!saturated_for(&t, &y, dt, 20));
+        let (t, y) = signal(6_000, &logistic);
+        let early = characterize(&t, &y, dt, &LimitCycleSettings::default());
+        assert!(early.amplitudes.len() < 20, "{}", early.amplitudes.len());
+        assert!(!saturated_for(&t, &y, dt, 20));
+        let (t, y) = signal(15_000, &logistic);
+        assert!(saturated_for(&t, &y, dt, 20));
+        let (t, y) = signal(15_000, &|t| (500.0 * t).exp());
+        assert!(!saturated_for(&t, &y, dt, 20));
+        let (t, mut y) = signal(15_000, &logistic);
+        y[7_000] = f64::NAN;
+        assert!(!saturated_for(&t, &y, dt, 20));
     }
 }

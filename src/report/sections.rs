@@ -32,8 +32,8 @@ impl RunSummary {
         let s = self;
         if let Some(st) = &s.statics {
             writeln!(f,
-                "static preload: {} contact points (per rank {:?}), {} load steps, {} Newton iterations ({} solves), {} LU factorizations ({:.3e} entries), final residual {:.2e} N",
-                st.points, st.points_per_rank, st.load_steps, st.newton_iterations, st.solves, st.factorizations, st.factor_entries, st.final_residual
+                "static preload: {} contact points (per rank {:?}), {} load steps, {} Newton iterations ({} solves; {} by GMRES with an earlier factor, {} GMRES iterations), {} LU factorizations ({:.3e} entries, {:.1} s), final residual {:.2e} N",
+                st.points, st.points_per_rank, st.load_steps, st.newton_iterations, st.solves, st.krylov_corrections, st.krylov_iterations, st.factorizations, st.factor_entries, st.seconds_factorizing, st.final_residual
             )?;
             for (name, missed, of) in &st.misses {
                 if *missed > 0 {
@@ -178,6 +178,14 @@ impl RunSummary {
                 1e3 * t.seconds_forces_per_step,
                 1e3 * t.seconds_products_per_step
             )?;
+            writeln!(
+                f,
+                "    started from the static state as an equilibrium (its residual {:.2e} N taken off the load)",
+                t.static_residual
+            )?;
+            if let Some(at) = t.stopped_at_saturation {
+                writeln!(f, "    stopped at t = {at:.4e} s: the torque had saturated transient.stop_after_saturation cycles before")?;
+            }
         }
         Ok(())
     }

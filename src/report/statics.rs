@@ -126,6 +126,19 @@ pub fn write_static<'p>(
     file.write_table("static/newton/step_length", &log(&|r| r.step_length), "1")?;
     file.set_number("static", "factorizations", state.factorizations as f64)?;
     file.set_number("static", "solves", state.solves as f64)?;
+    file.set_number(
+        "static",
+        "krylov_corrections",
+        state.krylov_corrections as f64,
+    )?;
+    file.set_number(
+        "static",
+        "krylov_iterations",
+        state.krylov_iterations as f64,
+    )?;
+    file.set_number("static", "seconds_factorizing", state.seconds_factorizing)?;
+    file.set_number("static", "seconds_solving", state.seconds_solving)?;
+    file.set_number("static", "factor_flops", state.factor_flops)?;
     file.set_number("static", "factor_entries", state.factor_entries)?;
     file.set_number("static", "piston_force_n", model.piston_force())?;
     let torque: f64 = state.summaries.iter().map(|s| s.torque).sum();

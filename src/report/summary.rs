@@ -89,6 +89,8 @@ pub struct StaticSummary {
     pub load_steps: usize,
     pub factorizations: usize,
     pub solves: usize,
+    pub krylov_corrections: usize,
+    pub krylov_iterations: usize,
     pub factor_entries: f64,
     pub pairing_seconds: f64,
     pub seconds: f64,
@@ -131,6 +133,10 @@ pub struct TransientSummary {
     /// recording).
     pub seconds_forces_per_step: f64,
     pub seconds_products_per_step: f64,
+    /// The static residual removed from the load (N), and where the run stopped because the
+    /// torque had saturated.
+    pub static_residual: f64,
+    pub stopped_at_saturation: Option<f64>,
     pub cost: StepCost,
 }
 
@@ -326,6 +332,8 @@ impl StaticSummary {
             load_steps: last.load_step,
             factorizations: state.factorizations,
             solves: state.solves,
+            krylov_corrections: state.krylov_corrections,
+            krylov_iterations: state.krylov_iterations,
             factor_entries: state.factor_entries,
             pairing_seconds: contact.pairing_seconds(),
             seconds: state.seconds,
@@ -396,6 +404,8 @@ impl TransientSummary {
             jacobian_solver: t.jacobian_solver,
             seconds_forces_per_step: t.seconds_in_forces / steps_run,
             seconds_products_per_step: t.seconds_in_products / steps_run,
+            static_residual: t.static_residual,
+            stopped_at_saturation: t.stopped_at_saturation,
             cost: StepCost::of(t),
         }
     }

@@ -44,6 +44,10 @@ pub fn write_transient(
     for (name, value) in numbers {
         file.set_number(g, name, value)?;
     }
+    file.set_number(g, "static_residual_removed_n", tr.static_residual)?;
+    if let Some(t) = tr.stopped_at_saturation {
+        file.set_number(g, "stopped_at_saturation_s", t)?;
+    }
     if let Some(t) = tr.resumed_at {
         file.set_number(g, "restarted_at_s", t)?;
     }

@@ -1,18 +1,22 @@
 //! Static preload (DESIGN.md §2): Newton on K0 q - f_N(q) - f_T(q) = f_ext with a backtracking
 //! line search and load stepping (pressure ramp, then friction ramp with the disc sliding at
-//! Omega), each Newton step a MUMPS LU of the unsymmetric tangent.
+//! Omega): a modified Newton on a MUMPS LU of the unsymmetric tangent, GMRES preconditioned
+//! by that LU once it stops contracting, a new LU when GMRES would cost more
+//! ([`tangent`]).
 
 use crate::invalid::InvalidSetting;
 use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::contact::kernel::Part;
 use crate::contact::surface::Face;
 use crate::contact::{ContactModel, ContactState, InterfaceSummary};
 use crate::fem::dofmap::DofMap;
-use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::la::{DirectSolver, LaError, Petsc, SparseMatrix, Vector};
 use crate::mesh::{Mesh, PressureLoad};
+
+pub mod tangent;
+use tangent::{Scale, TangentSolver};
 
 /// The `[statics]` table of a scene.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -33,6 +37,12 @@ pub struct StaticSettings {
     /// least by this factor (0: a new factor each iteration, full Newton).
     #[serde(default = "default_reuse_contraction")]
     pub reuse_contraction: f64,
+    /// Once the factor stops contracting: GMRES on the iterate's tangent preconditioned by it
+    /// before a new factorization (false: a new factorization at once, as before).
+    /// (Not written when true: the restart fingerprints of scenes written before this key
+    /// stay the same.)
+    #[serde(default = "default_krylov", skip_serializing_if = "is_true")]
+    pub krylov: bool,
 }
 
 fn default_pressure_steps() -> usize {
@@ -48,6 +58,12 @@ fn default_tolerance() -> f64 {
 fn default_max_iterations() -> usize {
     40
 }
+fn default_krylov() -> bool {
+    true
+}
+fn is_true(value: &bool) -> bool {
+    *value
+}
 fn default_reuse_contraction() -> f64 {
     // Fewer factorizations for more solves, fastest of those measured on the 30k brake
     // (benches/decisions-results.md, "statics-reuse").
@@ -62,6 +78,7 @@ impl Default for StaticSettings {
             tolerance: default_tolerance(),
             max_iterations: default_max_iterations(),
             reuse_contraction: default_reuse_contraction(),
+            krylov: default_krylov(),
         }
     }
 }
@@ -131,13 +148,22 @@ pub struct StaticState<'p> {
     pub summaries: Vec<InterfaceSummary>,
     pub log: Vec<NewtonRecord>,
     pub factorizations: usize,
-    /// Solves with those factors (one per Newton iteration, plus retries with a fresh factor).
+    /// Solves with those factors: one per correction with a factor, one per GMRES iteration
+    /// and one more per GMRES correction.
     pub solves: usize,
+    /// Of the corrections, those by GMRES preconditioned by an earlier factor, and their GMRES
+    /// iterations (each one solve; counted in `solves`).
+    pub krylov_corrections: usize,
+    pub krylov_iterations: usize,
     /// Load increments that were halved after a stall.
     pub cut_steps: usize,
     /// MUMPS factor entries of the last factorization.
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
+    /// In solves with the factors (GMRES' products and orthogonalization excluded).
+    pub seconds_solving: f64,
+    /// MUMPS' elimination flops of the last factorization (0 when not reported).
+    pub factor_flops: f64,
     pub seconds: f64,
     /// |f_ext| at full pressure (N).
     pub load_norm: f64,
@@ -259,13 +285,15 @@ pub struct Start<'a, 'p> {
 pub struct Factored<'p> {
     jac: SparseMatrix<'p>,
     solver: DirectSolver<'p>,
+    /// What the factorization took (GMRES' budget with this factor).
+    seconds: f64,
 }
 
 /// [`solve`] from `start_at`.
 ///
-/// About 190 lines, on purpose: load stepping with cutting around a modified Newton loop with
-/// factor refresh; the iterate, the factor and the residual pass between the two loops, which
-/// read best in one view (the factorization and the line search are their own functions).
+/// About 170 lines, on purpose: load stepping with cutting around a Newton loop; the iterate,
+/// the residual and the tangent's state pass between the two loops, which read best in one
+/// view (the corrections, the factorization and the line search are their own functions).
 ///
 /// # Collective
 #[allow(clippy::too_many_arguments)] // as solve
@@ -286,9 +314,15 @@ pub fn solve_from<'p>(
         .iter()
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
         && contact.disc_speed() != 0.0;
-    let (mut jac, mut solver) = match factor.take() {
-        Some(f) => (f.jac, Some(f.solver)),
-        None => (contact.joined_matrix(petsc, k0)?, None),
+    let mut tangent = match factor.take() {
+        Some(f) => TangentSolver::new(petsc, f.jac, Some(f.solver), f.seconds, settings.krylov),
+        None => TangentSolver::new(
+            petsc,
+            contact.joined_matrix(petsc, k0)?,
+            None,
+            0.0,
+            settings.krylov,
+        ),
     };
     let mut q = k0.new_vector()?;
     if let Some(start) = start_from {
@@ -301,8 +335,6 @@ pub fn solve_from<'p>(
     let mut fc = q.duplicate()?;
     let load_norm = f_ext.norm2()?;
     let mut log = Vec::new();
-    let (mut factorizations, mut factor_entries, mut seconds_factorizing) = (0usize, 0.0, 0.0);
-    let (mut refresh, mut solves) = (solver.is_none(), 0usize);
     let mut cut_steps = 0usize;
 
     // R = K0 q - f_c(q) - f; returns (|R|, reference force, state).
@@ -341,7 +373,8 @@ pub fn solve_from<'p>(
             // At the last converged state: no smaller load increment can help.
             return Err(StaticError::NotFinite { step });
         }
-        let mut history = Vec::new();
+        // (residual, step length taken from it) of each iteration.
+        let mut history: Vec<(f64, f64)> = Vec::new();
         let mut iteration = 0;
         let outcome = loop {
             let target = settings.tolerance * reference;
@@ -360,36 +393,22 @@ pub fn solve_from<'p>(
                 log.push(rec);
                 break Ok(state);
             }
-            history.push(r);
-            let stalled = history.len() > 8 && r > 0.5 * history[history.len() - 5];
-            if iteration >= settings.max_iterations || !r.is_finite() || stalled {
+            if iteration >= settings.max_iterations || !r.is_finite() || stalled(&history, r) {
                 break Err((iteration, r, target));
             }
-            // Modified Newton: a new factor of the current tangent only when the previous one
-            // stopped contracting well (or a line search with it failed).
-            let fresh = refresh || solver.is_none();
-            if fresh {
-                let t = Instant::now();
-                let factored =
-                    factorize_tangent(petsc, &mut jac, k0, contact, &state, solver.take())?;
-                seconds_factorizing += t.elapsed().as_secs_f64();
-                factorizations += 1;
-                factor_entries = factored.report().factor_entries;
-                solver = Some(factored);
-            }
             residual.scale(-1.0)?;
-            solver
-                .as_ref()
-                .expect("factored above")
-                .solve(&residual, &mut dq)?;
-            solves += 1;
+            let scale = Scale {
+                floor: 0.1 * target,
+                reach: q.norm2()?,
+            };
+            let kind = tangent.correct(k0, contact, &state, &residual, &mut dq, scale)?;
             let chosen = backtrack(&q, &dq, r, &mut trial, |t| eval(t, psi, &f, &mut residual))?;
             let Some((alpha, evaluated)) = chosen else {
                 // Leave the residual of the current iterate for the error report (and for a
-                // retry with a fresh factor when this one was old).
+                // retry with a Newton correction when this one was the old factor's).
                 eval(&q, psi, &f, &mut residual)?;
-                if !fresh {
-                    refresh = true;
+                if !kind.is_newton() {
+                    tangent.mark_stale();
                     continue;
                 }
                 break Err((iteration, r, target));
@@ -397,13 +416,16 @@ pub fn solve_from<'p>(
             let rec = record(alpha);
             progress(&rec);
             log.push(rec);
+            history.push((r, alpha));
             q.axpy(alpha, &dq)?;
             let previous = r;
             (r, reference, state) = match evaluated {
                 Some(e) => e,
                 None => eval(&q, psi, &f, &mut residual)?,
             };
-            refresh = alpha < 1.0 || r > settings.reuse_contraction * previous;
+            if alpha < 1.0 || r > settings.reuse_contraction * previous {
+                tangent.mark_stale();
+            }
             iteration += 1;
         };
         match outcome {
@@ -430,7 +452,7 @@ pub fn solve_from<'p>(
                 }
                 cuts += 1;
                 cut_steps += 1;
-                refresh = true;
+                tangent.mark_stale();
                 q.copy_from(&saved)?;
                 let half = (0.5 * (converged_at.0 + phi), 0.5 * (converged_at.1 + psi));
                 targets.push_front(half);
@@ -445,59 +467,46 @@ pub fn solve_from<'p>(
         }
     }
     let state = last_state.expect("at least one load step");
-    *factor = solver.map(|solver| Factored { jac, solver });
-    let summaries = contact.summarize(petsc, &state);
-    Ok(StaticState {
+    let solved = StaticState {
         displacement: q,
+        summaries: contact.summarize(petsc, &state),
         contact: state,
-        summaries,
         log,
-        factorizations,
-        solves,
+        factorizations: tangent.factorizations,
+        solves: tangent.solves,
+        krylov_corrections: tangent.krylov_corrections,
+        krylov_iterations: tangent.krylov_iterations,
         cut_steps,
-        factor_entries,
-        seconds_factorizing,
+        factor_entries: tangent.factor_entries(),
+        seconds_factorizing: tangent.seconds_factorizing,
+        seconds_solving: tangent.seconds_solving,
+        factor_flops: tangent.factor_flops(),
         seconds: start.elapsed().as_secs_f64(),
         load_norm,
-    })
+    };
+    let (jac, solver, seconds) = tangent.into_parts();
+    *factor = solver.map(|solver| Factored {
+        jac,
+        solver,
+        seconds,
+    });
+    Ok(solved)
+}
+
+/// Whether a load step's Newton iteration has stalled at residual `r` after `history`
+/// ((residual, step length) of each iteration): less than a halving over the last four
+/// iterations, after eight, none of them shortened by the line search. Shortened steps that
+/// lower the residual are a walk, not a stall: the pads dragged by friction onto their
+/// abutments take several at 100k and more at 600k, each one a little further; halving the
+/// increment then repeats the same walk in two parts (the 600k preload cut its friction step
+/// again and again).
+fn stalled(history: &[(f64, f64)], r: f64) -> bool {
+    let n = history.len();
+    n >= 8 && r > 0.5 * history[n - 4].0 && history[n - 4..].iter().all(|&(_, a)| a == 1.0)
 }
 
 /// A residual evaluation: |R|, the reference force, the contact state.
 type Evaluation = (f64, f64, ContactState);
-
-/// J = K0 + the contact tangent at `state` (normal, stick, friction, stick coupling) into
-/// `jac` (K0's pattern joined with the contacts), LU-factorized: by `old` again (numerical
-/// phase only) when it is a factor of `jac`, else anew (`old` freed first: peak memory).
-///
-/// # Collective
-fn factorize_tangent<'p>(
-    petsc: &'p Petsc,
-    jac: &mut SparseMatrix<'p>,
-    k0: &SparseMatrix<'p>,
-    contact: &ContactModel<'p>,
-    state: &ContactState,
-    old: Option<DirectSolver<'p>>,
-) -> Result<DirectSolver<'p>, LaError> {
-    jac.copy_values_from(k0)?;
-    let parts = [
-        Part::Normal,
-        Part::Stick,
-        Part::Friction,
-        Part::StickCoupling,
-    ];
-    contact.add_tangent(state, &parts, jac)?;
-    jac.assemble()?;
-    match old {
-        Some(mut solver) if solver.factors(jac)? => {
-            solver.refactorize(jac)?;
-            Ok(solver)
-        }
-        other => {
-            drop(other);
-            DirectSolver::factorize(petsc, jac, Factorization::Lu, "static_")
-        }
-    }
-}
 
 /// Backtracking along `dq` from `q` (residual norm `r`): the first step length with
 /// sufficient decrease of |R| with its evaluation, else the best one tried if it lowers |R| at

@@ -130,6 +130,14 @@ fn attempt_name(control: &StepControl, full_newton: bool) -> &'static str {
     }
 }
 
+/// What the caller of [`integrate_adaptive`] wants after an accepted step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    /// End the integration here, before `end_time` (a transient that has seen enough).
+    Stop,
+}
+
 /// Integrates from `state` to `end_time` with the nominal step of `settings`. When a step's
 /// iterations fail, it is retried as [`next_attempt`] says: with the factor updated at the
 /// dominant contact points (when `update` is set and `linearize` given), with J rebuilt at the
@@ -159,7 +167,7 @@ pub fn integrate_adaptive<'p>(
     end_time: f64,
     adaptivity: Adaptivity,
     control: &mut StepControl,
-    on_step: &mut dyn FnMut(&State<'p>, &StepReport, &StepControl) -> Result<(), TimeError>,
+    on_step: &mut dyn FnMut(&State<'p>, &StepReport, &StepControl) -> Result<Flow, TimeError>,
     log: &mut dyn FnMut(&str),
 ) -> Result<(), TimeError> {
     let Adaptivity {
@@ -226,7 +234,9 @@ pub fn integrate_adaptive<'p>(
                             step_of(control.level)
                         ));
                     }
-                    on_step(state, &report, control)?;
+                    if on_step(state, &report, control)? == Flow::Stop {
+                        return Ok(());
+                    }
                     if restore {
                         break;
                     }

@@ -16,12 +16,15 @@
 //! - the contact tangent applied through the observation rows (the transient's residual
 //!   update) equals the assembled tangent's product at the preloaded state (normal, stick,
 //!   friction with the convective term, and scaled friction damping) to 1e-12 relative.
+//! - the preload with GMRES on a stale factor and the one with a new factor each time equal
+//!   each other within their Newton error estimates.
 
+use squeal::contact::kernel::Part;
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
 use squeal::fem::shape::ElementKind;
 use squeal::la::fem_assembly::{assemble_system_as, AssembledSystem};
-use squeal::la::{MatrixFormat, Petsc};
+use squeal::la::{DirectSolver, Factorization, MatrixFormat, Petsc};
 use squeal::measure::{exceeds, nan_max};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
@@ -237,6 +240,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             "pad force vs piston {worst_force:e}, torque vs mu F r {worst_torque:e}"
         ));
     }
+    krylov_route_reaches_the_same_state(petsc, &system, &contact, &f, &state)?;
     tangent_operator_equals_assembled(petsc, &contact, &state.contact, &f)?;
     low_rank_update_of_the_tangent(petsc, &contact, &state.contact, &system.stiffness, &f)?;
     // 1 vs 2 ranks: contact pressures in point order.
@@ -277,6 +281,72 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     );
     if exceeds(diff, 1e-8) {
         return Err(format!("pressures differ by {diff:e} of the largest"));
+    }
+    Ok(())
+}
+
+/// The preload with GMRES on the stale factor (the default, `state`) and with a new factor
+/// whenever the old one stops contracting (`krylov = false`, the route before) reach the same
+/// static state: their difference is within the sum of their Newton error estimates
+/// |J(q)^-1 R(q)| (J factorized anew at each end state; the distance to the exact solution
+/// where Newton converges quadratically), doubled for the linearization.
+fn krylov_route_reaches_the_same_state<'p>(
+    petsc: &'p Petsc,
+    system: &AssembledSystem<'p>,
+    contact: &ContactModel<'p>,
+    f: &squeal::la::Vector<'p>,
+    state: &squeal::statics::StaticState<'p>,
+) -> Result<(), String> {
+    let direct_settings = StaticSettings {
+        krylov: false,
+        ..Default::default()
+    };
+    let direct = preload(petsc, system, contact, f, &direct_settings)?;
+    let estimate = |q: &squeal::la::Vector<'p>| -> Result<f64, squeal::la::LaError> {
+        let at = contact.evaluate(q, None, 1.0)?;
+        let mut r = q.duplicate()?;
+        let mut fc = q.duplicate()?;
+        contact.force(&at, &mut fc)?;
+        system.stiffness.mult(q, &mut r)?;
+        r.axpy(-1.0, &fc)?;
+        r.axpy(-1.0, f)?;
+        let mut jac = contact.joined_matrix(petsc, &system.stiffness)?;
+        jac.copy_values_from(&system.stiffness)?;
+        let parts = [
+            Part::Normal,
+            Part::Stick,
+            Part::Friction,
+            Part::StickCoupling,
+        ];
+        contact.add_tangent(&at, &parts, &mut jac)?;
+        jac.assemble()?;
+        let lu = DirectSolver::factorize(petsc, &jac, Factorization::Lu, "check_")?;
+        let mut e = q.duplicate()?;
+        lu.solve(&r, &mut e)?;
+        e.norm2()
+    };
+    let text = |e: squeal::la::LaError| e.to_string();
+    let (e_krylov, e_direct) = (
+        estimate(&state.displacement).map_err(text)?,
+        estimate(&direct.displacement).map_err(text)?,
+    );
+    let mut d = state.displacement.try_clone().map_err(text)?;
+    d.axpy(-1.0, &direct.displacement).map_err(text)?;
+    let (diff, size) = (
+        d.norm2().map_err(text)?,
+        direct.displacement.norm2().map_err(text)?,
+    );
+    say(
+        petsc,
+        &format!(
+            "GMRES route: {} factorizations, {} solves ({} GMRES corrections); new factors: {} factorizations, {} solves; |q - q_direct| = {diff:.2e} m of {size:.2e}, Newton error estimates {e_krylov:.2e} and {e_direct:.2e} m",
+            state.factorizations, state.solves, state.krylov_corrections, direct.factorizations, direct.solves
+        ),
+    );
+    if exceeds(diff, 2.0 * (e_krylov + e_direct)) {
+        return Err(format!(
+            "the two routes' static states differ by {diff:e} m, their Newton error estimates are {e_krylov:e} and {e_direct:e} m"
+        ));
     }
     Ok(())
 }

@@ -37,7 +37,7 @@ use squeal::la::{
     DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };
 use squeal::measure::{nan_max, nan_min};
-use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
+use squeal::time::adaptive::{integrate_adaptive, Adaptivity, Flow, StepControl};
 use squeal::time::newmark::{
     initial_acceleration, jacobian, Damping, Jacobian, NewmarkSettings, State, StepReport,
     TimeError,
@@ -423,12 +423,12 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
     record.t.push(0.0);
     record.q.push(q);
     record.v.push(v);
-    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<(), TimeError> {
+    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<Flow, TimeError> {
         let (q, v) = pair(s)?;
         record.t.push(s.time);
         record.q.push(q);
         record.v.push(v);
-        Ok(())
+        Ok(Flow::Continue)
     };
     let mut control = StepControl::default();
     integrate_adaptive(

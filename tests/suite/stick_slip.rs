@@ -21,7 +21,7 @@
 
 use squeal::contact::law::FrictionLaw;
 use squeal::la::{DirectSolver, Factorization, Petsc, Vector};
-use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
+use squeal::time::adaptive::{integrate_adaptive, Adaptivity, Flow, StepControl};
 use squeal::time::newmark::{
     initial_acceleration, Damping, NewmarkSettings, State, StepReport, TimeError,
 };
@@ -176,7 +176,7 @@ fn run(
     let mut maxima = Vec::new();
     let mut extremes: Vec<f64> = Vec::new();
     let mut previous = (0.0, 0.0, 0.0);
-    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<(), TimeError> {
+    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<Flow, TimeError> {
         let x = s.q.gather_all().map_err(TimeError::La)?[0];
         let v = s.v.gather_all().map_err(TimeError::La)?[0];
         let (t0, x0, v0) = previous;
@@ -187,7 +187,7 @@ fn run(
             extremes.push(x.min(x0));
         }
         previous = (s.time, x, v);
-        Ok(())
+        Ok(Flow::Continue)
     };
     let mut log = |_: &str| {};
     let mut control = StepControl::default();

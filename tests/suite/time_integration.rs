@@ -116,7 +116,7 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
     let mut accepted = 0;
     let mut on_step = |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl| {
         accepted += 1;
-        Ok(())
+        Ok(squeal::time::adaptive::Flow::Continue)
     };
     let mut control = StepControl::default();
     let adaptivity = Adaptivity {
@@ -254,7 +254,7 @@ fn cut_and_restore(
                 .map_err(squeal::time::newmark::TimeError::La)?[0],
         );
         oscillation.observe(s.time, g, v);
-        Ok(())
+        Ok(squeal::time::adaptive::Flow::Continue)
     };
     let mut lines = Vec::new();
     let mut log = |line: &str| lines.push(line.to_string());

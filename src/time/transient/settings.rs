@@ -57,6 +57,11 @@ pub struct TransientSettings {
     /// the end or the failure of the run (0: never).
     #[serde(default = "default_checkpoint_every")]
     pub checkpoint_every: usize,
+    /// End the run this many cycles after the braking torque saturated (the limit-cycle
+    /// analysis' detector, applied to the run so far every [`SATURATION_CHECK_EVERY`] steps);
+    /// `steps` stays the upper bound. None: run all `steps`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stop_after_saturation: Option<usize>,
     /// Sensor points by name: displacement, velocity and acceleration (x, y, z) of the node
     /// nearest to each position (m) at every step.
     #[serde(default)]
@@ -206,8 +211,18 @@ fn default_amplitude() -> f64 {
     1e-7
 }
 
+/// Steps between two checks of `stop_after_saturation` (the detector reads the whole torque
+/// record: ~1 ms per check at 10^5 steps, once per 500 steps).
+pub const SATURATION_CHECK_EVERY: usize = 500;
+
 impl TransientSettings {
     pub fn validate(&self) -> Result<(), InvalidSetting> {
+        if self.stop_after_saturation.is_some_and(|c| c < 2) {
+            return Err(InvalidSetting::new(
+                "transient.stop_after_saturation",
+                " must be at least 2 (cycles after the saturation; leave it out to run all steps)",
+            ));
+        }
         if !(self.step > 0.0 && self.step.is_finite()) {
             return Err(InvalidSetting::new(
                 "transient.step",
@@ -280,6 +295,20 @@ mod tests {
 
     fn settings(text: &str) -> TransientSettings {
         toml::from_str(text).expect("transient settings parse")
+    }
+
+    #[test]
+    fn stop_after_saturation_needs_two_cycles_and_is_left_out_when_unset() {
+        let err = settings("steps = 10\nstop_after_saturation = 1")
+            .validate()
+            .unwrap_err();
+        assert_eq!(err.key, "transient.stop_after_saturation", "{err}");
+        assert!(settings("steps = 10\nstop_after_saturation = 20")
+            .validate()
+            .is_ok());
+        // Unset, it is not written: the restart fingerprints of older scenes stay the same.
+        let text = toml::to_string(&settings("steps = 10")).unwrap();
+        assert!(!text.contains("stop_after_saturation"), "{text}");
     }
 
     #[test]
