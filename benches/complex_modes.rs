@@ -129,7 +129,6 @@ fn main() {
     let state = solve_statics(
         &petsc,
         &system.stiffness,
-        &system.dofs,
         &contact,
         &f_ext,
         &statics,

@@ -235,7 +235,7 @@ impl Scene {
     /// and a merge compare it (the output directory and the other analyses may differ).
     pub fn matrix_fingerprint(&self) -> String {
         let text = |value: Result<String, toml::ser::Error>| value.unwrap_or_default();
-        let tables = [
+        let mut tables = vec![
             text(toml::to_string(&self.model)),
             text(toml::to_string(&self.contact)),
             text(toml::to_string(&self.statics)),
@@ -244,6 +244,13 @@ impl Scene {
             text(toml::to_string(&self.complex_modes)),
             text(toml::to_string(&self.matrix)),
         ];
+        // The reduced statics' superelement; the full route leaves it out, so journals of
+        // full-model matrices keep their fingerprints.
+        if let Some(m) = &self.matrix {
+            if m.statics == crate::matrix::StaticsModel::Reduced {
+                tables.push(text(toml::to_string(&self.reduction)));
+            }
+        }
         format!(
             "{:016x}",
             crate::fault::fnv1a(tables.join("\n[]\n").as_bytes())
@@ -498,6 +505,9 @@ impl Scene {
             }
             if self.damping.is_some_and(|d| d.has_modal()) {
                 return Err(InvalidSetting::new("damping.modal_ratio", ": modal damping is applied by [transient] only; the matrix uses the assembled operators (Rayleigh damping)"));
+            }
+            if m.statics == crate::matrix::StaticsModel::Reduced && self.reduction.is_none() {
+                return Err(InvalidSetting::new("matrix.statics", " = \"reduced\" solves every point on the superelement of [reduction]: add a [reduction] table (its defaults will do) or set statics = \"full\""));
             }
         }
         if let Some(post) = &self.post {

@@ -216,6 +216,7 @@ mod tests {
                     cold_restart: false,
                     seconds_statics: 0.25,
                     seconds_factorizing: 0.125,
+                    full_check: None,
                     seconds_modes: 0.01,
                 }),
             },

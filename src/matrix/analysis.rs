@@ -317,6 +317,7 @@ mod tests {
                 cold_restart: false,
                 seconds_statics: 0.0,
                 seconds_factorizing: 0.0,
+                full_check: None,
                 seconds_modes: 0.0,
             }),
         }
@@ -370,6 +371,8 @@ mod tests {
     #[test]
     fn sample_estimate_separates_a_driver_from_a_bystander() {
         let settings = super::super::MatrixSettings {
+            statics: Default::default(),
+            full_checks: None,
             sampling: Sampling::Sobol,
             points: Some(256),
             seed: 3,

@@ -6,6 +6,7 @@
 //! in [`analysis`].
 
 pub mod analysis;
+pub mod check;
 pub mod point;
 pub mod sample;
 
@@ -83,6 +84,28 @@ pub enum Sampling {
     /// (space-filling: every axis' range is stratified, also in projections).
     Sobol,
 }
+
+/// The model a point's static state is solved on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StaticsModel {
+    /// The full finite-element model (exact; a factorization of its tangent per few points).
+    #[default]
+    Full,
+    /// The superelement of `[reduction]`: the kept contact zone whole, the rest on the real
+    /// modes and the static shape. For large models: its tangent is a fraction of the full
+    /// one's, and `full_checks` points are also solved on the full model to measure the error.
+    Reduced,
+}
+
+impl StaticsModel {
+    fn is_full(&self) -> bool {
+        *self == StaticsModel::Full
+    }
+}
+
+/// Points also solved on the full model when the reduced one solves the matrix, by default.
+pub const DEFAULT_FULL_CHECKS: usize = 3;
 
 /// One axis: a list of values, or `from`, `to` (and `points`, for a grid).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -178,6 +201,15 @@ pub struct MatrixSettings {
     /// mu(T) of the sliding interfaces, for a temperature axis.
     #[serde(default)]
     pub temperature: Option<TemperatureTable>,
+    /// The model each point's static state is solved on (not written when full, so the
+    /// fingerprints of journals from before it stay).
+    #[serde(default, skip_serializing_if = "StaticsModel::is_full")]
+    pub statics: StaticsModel,
+    /// With `statics = "reduced"`: this many points, spread over the matrix' indices, are
+    /// solved on the full model too (static state and complex modes), and their difference is
+    /// the reduced route's error in the report. Default 3.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub full_checks: Option<usize>,
 }
 
 fn default_seed() -> u32 {
@@ -191,6 +223,21 @@ impl MatrixSettings {
     /// The axes in their fixed order (the order of every point's values).
     pub fn axis_list(&self) -> Vec<Axis> {
         self.axes.keys().copied().collect()
+    }
+
+    /// The indices (among `total` points) also solved on the full model: `full_checks` of them,
+    /// each in the middle of an equal share of the indices, so every slicing checks the same
+    /// points. None with the full model.
+    pub fn full_check_indices(&self, total: usize) -> Vec<usize> {
+        if self.statics == StaticsModel::Full || total == 0 {
+            return Vec::new();
+        }
+        let n = self.full_checks.unwrap_or(DEFAULT_FULL_CHECKS).min(total);
+        let mut indices: Vec<usize> = (0..n)
+            .map(|k| ((2 * k + 1) * total / (2 * n)).min(total - 1))
+            .collect();
+        indices.dedup();
+        indices
     }
 
     pub fn validate(&self) -> Result<(), InvalidSetting> {
@@ -224,6 +271,10 @@ impl MatrixSettings {
                     return Err(InvalidSetting::new("matrix.axes", detail));
                 }
             }
+        }
+        if self.full_checks.is_some() && self.statics == StaticsModel::Full {
+            let detail = ": full checks measure the reduced statics' error: set statics = \"reduced\" or leave full_checks out";
+            return Err(InvalidSetting::new("matrix.full_checks", detail));
         }
         let temperature = self.axes.contains_key(&Axis::Temperature);
         match (&self.temperature, temperature) {

@@ -58,6 +58,37 @@ pub struct SolvedPoint {
     #[serde(default)]
     pub seconds_factorizing: f64,
     pub seconds_modes: f64,
+    /// With the reduced statics at a checked point: the same point on the full model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub full_check: Option<FullCheck>,
+}
+
+/// A point of a reduced-statics matrix solved again on the full model: the reduced route's
+/// error there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FullCheck {
+    /// |T q_r - q| / |q|: the reduced static displacement, recovered, against the full one
+    /// (NaN when the full solve failed).
+    pub displacement_error: f64,
+    /// Braking torque (N m) and normal force (N) of the full static state.
+    pub braking_torque: f64,
+    pub normal_force: f64,
+    /// The full static state's complex modes, labelled as the point's.
+    pub modes: Vec<PointMode>,
+    pub seconds: f64,
+    /// Why the full solve failed (then the other fields are NaN or empty).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+impl FullCheck {
+    /// The largest Re(s) of the full state's modes (NaN when it failed).
+    pub fn largest_real_part(&self) -> f64 {
+        if self.failure.is_some() || self.modes.is_empty() {
+            return f64::NAN;
+        }
+        crate::measure::greatest(self.modes.iter().map(|m| m.re))
+    }
 }
 
 /// A point's outcome.

@@ -156,6 +156,8 @@ mod tests {
         axes.insert(Axis::Mu, range(0.3, 0.6));
         axes.insert(Axis::DiscSpeed, range(1.0, 20.0));
         MatrixSettings {
+            statics: Default::default(),
+            full_checks: None,
             sampling: Sampling::Sobol,
             points: Some(points),
             seed,
@@ -209,6 +211,8 @@ mod tests {
             },
         );
         let settings = MatrixSettings {
+            statics: Default::default(),
+            full_checks: None,
             sampling: Sampling::Grid,
             points: None,
             seed: 1,

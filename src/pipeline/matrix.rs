@@ -29,7 +29,7 @@ pub(super) fn noise_matrix<'p>(
     let Some(settings) = &scene.matrix else {
         return Ok(None);
     };
-    let (Some(preload), Some(modes), Some(dofs), Some(statics)) =
+    let (Some(preload), Some(modes), Some(_), Some(statics)) =
         (&a.preload, &a.modes, a.ops.dofs.as_ref(), &scene.statics)
     else {
         return Err(RunError::scene(
@@ -40,13 +40,13 @@ pub(super) fn noise_matrix<'p>(
     let complex = scene.complex_modes.clone().unwrap_or_default();
     let input = MatrixInputs {
         k0: &a.ops.k0,
-        dofs,
         modes,
         preload,
         pressure_bar: a.model.as_ref().map_or(0.0, |m| m.pressure / 1e5),
         statics,
         complex: &complex,
         damping: scene.damping.unwrap_or_default(),
+        reduced: a.reduced.as_ref(),
     };
     let nominal = crate::stages::matrix::nominal_values(&settings.axis_list(), &input);
     let header = JournalHeader {

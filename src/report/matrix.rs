@@ -140,6 +140,9 @@ impl MatrixReport {
                 solved.iter().filter(|s| s.cold_restart).count()
             );
         }
+        if let Some(e) = crate::matrix::check::reduced_error(&r.points, r.margin) {
+            let _ = writeln!(t, "  {}", reduced_error_text(&e));
+        }
         let mut bands = a.bands.clone();
         bands.sort_by_key(|b| std::cmp::Reverse(b.points));
         let list: Vec<String> = bands
@@ -194,6 +197,26 @@ impl MatrixReport {
         }
         t
     }
+}
+
+/// The reduced statics against the full model at the checked points, in one line.
+fn reduced_error_text(e: &crate::matrix::check::ReducedError) -> String {
+    let mut line = format!(
+        "static state on the superelement vs the full model at {} points: displacement within {:.1e} (relative), braking torque {:.1e}, normal force {:.1e}; largest Re(s) within {:.2} 1/s (of up to {:.1}); frequencies of the unstable modes within {:.2e}; the same modes unstable at {} of {}",
+        e.checked - e.failed,
+        e.displacement,
+        e.torque,
+        e.normal_force,
+        e.largest_real_part,
+        e.real_part_scale,
+        e.frequency,
+        e.same_unstable,
+        e.checked - e.failed
+    );
+    if e.failed > 0 {
+        let _ = write!(line, "; the full solve failed at {}", e.failed);
+    }
+    line
 }
 
 /// "pressure_bar 5-16.667" per axis of a region.
@@ -305,9 +328,69 @@ pub fn write_matrix(
         "1",
     )?;
     file.write_table(&format!("{m}/mac"), &mode_column(&|_, m| m.mac), "1")?;
+    write_full_checks(file, run)?;
     if rank == 0 {
         write_files(r, output)?;
     }
+    Ok(())
+}
+
+/// /matrix/full_checks: the points of a reduced-statics matrix also solved on the full model,
+/// with both routes' braking torque and largest Re(s).
+fn write_full_checks(file: &ResultsFile, run: &MatrixOutput) -> Result<(), WriteError> {
+    let checked: Vec<_> = run
+        .points
+        .iter()
+        .filter_map(|p| {
+            p.solved()
+                .and_then(|s| s.full_check.as_ref().map(|c| (p, s, c)))
+        })
+        .collect();
+    if checked.is_empty() {
+        return Ok(());
+    }
+    let g = "matrix/full_checks";
+    let column = |f: &dyn Fn(
+        &crate::matrix::point::PointResult,
+        &crate::matrix::point::SolvedPoint,
+        &crate::matrix::point::FullCheck,
+    ) -> f64|
+     -> Vec<f64> { checked.iter().map(|&(p, s, c)| f(p, s, c)).collect() };
+    file.write_table(
+        &format!("{g}/point"),
+        &column(&|p, _, _| p.index as f64),
+        "1",
+    )?;
+    file.write_table(
+        &format!("{g}/displacement_error"),
+        &column(&|_, _, c| c.displacement_error),
+        "1 (|T q_r - q| / |q|)",
+    )?;
+    file.write_table(
+        &format!("{g}/braking_torque_reduced"),
+        &column(&|_, s, _| s.braking_torque),
+        "N m",
+    )?;
+    file.write_table(
+        &format!("{g}/braking_torque_full"),
+        &column(&|_, _, c| c.braking_torque),
+        "N m",
+    )?;
+    file.write_table(
+        &format!("{g}/largest_real_part_reduced"),
+        &column(&|p, _, _| p.largest_real_part()),
+        "1/s",
+    )?;
+    file.write_table(
+        &format!("{g}/largest_real_part_full"),
+        &column(&|_, _, c| c.largest_real_part()),
+        "1/s",
+    )?;
+    file.write_table(
+        &format!("{g}/seconds_full"),
+        &column(&|_, _, c| c.seconds),
+        "s",
+    )?;
     Ok(())
 }
 
@@ -332,7 +415,7 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
     let run = &r.run;
     let names: Vec<&str> = run.axes.iter().map(|a| a.name()).collect();
     let mut points = format!(
-        "point,{},status,braking_torque_nm,unstable_modes,largest_re_s,most_unstable,most_unstable_hz,reason\n",
+        "point,{},status,braking_torque_nm,unstable_modes,largest_re_s,most_unstable,most_unstable_hz,reason,full_displacement_error,full_braking_torque_nm,full_largest_re_s\n",
         names.join(",")
     );
     let mut modes = format!(
@@ -345,9 +428,18 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
         match &p.outcome {
             Outcome::Solved(s) => {
                 let worst = p.unstable(run.margin).max_by(|a, b| a.re.total_cmp(&b.re));
+                // With reduced statics, where the point was also solved on the full model.
+                let check = s.full_check.as_ref().map_or(",,".to_string(), |c| {
+                    format!(
+                        "{:.6e},{:.10e},{:.10e}",
+                        c.displacement_error,
+                        c.braking_torque,
+                        c.largest_real_part()
+                    )
+                });
                 let _ = writeln!(
                     points,
-                    "{},{values},solved,{:.10e},{},{:.10e},{},{},",
+                    "{},{values},solved,{:.10e},{},{:.10e},{},{},,{check}",
                     p.index + 1,
                     s.braking_torque,
                     p.unstable(run.margin).count(),
@@ -372,7 +464,7 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
             Outcome::Failed { reason } => {
                 let _ = writeln!(
                     points,
-                    "{},{values},failed,,,,,,\"{}\"",
+                    "{},{values},failed,,,,,,\"{}\",,,",
                     p.index + 1,
                     reason.replace('"', "'")
                 );

@@ -9,9 +9,10 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
+use super::reduce::Reduced;
 use super::statics::Preloaded;
 use super::RunError;
-use crate::contact::ResolvedInterface;
+use crate::contact::{ContactModel, ContactState, ResolvedInterface};
 use crate::eigen::complex_modes::{
     frequency_hz, projected_coordinates, ComplexModeSettings, DampingSettings, DenseEigenpair,
 };
@@ -19,17 +20,15 @@ use crate::eigen::real_modes::RealModes;
 use crate::eigen::stability::ProjectedStability;
 use crate::eigen::sweep::{apply_to_laws, SweepParameter};
 use crate::eigen::tracking::pair_modes;
-use crate::fem::dofmap::DofMap;
 use crate::la::{Petsc, SparseMatrix, Vector};
-use crate::matrix::point::{Outcome, PointMode, PointResult, SolvedPoint};
+use crate::matrix::point::{FullCheck, Outcome, PointMode, PointResult, SolvedPoint};
 use crate::matrix::sample::{points, warm_order, Slice};
-use crate::matrix::{Axis, MatrixSettings, Sampling};
-use crate::statics::{Factored, Start, StaticSettings};
+use crate::matrix::{Axis, MatrixSettings, Sampling, StaticsModel};
+use crate::statics::{Factored, Start, StaticSettings, StaticState};
 
 /// What the matrix needs from the earlier stages.
 pub struct MatrixInputs<'a, 'p> {
     pub k0: &'a SparseMatrix<'p>,
-    pub dofs: &'a DofMap,
     pub modes: &'a RealModes<'p>,
     pub preload: &'a Preloaded<'p>,
     /// The scene's brake pressure (bar): the load scales from it.
@@ -37,6 +36,8 @@ pub struct MatrixInputs<'a, 'p> {
     pub statics: &'a StaticSettings,
     pub complex: &'a ComplexModeSettings,
     pub damping: DampingSettings,
+    /// The superelement, for `statics = "reduced"`.
+    pub reduced: Option<&'a Reduced<'p>>,
 }
 
 /// Which points this run computes: a slice, less those a journal already holds.
@@ -155,8 +156,17 @@ pub fn matrix<'p>(
         .map(|(&v, &(lo, hi))| if v.is_finite() { v } else { 0.5 * (lo + hi) })
         .collect();
     let order = warm_order(&values, &todo, &start, &ranges);
-    let statics_state = &input.preload.state.displacement;
-    let mut solver = PointSolver::new(petsc, input)?;
+    // Warm starts are states in the unknowns of the model the points are solved on.
+    let statics_state = match (settings.statics, input.reduced) {
+        (StaticsModel::Reduced, Some(r)) => &r.q_static,
+        (StaticsModel::Reduced, None) => {
+            let message = "statics = \"reduced\" needs the superelement of [reduction]";
+            return Err(RunError::scene("matrix.statics", message));
+        }
+        (StaticsModel::Full, _) => &input.preload.state.displacement,
+    };
+    let checks = settings.full_check_indices(values.len());
+    let mut solver = PointSolver::new(petsc, input, checks)?;
     let mut kept: HashMap<usize, Vector<'p>> = HashMap::new();
     // The last use of each point's static state as a warm start (then it is dropped).
     let mut last_use: HashMap<usize, usize> = HashMap::new();
@@ -203,13 +213,36 @@ struct PointSolver<'a, 'p> {
     input: MatrixInputs<'a, 'p>,
     stability: ProjectedStability,
     nominal: Vec<DenseEigenpair>,
-    /// The last point's LU factor of its tangent.
+    /// The last point's LU factor of its tangent, on the full model and on the superelement.
     factor: Option<Factored<'p>>,
+    reduced_factor: Option<Factored<'p>>,
+    /// Points also solved on the full model (reduced statics only).
+    checks: Vec<usize>,
+}
+
+/// What a static solve runs on: a stiffness, the contact points in its unknowns, the load at
+/// the scene's pressure.
+struct StaticProblem<'a, 'p> {
+    k0: &'a SparseMatrix<'p>,
+    contact: &'a ContactModel<'p>,
+    load: &'a Vector<'p>,
+}
+
+/// A point's static state on one model, with the contact model at the point's laws.
+struct PointStatics<'p> {
+    contact: ContactModel<'p>,
+    state: StaticState<'p>,
+    cold_restart: bool,
+    seconds: f64,
 }
 
 impl<'a, 'p> PointSolver<'a, 'p> {
     /// # Collective
-    fn new(petsc: &'p Petsc, input: MatrixInputs<'a, 'p>) -> Result<Self, RunError> {
+    fn new(
+        petsc: &'p Petsc,
+        input: MatrixInputs<'a, 'p>,
+        checks: Vec<usize>,
+    ) -> Result<Self, RunError> {
         let comm = petsc.world();
         let (contact, state) = (&input.preload.contact, &input.preload.state.contact);
         let stability = ProjectedStability::new(comm, contact, input.modes, state, input.damping)?;
@@ -221,10 +254,74 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             stability,
             nominal,
             factor: None,
+            reduced_factor: None,
+            checks,
         })
     }
 
-    /// One point: its result, and its static displacement when solved.
+    /// The full model's static problem, or the superelement's when the matrix uses it.
+    fn problem(&self, reduced: bool) -> StaticProblem<'a, 'p> {
+        let input = &self.input;
+        match (reduced, input.reduced) {
+            (true, Some(r)) => StaticProblem {
+                k0: &r.model.stiffness,
+                contact: &r.contact,
+                load: &r.f_ext,
+            },
+            _ => StaticProblem {
+                k0: input.k0,
+                contact: &input.preload.contact,
+                load: &input.preload.load,
+            },
+        }
+    }
+
+    /// The static state of a point's laws and load scale on `problem`, from `warm` (a
+    /// neighbour's state), else from the unloaded state: Err(reason) when neither converges.
+    ///
+    /// # Collective
+    #[allow(clippy::too_many_arguments)] // the point's laws, speed and load, a start, a factor
+    fn solve_static(
+        petsc: &'p Petsc,
+        problem: StaticProblem<'_, 'p>,
+        statics: &StaticSettings,
+        (laws, speed, scale): (Vec<ResolvedInterface>, f64, f64),
+        warm: &Vector<'p>,
+        factor: &mut Option<Factored<'p>>,
+    ) -> Result<Result<PointStatics<'p>, String>, RunError> {
+        let contact = problem.contact.with_laws(laws, speed)?;
+        let mut f = problem.load.duplicate()?;
+        f.copy_from(problem.load)?;
+        f.scale(scale)?;
+        let t = Instant::now();
+        // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
+        // (numerical phase only) when it stops contracting. From the unloaded state afresh.
+        let mut solve = |displacement| {
+            let start = Start {
+                displacement,
+                factor: &mut *factor,
+            };
+            crate::statics::solve_from(petsc, problem.k0, &contact, &f, statics, start, |_| {})
+        };
+        let (state, cold_restart) = match solve(Some(warm)) {
+            Ok(s) => (s, false),
+            Err(warm_error) => match solve(None) {
+                Ok(s) => (s, true),
+                Err(cold) => {
+                    return Ok(Err(format!("static state: from the nearest point: {warm_error}; from the unloaded state: {cold}")));
+                }
+            },
+        };
+        Ok(Ok(PointStatics {
+            contact,
+            state,
+            cold_restart,
+            seconds: t.elapsed().as_secs_f64(),
+        }))
+    }
+
+    /// One point: its result, and its static displacement (in the unknowns of the model the
+    /// matrix solves on) when solved.
     ///
     /// # Collective
     fn point(
@@ -236,77 +333,124 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         values: &[f64],
         warm: &Vector<'p>,
     ) -> Result<(PointResult, Option<Vector<'p>>), RunError> {
-        let input = &self.input;
-        let (laws, speed, scale) = point_laws(settings, axes, values, input)?;
-        let contact = input.preload.contact.with_laws(laws, speed)?;
-        let mut f = input.preload.load.duplicate()?;
-        f.copy_from(&input.preload.load)?;
-        f.scale(scale)?;
-        let t = Instant::now();
+        let laws = point_laws(settings, axes, values, &self.input)?;
+        let reduced = settings.statics == StaticsModel::Reduced;
         let failed = |reason: String| PointResult {
             index,
             values: values.to_vec(),
             outcome: Outcome::Failed { reason },
         };
-        // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
-        // (numerical phase only) when it stops contracting. From the unloaded state afresh.
-        let solve = |displacement, factor: &mut Option<Factored<'p>>| {
-            let start = Start {
-                displacement,
-                factor,
-            };
-            let (k0, dofs, statics) = (input.k0, input.dofs, input.statics);
-            crate::statics::solve_from(petsc, k0, dofs, &contact, &f, statics, start, |_| {})
+        let problem = self.problem(reduced);
+        let statics = self.input.statics;
+        let factor = match reduced {
+            true => &mut self.reduced_factor,
+            false => &mut self.factor,
         };
-        let (state, cold_restart) = match solve(Some(warm), &mut self.factor) {
-            Ok(s) => (s, false),
-            Err(warm_error) => match solve(None, &mut self.factor) {
-                Ok(s) => (s, true),
-                Err(cold) => {
-                    let reason = format!("static state: from the nearest point: {warm_error}; from the unloaded state: {cold}");
-                    return Ok((failed(reason), None));
-                }
-            },
-        };
-        let seconds_statics = t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let pairs = match self
-            .stability
-            .modes_at(petsc.world(), &contact, &state.contact)
-        {
+        let solved = Self::solve_static(petsc, problem, statics, laws.clone(), warm, factor)?;
+        let point = match solved {
             Ok(p) => p,
-            Err(e) => {
-                return Ok((
-                    failed(format!("complex modes: {e}")),
-                    Some(state.displacement),
-                ))
-            }
+            Err(reason) => return Ok((failed(reason), None)),
         };
-        let modes = self.labelled(pairs);
-        if modes
-            .iter()
-            .any(|m| !(m.re.is_finite() && m.im.is_finite()))
-        {
-            let reason = "complex modes: an eigenvalue is not finite (NaN or Inf)".to_string();
-            return Ok((failed(reason), Some(state.displacement)));
-        }
+        let t = Instant::now();
+        let modes = match self.modes(petsc, &point.contact, &point.state.contact) {
+            Ok(m) => m,
+            Err(reason) => return Ok((failed(reason), Some(point.state.displacement))),
+        };
+        let seconds_modes = t.elapsed().as_secs_f64();
+        let full_check = match reduced && self.checks.contains(&index) {
+            true => Some(self.full_check(petsc, laws, &point.state.displacement)?),
+            false => None,
+        };
+        let state = &point.state;
         let solved = SolvedPoint {
             modes,
             braking_torque: state.summaries.iter().map(|i| i.torque).sum(),
             normal_force: state.summaries.iter().map(|i| i.normal_force).sum(),
             newton_iterations: state.log.iter().filter(|r| r.step_length > 0.0).count(),
             factorizations: state.factorizations,
-            cold_restart,
-            seconds_statics,
+            cold_restart: point.cold_restart,
+            seconds_statics: point.seconds,
             seconds_factorizing: state.seconds_factorizing,
-            seconds_modes: t.elapsed().as_secs_f64(),
+            seconds_modes,
+            full_check,
         };
         let result = PointResult {
             index,
             values: values.to_vec(),
             outcome: Outcome::Solved(solved),
         };
-        Ok((result, Some(state.displacement)))
+        Ok((result, Some(point.state.displacement)))
+    }
+
+    /// The labelled complex modes at a static contact state, or why they failed.
+    ///
+    /// # Collective
+    fn modes(
+        &self,
+        petsc: &'p Petsc,
+        contact: &ContactModel<'p>,
+        state: &ContactState,
+    ) -> Result<Vec<PointMode>, String> {
+        // The superelement's contact model has the full one's points, in the same order on
+        // the same ranks: its state projects on the same observed modes.
+        let pairs = self
+            .stability
+            .modes_at(petsc.world(), contact, state)
+            .map_err(|e| format!("complex modes: {e}"))?;
+        let modes = self.labelled(pairs);
+        if modes
+            .iter()
+            .any(|m| !(m.re.is_finite() && m.im.is_finite()))
+        {
+            return Err("complex modes: an eigenvalue is not finite (NaN or Inf)".to_string());
+        }
+        Ok(modes)
+    }
+
+    /// The point solved again on the full model, from the nominal static state, against the
+    /// superelement's static displacement `reduced_q`.
+    ///
+    /// # Collective
+    fn full_check(
+        &mut self,
+        petsc: &'p Petsc,
+        laws: (Vec<ResolvedInterface>, f64, f64),
+        reduced_q: &Vector<'p>,
+    ) -> Result<FullCheck, RunError> {
+        let t = Instant::now();
+        let problem = self.problem(false);
+        let (statics, nominal) = (self.input.statics, &self.input.preload.state.displacement);
+        let solved = Self::solve_static(petsc, problem, statics, laws, nominal, &mut self.factor)?;
+        let failed = |reason: String| FullCheck {
+            displacement_error: f64::NAN,
+            braking_torque: f64::NAN,
+            normal_force: f64::NAN,
+            modes: Vec::new(),
+            seconds: t.elapsed().as_secs_f64(),
+            failure: Some(reason),
+        };
+        let point = match solved {
+            Ok(p) => p,
+            Err(reason) => return Ok(failed(reason)),
+        };
+        let modes = match self.modes(petsc, &point.contact, &point.state.contact) {
+            Ok(m) => m,
+            Err(reason) => return Ok(failed(reason)),
+        };
+        let q = &point.state.displacement;
+        let reduction = &self.input.reduced.expect("reduced statics").model.reduction;
+        let mut difference = q.duplicate()?;
+        reduction.recover(petsc, reduced_q, &mut difference)?;
+        difference.axpy(-1.0, q)?;
+        let state = &point.state;
+        Ok(FullCheck {
+            displacement_error: difference.norm2()? / q.norm2()?.max(f64::MIN_POSITIVE),
+            braking_torque: state.summaries.iter().map(|i| i.torque).sum(),
+            normal_force: state.summaries.iter().map(|i| i.normal_force).sum(),
+            modes,
+            seconds: t.elapsed().as_secs_f64(),
+            failure: None,
+        })
     }
 
     /// The modes below f_max by frequency, each labelled by the nominal mode it continues.

@@ -57,7 +57,7 @@ pub fn preload<'p>(
     // Every Newton iteration for a person watching; the summary has the totals.
     let verbose = petsc.rank() == 0 && crate::progress::interactive();
     let state = timings.stage("static preload", || {
-        crate::statics::solve(petsc, &ops.k0, dofs, &contact, &load, settings, None, |r| {
+        crate::statics::solve(petsc, &ops.k0, &contact, &load, settings, None, |r| {
             if verbose {
                 println!(
                     "  static step {} (pressure {:>3.0} %, friction {:>3.0} %) iteration {:>2}: residual {:.3e} N (of {:.3e}){}",

@@ -161,18 +161,8 @@ fn sweep_points<'p>(
         }
         let contact = &preload.contact.with_laws(laws, speed)?;
         let t = Instant::now();
-        let solve = |start| {
-            crate::statics::solve(
-                petsc,
-                input.k0,
-                input.dofs,
-                contact,
-                &f,
-                statics,
-                start,
-                |_| {},
-            )
-        };
+        let solve =
+            |start| crate::statics::solve(petsc, input.k0, contact, &f, statics, start, |_| {});
         let state = match solve(Some(&q)) {
             Ok(s) => s,
             Err(warm) => {

@@ -257,7 +257,6 @@ pub fn pressure_load<'p>(
 pub fn solve<'p>(
     petsc: &'p Petsc,
     k0: &SparseMatrix<'p>,
-    dofs: &DofMap,
     contact: &ContactModel<'p>,
     f_ext: &Vector<'p>,
     settings: &StaticSettings,
@@ -268,7 +267,7 @@ pub fn solve<'p>(
         displacement: start_from,
         factor: &mut None,
     };
-    solve_from(petsc, k0, dofs, contact, f_ext, settings, start, progress)
+    solve_from(petsc, k0, contact, f_ext, settings, start, progress)
 }
 
 /// Where a static solve starts: a displacement (None: unloaded, with the load schedule) and
@@ -300,7 +299,6 @@ pub struct Factored<'p> {
 pub fn solve_from<'p>(
     petsc: &'p Petsc,
     k0: &SparseMatrix<'p>,
-    dofs: &DofMap,
     contact: &ContactModel<'p>,
     f_ext: &Vector<'p>,
     settings: &StaticSettings,
@@ -447,7 +445,7 @@ pub fn solve_from<'p>(
                         iterations,
                         residual: r,
                         target,
-                        interface: worst_interface(petsc, contact, dofs, &residual)?,
+                        interface: worst_interface(petsc, contact, &residual)?,
                     });
                 }
                 cuts += 1;
@@ -541,25 +539,23 @@ fn backtrack<'p>(
     }
 }
 
-/// The interface whose master DOFs carry the largest residual (for the error message).
+/// The interface whose contact DOFs carry the largest residual (for the error message).
+/// Through the contact model's own columns, so it names the interface on a reduced model too.
 ///
 /// # Collective
 fn worst_interface(
     petsc: &Petsc,
     contact: &ContactModel,
-    dofs: &DofMap,
     residual: &Vector,
 ) -> Result<String, LaError> {
-    let own = dofs.owned_dofs();
+    let own = contact.columns();
     let r = residual.local()?;
     let mut worst = vec![0.0f64; contact.interfaces().len()];
-    for p in contact.points() {
-        for &n in &p.master_nodes {
-            for &d in &dofs.node_dofs[n] {
-                if d >= 0 && own.contains(&(d as usize)) {
-                    let v = r[d as usize - own.start].abs();
-                    worst[p.interface] = worst[p.interface].max(v);
-                }
+    for (p, columns) in contact.points().iter().zip(contact.point_columns()) {
+        for &c in columns {
+            if c >= 0 && own.contains(&(c as usize)) {
+                let v = r[c as usize - own.start].abs();
+                worst[p.interface] = worst[p.interface].max(v);
             }
         }
     }

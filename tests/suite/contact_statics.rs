@@ -541,15 +541,5 @@ fn preload<'p>(
     f: &squeal::la::Vector<'p>,
     settings: &StaticSettings,
 ) -> Result<squeal::statics::StaticState<'p>, String> {
-    solve(
-        petsc,
-        &system.stiffness,
-        &system.dofs,
-        contact,
-        f,
-        settings,
-        None,
-        |_| {},
-    )
-    .map_err(|e| e.to_string())
+    solve(petsc, &system.stiffness, contact, f, settings, None, |_| {}).map_err(|e| e.to_string())
 }
