@@ -231,6 +231,28 @@ impl ProjectedStability {
         )
     }
 
+    /// [`Self::modes_at`] with `extra` (m x m, column-major) added to the projected elastic
+    /// stiffness, and its Rayleigh part to the damping: a change of K0 on the fixed basis
+    /// (e.g. the lining's stiffness scaled, [`project_operator`]).
+    ///
+    /// # Collective
+    pub fn modes_with_stiffness(
+        &self,
+        comm: &SimpleCommunicator,
+        contact: &ContactModel,
+        state: &ContactState,
+        extra: &[f64],
+    ) -> Result<Vec<DenseEigenpair>, DenseError> {
+        let (mut kp, mut cp) = self.operators_at(comm, contact, state);
+        assert_eq!(extra.len(), kp.len(), "extra stiffness: m x m");
+        let beta = self.damping.rayleigh_beta;
+        for ((k, c), e) in kp.iter_mut().zip(cp.iter_mut()).zip(extra) {
+            *k += e;
+            *c += beta * e;
+        }
+        solve_dense(self.projection.size, &kp, &cp)
+    }
+
     /// The complex modes at `state` (of `contact`, whose points and rows are the basis'):
     /// eigenvalues with their modal coordinates, unsorted.
     ///
@@ -244,6 +266,32 @@ impl ProjectedStability {
         let (kp, cp) = self.operators_at(comm, contact, state);
         solve_dense(self.projection.size, &kp, &cp)
     }
+}
+
+/// Phi^T A Phi (m x m, column-major, on every rank) of the basis `shapes` and an operator of
+/// the full model.
+///
+/// # Collective
+pub fn project_operator(
+    comm: &SimpleCommunicator,
+    shapes: &[crate::la::Vector],
+    a: &crate::la::SparseMatrix,
+) -> Result<Vec<f64>, LaError> {
+    let m = shapes.len();
+    let Some(first) = shapes.first() else {
+        return Ok(Vec::new());
+    };
+    let mut product = first.duplicate()?;
+    let n = first.local()?.len();
+    let (mut phi, mut a_phi) = (Vec::with_capacity(n * m), Vec::with_capacity(n * m));
+    for shape in shapes {
+        a.mult(shape, &mut product)?;
+        phi.extend_from_slice(&shape.local()?);
+        a_phi.extend_from_slice(&product.local()?);
+    }
+    let mut out = lapack::gemm_tn(n, m, m, &phi, &a_phi);
+    crate::parallel::sum_in_place(comm, &mut out);
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -34,6 +34,22 @@ pub enum AssemblyError<E> {
     Sink(E),
 }
 
+/// A sink that drops what it is given (the mass of an assembly that wants the stiffness only).
+pub struct Discard<E>(std::marker::PhantomData<E>);
+
+impl<E> Default for Discard<E> {
+    fn default() -> Self {
+        Discard(std::marker::PhantomData)
+    }
+}
+
+impl<E> MatrixSink for Discard<E> {
+    type Error = E;
+    fn add(&mut self, _: &[i32], _: &[f64]) -> Result<(), E> {
+        Ok(())
+    }
+}
+
 /// Dense row-major sink for small problems and tests.
 pub struct DenseSink {
     pub n: usize,
@@ -80,11 +96,26 @@ pub fn assemble<S: MatrixSink>(
     stiffness: &mut S,
     mass: &mut S,
 ) -> Result<AssemblyStats, AssemblyError<S::Error>> {
+    assemble_blocks(mesh, dofs, &vec![true; mesh.blocks.len()], stiffness, mass)
+}
+
+/// [`assemble`] over the blocks flagged in `include` only (one flag per mesh block).
+pub fn assemble_blocks<S: MatrixSink, T: MatrixSink<Error = S::Error>>(
+    mesh: &Mesh,
+    dofs: &DofMap,
+    include: &[bool],
+    stiffness: &mut S,
+    mass: &mut T,
+) -> Result<AssemblyStats, AssemblyError<S::Error>> {
     let mut stats = AssemblyStats::default();
     let mut x = Vec::new();
     let mut edofs = Vec::new();
     let mut offset = 0;
-    for block in &mesh.blocks {
+    for (block, &included) in mesh.blocks.iter().zip(include) {
+        if !included {
+            offset += block.len();
+            continue;
+        }
         let mut kernel = ElementKernel::new(block.kind, &mesh.materials[block.material]);
         let n = kernel.order();
         let (mut ke, mut me) = (vec![0.0; n * n], vec![0.0; n * n]);
@@ -115,11 +146,16 @@ pub fn assemble<S: MatrixSink>(
 
 /// Exact preallocation of this rank's rows (per block row in block mode, per row otherwise).
 pub fn preallocation(mesh: &Mesh, dofs: &DofMap) -> Preallocation {
+    preallocation_of_blocks(mesh, dofs, &vec![true; mesh.blocks.len()])
+}
+
+/// [`preallocation`] of the blocks flagged in `include` only.
+pub fn preallocation_of_blocks(mesh: &Mesh, dofs: &DofMap, include: &[bool]) -> Preallocation {
     let owned = dofs.owned_nodes();
     let start = owned.start;
     // Neighbour nodes of each owned node, through the elements it belongs to.
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); owned.len()];
-    for block in &mesh.blocks {
+    for (block, _) in mesh.blocks.iter().zip(include).filter(|(_, &i)| i) {
         for e in 0..block.len() {
             let nodes = block.element(e);
             for &n in nodes {

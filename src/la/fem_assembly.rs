@@ -97,3 +97,31 @@ pub fn assemble_system_as<'p>(
         elements_on_rank: stats.elements,
     })
 }
+
+/// The stiffness of the blocks flagged in `include` alone, on the DOF map and in the storage
+/// format of the whole model's (`format`), so that its pattern is a subset of K0's: the part
+/// of K0 a change of those blocks' elastic constants scales.
+///
+/// # Collective
+pub fn assemble_block_stiffness<'p>(
+    petsc: &'p Petsc,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    include: &[bool],
+    format: MatrixFormat,
+) -> Result<SparseMatrix<'p>, SystemError> {
+    use crate::fem::assembly::{assemble_blocks, preallocation_of_blocks, Discard};
+    let prealloc = preallocation_of_blocks(mesh, dofs, include);
+    let bs = if dofs.block_mode { 3 } else { 1 };
+    let mut k = SparseMatrix::new(petsc, format, bs, dofs.local_dofs(), &prealloc)?;
+    let local = assemble_blocks(mesh, dofs, include, &mut k, &mut Discard::default());
+    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
+    match local {
+        Ok(_) if !failed => {}
+        Ok(_) => return Err(SystemError::OtherRank),
+        Err(e) => return Err(e.into()),
+    }
+    k.assemble()?;
+    k.set_symmetric(true)?;
+    Ok(k)
+}

@@ -339,6 +339,13 @@ impl<'p> SparseMatrix<'p> {
         ))
     }
 
+    /// `self += alpha * x` where x's nonzero pattern is a subset of this matrix's (kept).
+    ///
+    /// # Collective
+    pub fn axpy_subset(&mut self, alpha: f64, x: &SparseMatrix) -> Result<()> {
+        call!(MatAXPY(self.raw, alpha, x.raw, ffi::SUBSET_NONZERO_PATTERN))
+    }
+
     /// Overwrites the values with those of `source`, whose nonzero pattern must be a subset of
     /// this matrix's (entries outside it become zero).
     ///

@@ -373,6 +373,7 @@ mod tests {
         let settings = super::super::MatrixSettings {
             statics: Default::default(),
             full_checks: None,
+            lining_blocks: None,
             sampling: Sampling::Sobol,
             points: Some(256),
             seed: 3,

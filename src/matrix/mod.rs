@@ -31,22 +31,28 @@ pub enum Axis {
     P0,
     /// lambda of the exponential law (1/m).
     Lambda,
-    /// Lining temperature (deg C): sets mu through `[matrix.temperature]`.
+    /// Lining temperature (deg C): sets mu and the lining's stiffness through
+    /// `[matrix.temperature]`.
     Temperature,
+    /// The lining blocks' elastic constants as a factor on the scene's (1 = the scene's
+    /// lining; an orthotropic lining keeps its anisotropy).
+    LiningModulus,
 }
 
 impl Axis {
     pub fn name(self) -> &'static str {
         match self {
             Axis::Temperature => "temperature",
-            other => other.as_sweep().expect("not temperature").name(),
+            Axis::LiningModulus => "lining_modulus",
+            other => other.as_sweep().expect("a law parameter").name(),
         }
     }
 
     pub fn label(self) -> &'static str {
         match self {
             Axis::Temperature => "lining temperature (deg C)",
-            other => other.as_sweep().expect("not temperature").label(),
+            Axis::LiningModulus => "lining modulus (x the scene's)",
+            other => other.as_sweep().expect("a law parameter").label(),
         }
     }
 
@@ -58,7 +64,7 @@ impl Axis {
             Axis::Mu => SweepParameter::Mu,
             Axis::P0 => SweepParameter::P0,
             Axis::Lambda => SweepParameter::Lambda,
-            Axis::Temperature => return None,
+            Axis::Temperature | Axis::LiningModulus => return None,
         })
     }
 
@@ -68,6 +74,7 @@ impl Axis {
             && match self {
                 Axis::Mu => v >= 0.0,
                 Axis::Temperature => v > -273.15,
+                // Also a lining_modulus factor must be positive (the default arm).
                 _ => v > 0.0,
             }
     }
@@ -141,34 +148,64 @@ impl AxisRange {
     }
 }
 
-/// Properties of the lining against temperature, interpolated linearly between the rows.
+/// Properties of the lining against temperature, interpolated linearly between the rows: the
+/// friction coefficient mu(T), the lining's stiffness E_lining(T), or both.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TemperatureTable {
     /// deg C, increasing.
     pub celsius: Vec<f64>,
-    /// Friction coefficient at each temperature.
+    /// Friction coefficient at each temperature (empty: mu stays the scene's).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub mu: Vec<f64>,
+    /// The lining's elastic constants at each temperature, as a factor on the scene's
+    /// (empty: the lining stays the scene's).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lining_modulus: Vec<f64>,
+}
+
+/// Linear interpolation of `values` over the increasing `celsius` at `t`; None outside.
+fn interpolate(celsius: &[f64], values: &[f64], t: f64) -> Option<f64> {
+    let k = celsius.windows(2).position(|w| w[0] <= t && t <= w[1])?;
+    let s = (t - celsius[k]) / (celsius[k + 1] - celsius[k]);
+    Some(values[k] + s * (values[k + 1] - values[k]))
 }
 
 impl TemperatureTable {
-    /// mu at `t` (deg C), linear between the rows; None outside the table.
+    /// mu at `t` (deg C), linear between the rows; None outside the table or without a mu
+    /// column.
     pub fn mu(&self, t: f64) -> Option<f64> {
-        let c = &self.celsius;
-        let k = c.windows(2).position(|w| w[0] <= t && t <= w[1])?;
-        let s = (t - c[k]) / (c[k + 1] - c[k]);
-        Some(self.mu[k] + s * (self.mu[k + 1] - self.mu[k]))
+        (!self.mu.is_empty())
+            .then(|| interpolate(&self.celsius, &self.mu, t))
+            .flatten()
+    }
+
+    /// The lining-modulus factor at `t` (deg C); None outside the table or without the column.
+    pub fn lining_modulus(&self, t: f64) -> Option<f64> {
+        (!self.lining_modulus.is_empty())
+            .then(|| interpolate(&self.celsius, &self.lining_modulus, t))
+            .flatten()
     }
 
     fn validate(&self) -> Result<(), InvalidSetting> {
         let key = "matrix.temperature";
-        if self.celsius.len() < 2 || self.celsius.len() != self.mu.len() {
-            let detail = format!(
-                ": give 'celsius' and 'mu' of the same length, at least 2 rows (here {} and {})",
-                self.celsius.len(),
-                self.mu.len()
-            );
+        let rows = self.celsius.len();
+        if rows < 2 {
+            let detail = format!(": give at least 2 rows of 'celsius' (here {rows})");
             return Err(InvalidSetting::new(key, detail));
+        }
+        if self.mu.is_empty() && self.lining_modulus.is_empty() {
+            let detail = ": give 'mu' or 'lining_modulus' (or both) at the 'celsius' rows";
+            return Err(InvalidSetting::new(key, detail));
+        }
+        for (name, column) in [("mu", &self.mu), ("lining_modulus", &self.lining_modulus)] {
+            if !column.is_empty() && column.len() != rows {
+                let detail = format!(
+                    ": '{name}' has {} values for {rows} rows of 'celsius'",
+                    column.len()
+                );
+                return Err(InvalidSetting::new(key, detail));
+            }
         }
         if !self.celsius.windows(2).all(|w| w[0] < w[1])
             || self.celsius.iter().any(|t| !t.is_finite())
@@ -178,6 +215,14 @@ impl TemperatureTable {
         }
         if let Some(m) = self.mu.iter().find(|m| !(m.is_finite() && **m >= 0.0)) {
             let detail = format!(": mu = {m} is not a friction coefficient (finite, >= 0)");
+            return Err(InvalidSetting::new(key, detail));
+        }
+        if let Some(e) = self
+            .lining_modulus
+            .iter()
+            .find(|e| !(e.is_finite() && **e > 0.0))
+        {
+            let detail = format!(": lining_modulus = {e} is not a stiffness factor (finite, > 0)");
             return Err(InvalidSetting::new(key, detail));
         }
         Ok(())
@@ -210,7 +255,14 @@ pub struct MatrixSettings {
     /// the reduced route's error in the report. Default 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub full_checks: Option<usize>,
+    /// The mesh blocks of the friction lining, whose stiffness a lining_modulus axis or
+    /// column scales. Default: inner_lining and outer_lining (the brake model's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lining_blocks: Option<Vec<String>>,
 }
+
+/// The brake model's lining blocks.
+pub const DEFAULT_LINING_BLOCKS: [&str; 2] = ["inner_lining", "outer_lining"];
 
 fn default_seed() -> u32 {
     1
@@ -220,6 +272,27 @@ fn default_seed() -> u32 {
 pub const MAX_POINTS: usize = 1 << 16;
 
 impl MatrixSettings {
+    /// Whether some point scales the lining's stiffness (an axis, or the temperature table's
+    /// column with a temperature axis).
+    pub fn varies_lining(&self) -> bool {
+        self.axes.contains_key(&Axis::LiningModulus)
+            || (self.axes.contains_key(&Axis::Temperature)
+                && self
+                    .temperature
+                    .as_ref()
+                    .is_some_and(|t| !t.lining_modulus.is_empty()))
+    }
+
+    /// The lining blocks' names.
+    pub fn lining_block_names(&self) -> Vec<String> {
+        self.lining_blocks.clone().unwrap_or_else(|| {
+            DEFAULT_LINING_BLOCKS
+                .iter()
+                .map(|b| b.to_string())
+                .collect()
+        })
+    }
+
     /// The axes in their fixed order (the order of every point's values).
     pub fn axis_list(&self) -> Vec<Axis> {
         self.axes.keys().copied().collect()
@@ -288,9 +361,14 @@ impl MatrixSettings {
             }
             (Some(table), true) => {
                 table.validate()?;
-                if self.axes.contains_key(&Axis::Mu) {
-                    let detail = ": temperature sets mu through its table: give either a mu axis or a temperature axis";
+                if self.axes.contains_key(&Axis::Mu) && !table.mu.is_empty() {
+                    let detail = ": temperature sets mu through its table: give either a mu axis or a mu column in [matrix.temperature]";
                     return Err(InvalidSetting::new("matrix.axes.mu", detail));
+                }
+                if self.axes.contains_key(&Axis::LiningModulus) && !table.lining_modulus.is_empty()
+                {
+                    let detail = ": temperature sets the lining's stiffness through its table: give either a lining_modulus axis or a lining_modulus column in [matrix.temperature]";
+                    return Err(InvalidSetting::new("matrix.axes.lining_modulus", detail));
                 }
                 let (lo, hi) = self.axes[&Axis::Temperature].range();
                 let (first, last) = (table.celsius[0], table.celsius[table.celsius.len() - 1]);
@@ -300,6 +378,12 @@ impl MatrixSettings {
                 }
             }
             (None, false) => {}
+        }
+        if let Some(blocks) = &self.lining_blocks {
+            if !self.varies_lining() || blocks.is_empty() {
+                let detail = ": names the lining blocks a lining_modulus axis (or temperature column) scales: give at least one block, and such an axis";
+                return Err(InvalidSetting::new("matrix.lining_blocks", detail));
+            }
         }
         Ok(())
     }
@@ -373,6 +457,21 @@ mod tests {
                 "[axes]\ntemperature = { values = [20.0] }\nmu = { values = [0.4] }\n[temperature]\ncelsius = [0.0, 300.0]\nmu = [0.4, 0.3]\n",
                 "matrix.axes.mu",
             ),
+            (
+                "[axes]\ntemperature = { values = [20.0] }\n[temperature]\ncelsius = [0.0, 300.0]\n",
+                "matrix.temperature",
+            ),
+            (
+                "[axes]\ntemperature = { values = [20.0] }\n[temperature]\ncelsius = [0.0, 300.0]\nlining_modulus = [1.0, 0.0]\n",
+                "matrix.temperature",
+            ),
+            (
+                "[axes]\ntemperature = { values = [20.0] }\nlining_modulus = { values = [0.8] }\n[temperature]\ncelsius = [0.0, 300.0]\nlining_modulus = [1.0, 0.6]\n",
+                "matrix.axes.lining_modulus",
+            ),
+            ("[axes]\nlining_modulus = { values = [0.5, -1.0] }\n", "matrix.axes.lining_modulus"),
+            ("lining_blocks = [\"inner_lining\"]\n[axes]\nmu = { values = [0.4] }\n", "matrix.lining_blocks"),
+            ("full_checks = 2\n[axes]\nmu = { values = [0.4] }\n", "matrix.full_checks"),
         ] {
             let err = parse(text).validate().unwrap_err();
             assert_eq!(err.key, key, "{text}");
@@ -384,9 +483,18 @@ mod tests {
         let t = TemperatureTable {
             celsius: vec![20.0, 100.0, 300.0],
             mu: vec![0.40, 0.44, 0.34],
+            lining_modulus: vec![1.0, 0.9, 0.5],
         };
         assert!((t.mu(60.0).unwrap() - 0.42).abs() < 1e-15);
         assert!((t.mu(300.0).unwrap() - 0.34).abs() < 1e-15);
         assert_eq!(t.mu(301.0), None);
+        assert!((t.lining_modulus(200.0).unwrap() - 0.7).abs() < 1e-15);
+        assert_eq!(t.lining_modulus(19.0), None);
+        let only_stiffness = TemperatureTable {
+            mu: Vec::new(),
+            ..t
+        };
+        assert_eq!(only_stiffness.mu(60.0), None);
+        only_stiffness.validate().unwrap();
     }
 }

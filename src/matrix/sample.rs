@@ -158,6 +158,7 @@ mod tests {
         MatrixSettings {
             statics: Default::default(),
             full_checks: None,
+            lining_blocks: None,
             sampling: Sampling::Sobol,
             points: Some(points),
             seed,
@@ -213,6 +214,7 @@ mod tests {
         let settings = MatrixSettings {
             statics: Default::default(),
             full_checks: None,
+            lining_blocks: None,
             sampling: Sampling::Grid,
             points: None,
             seed: 1,

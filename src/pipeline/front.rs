@@ -5,8 +5,10 @@
 use std::path::Path;
 
 use crate::la::Petsc;
+use crate::matrix::StaticsModel;
 use crate::scene::Scene;
-use crate::stages::{complex, modes, operators, reduce, statics, sweep};
+use crate::stages::parameter_shapes::parameter_shapes;
+use crate::stages::{complex, matrix, modes, operators, reduce, statics, sweep};
 use crate::stages::{Analyses, RunError, Timings};
 
 /// A stage's prerequisite. The scene's validation already asked for it (`Scene::validate`):
@@ -85,13 +87,30 @@ pub fn analyses<'p>(
         }
         None => None,
     };
+    // The lining's stiffness, for a noise matrix that scales it (its reduced statics also
+    // put the lining's static shape into the reduction's basis).
+    let lining = match (&scene.matrix, &model, ops.dofs.as_ref()) {
+        (Some(m), Some(model), Some(dofs)) if m.varies_lining() => {
+            Some(timings.stage("lining stiffness", || {
+                matrix::lining_stiffness(petsc, m, model, dofs, ops.k0.format())
+            })?)
+        }
+        _ => None,
+    };
     let reduced = match &scene.reduction {
         Some(settings) => {
             let model = need(model.as_ref(), "reduction", "a mesh model")?;
             let preload = need(preload.as_ref(), "reduction", "[statics]")?;
             let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
+            let shapes = match &scene.matrix {
+                Some(m) if m.statics == StaticsModel::Reduced => timings
+                    .stage("parameter shapes", || {
+                        parameter_shapes(petsc, m, &ops, preload, lining.as_ref())
+                    })?,
+                _ => Vec::new(),
+            };
             Some(timings.stage("reduction", || {
-                reduce::reduce(petsc, settings, model, &ops, preload, modes)
+                reduce::reduce(petsc, settings, model, &ops, preload, modes, &shapes)
             })?)
         }
         None => None,
@@ -105,5 +124,6 @@ pub fn analyses<'p>(
         complex,
         sweep,
         reduced,
+        lining,
     })
 }

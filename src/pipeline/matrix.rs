@@ -37,6 +37,10 @@ pub(super) fn noise_matrix<'p>(
             "needs [statics] and [real_modes] of a mesh model",
         ));
     };
+    if settings.varies_lining() && a.lining.is_none() {
+        let message = "a lining_modulus axis or column scales the lining blocks of a mesh model";
+        return Err(RunError::scene("matrix.axes", message));
+    }
     let complex = scene.complex_modes.clone().unwrap_or_default();
     let input = MatrixInputs {
         k0: &a.ops.k0,
@@ -47,6 +51,7 @@ pub(super) fn noise_matrix<'p>(
         complex: &complex,
         damping: scene.damping.unwrap_or_default(),
         reduced: a.reduced.as_ref(),
+        lining: a.lining.as_ref(),
     };
     let nominal = crate::stages::matrix::nominal_values(&settings.axis_list(), &input);
     let header = JournalHeader {

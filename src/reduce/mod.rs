@@ -267,6 +267,24 @@ impl Reduction {
         }
     }
 
+    /// T^T A T of another operator of the full model (one block's stiffness, say), in the
+    /// reduced operators' balanced layout.
+    ///
+    /// # Collective
+    pub fn project_operator<'p>(
+        &self,
+        petsc: &'p Petsc,
+        a: &SparseMatrix<'p>,
+    ) -> Result<SparseMatrix<'p>, LaError> {
+        let mut work = a.new_vector()?;
+        let mut product = work.duplicate()?;
+        let a_basis = products(self, a, &mut work, &mut product)?;
+        let reduced = reduced_operators(petsc, self, &[(a, &a_basis)])?
+            .pop()
+            .ok_or_else(|| LaError::Invalid("reduction: one operator expected".into()))?;
+        reduced.redistributed(petsc, self.columns.clone())
+    }
+
     /// The b rows of `cols` full local columns (column-major).
     fn at_reduced_rows(&self, w: &[f64], cols: usize) -> Vec<f64> {
         let n = self.full_local;
@@ -291,7 +309,8 @@ impl Reduction {
 
 /// Builds the reduction of the full model (stiffness `k0`, mass `m`, both AIJ) that keeps the
 /// DOFs flagged in `kept` and reduces the rest onto `shapes` (M-normalized real modes of the
-/// tangent state) and `static_shape` (if given).
+/// tangent state), `static_shape` (if given) and `extra_shapes` (static shapes of parameters,
+/// for example).
 ///
 /// # Collective
 pub fn reduce<'p>(
@@ -301,6 +320,7 @@ pub fn reduce<'p>(
     kept: &[bool],
     shapes: &[Vector<'p>],
     static_shape: Option<&Vector<'p>>,
+    extra_shapes: &[Vector<'p>],
     settings: &ReductionSettings,
 ) -> Result<ReducedModel<'p>, LaError> {
     let start = Instant::now();
@@ -338,6 +358,7 @@ pub fn reduce<'p>(
     if let Some(q0) = static_shape {
         raw.push(q0);
     }
+    raw.extend(extra_shapes);
     let offered = raw.len();
     let mut basis = Vec::with_capacity(nb * offered);
     for v in &raw {

@@ -274,6 +274,7 @@ pub fn write_matrix(
             crate::matrix::Axis::P0 => "Pa",
             crate::matrix::Axis::Lambda => "1/m",
             crate::matrix::Axis::Temperature => "degC",
+            crate::matrix::Axis::LiningModulus => "1 (x the scene's lining)",
         };
         file.write_table(
             &format!("{g}/points/{}", a.name()),

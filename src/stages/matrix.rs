@@ -17,7 +17,7 @@ use crate::eigen::complex_modes::{
     frequency_hz, projected_coordinates, ComplexModeSettings, DampingSettings, DenseEigenpair,
 };
 use crate::eigen::real_modes::RealModes;
-use crate::eigen::stability::ProjectedStability;
+use crate::eigen::stability::{project_operator, ProjectedStability};
 use crate::eigen::sweep::{apply_to_laws, SweepParameter};
 use crate::eigen::tracking::pair_modes;
 use crate::la::{Petsc, SparseMatrix, Vector};
@@ -38,6 +38,8 @@ pub struct MatrixInputs<'a, 'p> {
     pub damping: DampingSettings,
     /// The superelement, for `statics = "reduced"`.
     pub reduced: Option<&'a Reduced<'p>>,
+    /// The lining blocks' part of K0, when a point scales the lining's stiffness.
+    pub lining: Option<&'a SparseMatrix<'p>>,
 }
 
 /// Which points this run computes: a slice, less those a journal already holds.
@@ -88,41 +90,64 @@ pub fn nominal_values(axes: &[Axis], input: &MatrixInputs) -> Vec<f64> {
                 _ => f64::NAN,
             }),
             Axis::Temperature => f64::NAN,
+            Axis::LiningModulus => 1.0,
         })
         .collect()
 }
 
-/// The contact laws, disc speed and load scale of a point.
-fn point_laws(
+/// A point's operating conditions: the contact laws, the disc speed, the load scale (of the
+/// scene's pressure) and the lining-stiffness factor (of the scene's lining).
+struct Conditions {
+    laws: Vec<ResolvedInterface>,
+    speed: f64,
+    scale: f64,
+    lining: f64,
+}
+
+/// The operating conditions of a point.
+fn point_conditions(
     settings: &MatrixSettings,
     axes: &[Axis],
     values: &[f64],
     input: &MatrixInputs,
-) -> Result<(Vec<ResolvedInterface>, f64, f64), RunError> {
+) -> Result<Conditions, RunError> {
     let contact = &input.preload.contact;
-    let (mut laws, mut speed, mut scale) =
-        (contact.interfaces().to_vec(), contact.disc_speed(), 1.0);
+    let mut c = Conditions {
+        laws: contact.interfaces().to_vec(),
+        speed: contact.disc_speed(),
+        scale: 1.0,
+        lining: 1.0,
+    };
     for (&axis, &v) in axes.iter().zip(values) {
         let (parameter, value) = match axis {
             Axis::PressureBar => {
-                scale = v / input.pressure_bar;
+                c.scale = v / input.pressure_bar;
                 continue;
             }
             Axis::DiscSpeed => {
-                speed = v;
+                c.speed = v;
+                continue;
+            }
+            Axis::LiningModulus => {
+                c.lining = v;
                 continue;
             }
             Axis::Temperature => {
                 let table = settings.temperature.as_ref().expect("validated: a table");
-                let mu = table.mu(v).expect("validated: inside the table");
-                (SweepParameter::Mu, mu)
+                if let Some(e) = table.lining_modulus(v) {
+                    c.lining = e;
+                }
+                match table.mu(v) {
+                    Some(mu) => (SweepParameter::Mu, mu),
+                    None => continue,
+                }
             }
             other => (other.as_sweep().expect("a law parameter"), v),
         };
-        apply_to_laws(parameter, value, &mut laws)
+        apply_to_laws(parameter, value, &mut c.laws)
             .map_err(|e| RunError::scene("matrix.axes", e.to_string()))?;
     }
-    Ok((laws, speed, scale))
+    Ok(c)
 }
 
 /// Runs the matrix' points of `run.slice` that `run.done` lacks, in warm-start order, handing
@@ -140,7 +165,7 @@ pub fn matrix<'p>(
     let values = points(settings);
     let nominal = nominal_values(&axes, &input);
     // A law the axes cannot set fails here, before any point.
-    point_laws(settings, &axes, &values[0], &input)?;
+    point_conditions(settings, &axes, &values[0], &input)?;
     let done: HashMap<usize, PointResult> = run.done.into_iter().map(|p| (p.index, p)).collect();
     let todo: Vec<usize> = run
         .slice
@@ -166,7 +191,7 @@ pub fn matrix<'p>(
         (StaticsModel::Full, _) => &input.preload.state.displacement,
     };
     let checks = settings.full_check_indices(values.len());
-    let mut solver = PointSolver::new(petsc, input, checks)?;
+    let mut solver = PointSolver::new(petsc, input, checks, settings.statics)?;
     let mut kept: HashMap<usize, Vector<'p>> = HashMap::new();
     // The last use of each point's static state as a warm start (then it is dropped).
     let mut last_use: HashMap<usize, usize> = HashMap::new();
@@ -218,6 +243,42 @@ struct PointSolver<'a, 'p> {
     reduced_factor: Option<Factored<'p>>,
     /// Points also solved on the full model (reduced statics only).
     checks: Vec<usize>,
+    /// The lining's stiffness on each model, when points scale it.
+    lining: Option<LiningParts<'p>>,
+}
+
+/// The lining blocks' stiffness K_l on the models a point uses, and the point's K0 + (e - 1)
+/// K_l (e the point's lining factor) in a matrix whose pattern holds both.
+struct LiningParts<'p> {
+    /// Phi^T K_l Phi on the projection basis.
+    projected: Vec<f64>,
+    full: LiningOperator<'p>,
+    reduced: Option<LiningOperator<'p>>,
+}
+
+struct LiningOperator<'p> {
+    lining: SparseMatrix<'p>,
+    /// K0 + (e - 1) K_l of the last point (pattern: the union of K0's and K_l's).
+    point: SparseMatrix<'p>,
+}
+
+impl<'p> LiningOperator<'p> {
+    /// # Collective
+    fn new(k0: &SparseMatrix<'p>, lining: SparseMatrix<'p>) -> Result<Self, RunError> {
+        let mut point = lining.try_clone()?;
+        point.axpy(1.0, k0)?;
+        Ok(LiningOperator { lining, point })
+    }
+
+    /// K0 + (e - 1) K_l, in `self.point`.
+    ///
+    /// # Collective
+    fn at(&mut self, k0: &SparseMatrix<'p>, e: f64) -> Result<&SparseMatrix<'p>, RunError> {
+        self.point.zero_entries()?;
+        self.point.axpy_subset(1.0, k0)?;
+        self.point.axpy_subset(e - 1.0, &self.lining)?;
+        Ok(&self.point)
+    }
 }
 
 /// What a static solve runs on: a stiffness, the contact points in its unknowns, the load at
@@ -242,6 +303,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         petsc: &'p Petsc,
         input: MatrixInputs<'a, 'p>,
         checks: Vec<usize>,
+        statics: StaticsModel,
     ) -> Result<Self, RunError> {
         let comm = petsc.world();
         let (contact, state) = (&input.preload.contact, &input.preload.state.contact);
@@ -249,6 +311,23 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         let (kp, cp) = stability.operators_at(comm, contact, state);
         let nominal = projected_coordinates(stability.projection.size, &kp, &cp)
             .map_err(crate::la::LaError::from)?;
+        let lining = match input.lining {
+            Some(k_l) => {
+                let reduced = match (statics, input.reduced) {
+                    (StaticsModel::Reduced, Some(r)) => {
+                        let k_r = r.model.reduction.project_operator(petsc, k_l)?;
+                        Some(LiningOperator::new(&r.model.stiffness, k_r)?)
+                    }
+                    _ => None,
+                };
+                Some(LiningParts {
+                    projected: project_operator(comm, &input.modes.shapes, k_l)?,
+                    full: LiningOperator::new(input.k0, k_l.try_clone()?)?,
+                    reduced,
+                })
+            }
+            None => None,
+        };
         Ok(PointSolver {
             input,
             stability,
@@ -256,6 +335,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             factor: None,
             reduced_factor: None,
             checks,
+            lining,
         })
     }
 
@@ -285,14 +365,16 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         petsc: &'p Petsc,
         problem: StaticProblem<'_, 'p>,
         statics: &StaticSettings,
-        (laws, speed, scale): (Vec<ResolvedInterface>, f64, f64),
+        conditions: &Conditions,
         warm: &Vector<'p>,
         factor: &mut Option<Factored<'p>>,
     ) -> Result<Result<PointStatics<'p>, String>, RunError> {
-        let contact = problem.contact.with_laws(laws, speed)?;
+        let contact = problem
+            .contact
+            .with_laws(conditions.laws.clone(), conditions.speed)?;
         let mut f = problem.load.duplicate()?;
         f.copy_from(problem.load)?;
-        f.scale(scale)?;
+        f.scale(conditions.scale)?;
         let t = Instant::now();
         // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
         // (numerical phase only) when it stops contracting. From the unloaded state afresh.
@@ -333,32 +415,41 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         values: &[f64],
         warm: &Vector<'p>,
     ) -> Result<(PointResult, Option<Vector<'p>>), RunError> {
-        let laws = point_laws(settings, axes, values, &self.input)?;
+        let conditions = point_conditions(settings, axes, values, &self.input)?;
         let reduced = settings.statics == StaticsModel::Reduced;
         let failed = |reason: String| PointResult {
             index,
             values: values.to_vec(),
             outcome: Outcome::Failed { reason },
         };
-        let problem = self.problem(reduced);
+        let mut problem = self.problem(reduced);
         let statics = self.input.statics;
+        let lining = match (&mut self.lining, reduced) {
+            (Some(l), true) => l.reduced.as_mut(),
+            (Some(l), false) => Some(&mut l.full),
+            (None, _) => None,
+        };
+        if let Some(l) = lining {
+            problem.k0 = l.at(problem.k0, conditions.lining)?;
+        }
         let factor = match reduced {
             true => &mut self.reduced_factor,
             false => &mut self.factor,
         };
-        let solved = Self::solve_static(petsc, problem, statics, laws.clone(), warm, factor)?;
+        let solved = Self::solve_static(petsc, problem, statics, &conditions, warm, factor)?;
         let point = match solved {
             Ok(p) => p,
             Err(reason) => return Ok((failed(reason), None)),
         };
         let t = Instant::now();
-        let modes = match self.modes(petsc, &point.contact, &point.state.contact) {
+        let lining = conditions.lining;
+        let modes = match self.modes(petsc, &point.contact, &point.state.contact, lining) {
             Ok(m) => m,
             Err(reason) => return Ok((failed(reason), Some(point.state.displacement))),
         };
         let seconds_modes = t.elapsed().as_secs_f64();
         let full_check = match reduced && self.checks.contains(&index) {
-            true => Some(self.full_check(petsc, laws, &point.state.displacement)?),
+            true => Some(self.full_check(petsc, &conditions, &point.state.displacement)?),
             false => None,
         };
         let state = &point.state;
@@ -390,13 +481,20 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         petsc: &'p Petsc,
         contact: &ContactModel<'p>,
         state: &ContactState,
+        lining: f64,
     ) -> Result<Vec<PointMode>, String> {
         // The superelement's contact model has the full one's points, in the same order on
         // the same ranks: its state projects on the same observed modes.
-        let pairs = self
-            .stability
-            .modes_at(petsc.world(), contact, state)
-            .map_err(|e| format!("complex modes: {e}"))?;
+        let comm = petsc.world();
+        let pairs = match &self.lining {
+            Some(l) => {
+                let extra: Vec<f64> = l.projected.iter().map(|k| (lining - 1.0) * k).collect();
+                self.stability
+                    .modes_with_stiffness(comm, contact, state, &extra)
+            }
+            None => self.stability.modes_at(comm, contact, state),
+        }
+        .map_err(|e| format!("complex modes: {e}"))?;
         let modes = self.labelled(pairs);
         if modes
             .iter()
@@ -414,13 +512,17 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     fn full_check(
         &mut self,
         petsc: &'p Petsc,
-        laws: (Vec<ResolvedInterface>, f64, f64),
+        conditions: &Conditions,
         reduced_q: &Vector<'p>,
     ) -> Result<FullCheck, RunError> {
         let t = Instant::now();
-        let problem = self.problem(false);
+        let mut problem = self.problem(false);
+        if let Some(l) = &mut self.lining {
+            problem.k0 = l.full.at(problem.k0, conditions.lining)?;
+        }
         let (statics, nominal) = (self.input.statics, &self.input.preload.state.displacement);
-        let solved = Self::solve_static(petsc, problem, statics, laws, nominal, &mut self.factor)?;
+        let factor = &mut self.factor;
+        let solved = Self::solve_static(petsc, problem, statics, conditions, nominal, factor)?;
         let failed = |reason: String| FullCheck {
             displacement_error: f64::NAN,
             braking_torque: f64::NAN,
@@ -433,7 +535,12 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             Ok(p) => p,
             Err(reason) => return Ok(failed(reason)),
         };
-        let modes = match self.modes(petsc, &point.contact, &point.state.contact) {
+        let modes = match self.modes(
+            petsc,
+            &point.contact,
+            &point.state.contact,
+            conditions.lining,
+        ) {
             Ok(m) => m,
             Err(reason) => return Ok(failed(reason)),
         };
@@ -475,4 +582,36 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             })
             .collect()
     }
+}
+
+/// The lining blocks' part of K0 (`matrix.lining_blocks`), in K0's `format`: what a lining
+/// stiffness factor e turns K0 into, K0 + (e - 1) K_l.
+///
+/// # Collective
+pub fn lining_stiffness<'p>(
+    petsc: &'p Petsc,
+    settings: &MatrixSettings,
+    model: &super::model::Model,
+    dofs: &crate::fem::dofmap::DofMap,
+    format: crate::la::MatrixFormat,
+) -> Result<SparseMatrix<'p>, RunError> {
+    let blocks = &model.mesh.blocks;
+    let mut include = vec![false; blocks.len()];
+    for name in settings.lining_block_names() {
+        match blocks.iter().position(|b| b.name == name) {
+            Some(i) => include[i] = true,
+            None => {
+                let known: Vec<&str> = blocks.iter().map(|b| b.name.as_str()).collect();
+                let message = format!(
+                    ": no block '{name}' in the mesh (its blocks: {}); name the lining's blocks in matrix.lining_blocks",
+                    known.join(", ")
+                );
+                return Err(RunError::scene("matrix.lining_blocks", message));
+            }
+        }
+    }
+    let mesh = &model.mesh;
+    let k_l =
+        crate::la::fem_assembly::assemble_block_stiffness(petsc, mesh, dofs, &include, format)?;
+    Ok(k_l)
 }

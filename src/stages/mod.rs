@@ -18,6 +18,7 @@ pub mod matrix;
 pub mod model;
 pub mod modes;
 pub mod operators;
+pub mod parameter_shapes;
 pub mod post;
 pub mod pseudo;
 pub mod reduce;
@@ -119,6 +120,8 @@ pub struct Analyses<'p> {
     pub complex: Vec<crate::eigen::complex_modes::ComplexModes<'p>>,
     pub sweep: Option<sweep::SweepOutput>,
     pub reduced: Option<reduce::Reduced<'p>>,
+    /// The lining blocks' part of K0, when a noise matrix scales the lining's stiffness.
+    pub lining: Option<crate::la::SparseMatrix<'p>>,
 }
 
 impl Analyses<'_> {

@@ -58,6 +58,7 @@ pub fn reduce<'p>(
     ops: &Operators<'p>,
     preload: &Preloaded<'p>,
     modes: &RealModes<'p>,
+    extra_shapes: &[Vector<'p>],
 ) -> Result<Reduced<'p>, ReductionError> {
     let dofs = ops.dofs.as_ref().ok_or(ReductionError::NoMesh)?;
     let (contact, state) = (&preload.contact, &preload.state);
@@ -82,6 +83,7 @@ pub fn reduce<'p>(
         &kept,
         &modes.shapes,
         settings.static_shape.then_some(&state.displacement),
+        extra_shapes,
         settings,
     )?;
     let r = &reduced.reduction;

@@ -62,7 +62,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     let request = scene.real_modes.clone().ok_or("[real_modes]")?;
     let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
     let reduction = scene.reduction.clone().ok_or("[reduction]")?;
-    let reduced = stages::reduce::reduce(petsc, &reduction, &model, &ops, &preload, &modes)
+    let reduced = stages::reduce::reduce(petsc, &reduction, &model, &ops, &preload, &modes, &[])
         .map_err(|e| e.to_string())?;
     let (index, f) = modes
         .frequencies_hz

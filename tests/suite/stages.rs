@@ -82,7 +82,7 @@ fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
     };
     let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
     let settings: ReductionSettings = toml::from_str("").map_err(|e| e.to_string())?;
-    let reduced = stages::reduce::reduce(petsc, &settings, &model, &ops, &preload, &modes)
+    let reduced = stages::reduce::reduce(petsc, &settings, &model, &ops, &preload, &modes, &[])
         .map_err(|e| e.to_string())?;
     let mode_error = reduced.mode_error();
     if reduced.mode_check.len() != 30 || mode_error.is_nan() || mode_error > 1e-9 {
