@@ -309,8 +309,7 @@ impl Reduction {
 
 /// Builds the reduction of the full model (stiffness `k0`, mass `m`, both AIJ) that keeps the
 /// DOFs flagged in `kept` and reduces the rest onto `shapes` (M-normalized real modes of the
-/// tangent state), `static_shape` (if given) and `extra_shapes` (static shapes of parameters,
-/// for example).
+/// tangent state) and `static_shapes` (the static state, static shapes of parameters).
 ///
 /// # Collective
 pub fn reduce<'p>(
@@ -319,8 +318,7 @@ pub fn reduce<'p>(
     m: &SparseMatrix<'p>,
     kept: &[bool],
     shapes: &[Vector<'p>],
-    static_shape: Option<&Vector<'p>>,
-    extra_shapes: &[Vector<'p>],
+    static_shapes: &[&Vector<'p>],
     settings: &ReductionSettings,
 ) -> Result<ReducedModel<'p>, LaError> {
     let start = Instant::now();
@@ -355,10 +353,7 @@ pub fn reduce<'p>(
     let mut work = m.new_vector()?;
     let mut product = work.duplicate()?;
     let mut raw: Vec<&Vector> = shapes.iter().collect();
-    if let Some(q0) = static_shape {
-        raw.push(q0);
-    }
-    raw.extend(extra_shapes);
+    raw.extend(static_shapes);
     let offered = raw.len();
     let mut basis = Vec::with_capacity(nb * offered);
     for v in &raw {

@@ -76,14 +76,17 @@ pub fn reduce<'p>(
     }
     let kept = crate::reduce::kept_dofs(&model.mesh, dofs, &surfaces, Some(&coupled))
         .map_err(ReductionError::KeptZone)?;
+    let mut static_shapes: Vec<&Vector<'p>> = extra_shapes.iter().collect();
+    if settings.static_shape {
+        static_shapes.insert(0, &state.displacement);
+    }
     let reduced = crate::reduce::reduce(
         petsc,
         &ops.k0,
         &ops.m,
         &kept,
         &modes.shapes,
-        settings.static_shape.then_some(&state.displacement),
-        extra_shapes,
+        &static_shapes,
         settings,
     )?;
     let r = &reduced.reduction;
