@@ -71,6 +71,11 @@ pub enum LaError {
         allowed_mb: i32,
         prefix: String,
     },
+    /// MUMPS found the matrix numerically singular (INFOG(1) = -10).
+    #[error(
+        "the matrix of solver '{prefix}' is numerically singular (MUMPS INFOG(1) = -10 after {eliminated} eliminated pivots)"
+    )]
+    SingularMatrix { prefix: String, eliminated: i32 },
     /// An iterative solver stopped before converging.
     #[error("{solver} did not converge: {detail}")]
     NotConverged {

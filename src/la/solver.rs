@@ -95,7 +95,8 @@ fn release_freed_memory() {
     }
 }
 
-/// The memory error of a failed factorization whose factor is `factor`, if that was why.
+/// The memory (INFOG(1) = -19) or singularity (-10) error of a failed factorization whose
+/// factor is `factor`, if that was why.
 pub(crate) fn mumps_memory_error(factor: ffi::Mat, prefix: &str) -> Option<LaError> {
     let infog = |i: i32| -> Option<i32> {
         let mut v = 0;
@@ -107,13 +108,20 @@ pub(crate) fn mumps_memory_error(factor: ffi::Mat, prefix: &str) -> Option<LaErr
         call!(MatMumpsGetIcntl(factor, 23, &mut v)).ok()?;
         v
     };
-    (infog(1)? == -19).then(|| LaError::MumpsMemory {
-        phase: "factorization",
-        needed_mb: infog(16).unwrap_or(-1),
-        ooc_mb: infog(26).unwrap_or(-1),
-        allowed_mb: icntl23,
-        prefix: prefix.to_string(),
-    })
+    match infog(1)? {
+        -19 => Some(LaError::MumpsMemory {
+            phase: "factorization",
+            needed_mb: infog(16).unwrap_or(-1),
+            ooc_mb: infog(26).unwrap_or(-1),
+            allowed_mb: icntl23,
+            prefix: prefix.to_string(),
+        }),
+        -10 => Some(LaError::SingularMatrix {
+            prefix: prefix.to_string(),
+            eliminated: infog(2).unwrap_or(-1),
+        }),
+        _ => None,
+    }
 }
 
 pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<FactorizationReport> {
@@ -333,10 +341,16 @@ impl<'p> DirectSolver<'p> {
         }
         call!(KSPSetReusePreconditioner(self.raw, ffi::PETSC_FALSE))?;
         call!(KSPSetOperators(self.raw, a.raw, a.raw))?;
-        call!(KSPSetUp(self.raw))?;
-        call!(KSPSetReusePreconditioner(self.raw, ffi::PETSC_TRUE))?;
         let mut pc = std::ptr::null_mut();
         call!(KSPGetPC(self.raw, &mut pc))?;
+        if let Err(e) = call!(KSPSetUp(self.raw)) {
+            let mut factor = std::ptr::null_mut();
+            if call!(PCFactorGetMatrix(pc, &mut factor)).is_ok() {
+                return Err(mumps_memory_error(factor, &self.prefix).unwrap_or(e));
+            }
+            return Err(e);
+        }
+        call!(KSPSetReusePreconditioner(self.raw, ffi::PETSC_TRUE))?;
         self.report = match mumps_factor(pc)? {
             Some(factor) => mumps_report(factor, &self.prefix)?,
             None => other_report(pc)?,

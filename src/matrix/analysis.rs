@@ -318,6 +318,8 @@ mod tests {
                 seconds_statics: 0.0,
                 seconds_factorizing: 0.0,
                 full_check: None,
+                factor_solves: 0,
+                seconds_solving: 0.0,
                 seconds_modes: 0.0,
             }),
         }
@@ -374,6 +376,7 @@ mod tests {
             statics: Default::default(),
             full_checks: None,
             lining_blocks: None,
+            parameter_shapes: true,
             sampling: Sampling::Sobol,
             points: Some(256),
             seed: 3,

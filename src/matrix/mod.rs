@@ -111,6 +111,14 @@ impl StaticsModel {
     }
 }
 
+fn yes() -> bool {
+    true
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
+}
+
 /// Points also solved on the full model when the reduced one solves the matrix, by default.
 pub const DEFAULT_FULL_CHECKS: usize = 3;
 
@@ -255,6 +263,10 @@ pub struct MatrixSettings {
     /// the reduced route's error in the report. Default 3.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub full_checks: Option<usize>,
+    /// With `statics = "reduced"`: put the varied parameters' static shapes into the
+    /// superelement's basis (default true; false for comparison).
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub parameter_shapes: bool,
     /// The mesh blocks of the friction lining, whose stiffness a lining_modulus axis or
     /// column scales. Default: inner_lining and outer_lining (the brake model's).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -57,6 +57,11 @@ pub struct SolvedPoint {
     /// Of which in LU factorizations.
     #[serde(default)]
     pub seconds_factorizing: f64,
+    /// Solves with the LU factors (corrections and GMRES iterations), and their seconds.
+    #[serde(default)]
+    pub factor_solves: usize,
+    #[serde(default)]
+    pub seconds_solving: f64,
     pub seconds_modes: f64,
     /// With the reduced statics at a checked point: the same point on the full model.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -103,7 +103,7 @@ pub fn analyses<'p>(
             let preload = need(preload.as_ref(), "reduction", "[statics]")?;
             let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
             let shapes = match &scene.matrix {
-                Some(m) if m.statics == StaticsModel::Reduced => timings
+                Some(m) if m.statics == StaticsModel::Reduced && m.parameter_shapes => timings
                     .stage("parameter shapes", || {
                         parameter_shapes(petsc, m, &ops, preload, lining.as_ref())
                     })?,

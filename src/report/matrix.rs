@@ -131,11 +131,13 @@ impl MatrixReport {
             };
             let _ = writeln!(
                 t,
-                "  per point: statics {:.3} s ({:.1} Newton iterations, {:.1} LU factorizations taking {:.3} s), complex modes {:.3} s; {} cold restarts",
+                "  per point: statics {:.3} s ({:.1} Newton iterations, {:.1} LU factorizations taking {:.3} s, {:.1} solves with them taking {:.3} s), complex modes {:.3} s; {} cold restarts",
                 mean(&|s| s.seconds_statics),
                 mean(&|s| s.newton_iterations as f64),
                 mean(&|s| s.factorizations as f64),
                 mean(&|s| s.seconds_factorizing),
+                mean(&|s| s.factor_solves as f64),
+                mean(&|s| s.seconds_solving),
                 mean(&|s| s.seconds_modes),
                 solved.iter().filter(|s| s.cold_restart).count()
             );

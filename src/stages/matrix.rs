@@ -462,6 +462,8 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             cold_restart: point.cold_restart,
             seconds_statics: point.seconds,
             seconds_factorizing: state.seconds_factorizing,
+            factor_solves: state.solves,
+            seconds_solving: state.seconds_solving,
             seconds_modes,
             full_check,
         };
@@ -505,8 +507,8 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         Ok(modes)
     }
 
-    /// The point solved again on the full model, from the nominal static state, against the
-    /// superelement's static displacement `reduced_q`.
+    /// The point solved again on the full model, from the superelement's static displacement
+    /// `reduced_q` recovered, against it.
     ///
     /// # Collective
     fn full_check(
@@ -520,9 +522,15 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         if let Some(l) = &mut self.lining {
             problem.k0 = l.full.at(problem.k0, conditions.lining)?;
         }
-        let (statics, nominal) = (self.input.statics, &self.input.preload.state.displacement);
+        // From the superelement's state recovered: the full equilibrium nearest to it (joints
+        // that stick hold a state that depends on the path; from the nominal state the full
+        // solve may settle in another one, and the difference would not be the reduction's).
+        let reduction = &self.input.reduced.expect("reduced statics").model.reduction;
+        let mut start = self.input.preload.state.displacement.duplicate()?;
+        reduction.recover(petsc, reduced_q, &mut start)?;
+        let statics = self.input.statics;
         let factor = &mut self.factor;
-        let solved = Self::solve_static(petsc, problem, statics, conditions, nominal, factor)?;
+        let solved = Self::solve_static(petsc, problem, statics, conditions, &start, factor)?;
         let failed = |reason: String| FullCheck {
             displacement_error: f64::NAN,
             braking_torque: f64::NAN,
@@ -545,7 +553,6 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             Err(reason) => return Ok(failed(reason)),
         };
         let q = &point.state.displacement;
-        let reduction = &self.input.reduced.expect("reduced statics").model.reduction;
         let mut difference = q.duplicate()?;
         reduction.recover(petsc, reduced_q, &mut difference)?;
         difference.axpy(-1.0, q)?;

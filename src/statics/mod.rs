@@ -199,6 +199,16 @@ pub enum StaticError {
          finite (NaN or Inf); check the materials, the pressure and the contact law's values"
     )]
     NotFinite { step: usize },
+    #[error(
+        "static preload, load step {step} (pressure {pressure:.0} %, friction {friction:.0} %), Newton iteration {iteration} (residual {residual:.3e} N): the tangent stiffness is singular, so no equilibrium is near this state. Either a part held only by contact has lost it (check the clamps and the contact surfaces' fit), or friction has made the static state unstable at these conditions (a divergence: lower mu or the pressure)"
+    )]
+    SingularTangent {
+        step: usize,
+        pressure: f64,
+        friction: f64,
+        iteration: usize,
+        residual: f64,
+    },
     #[error("static preload: {0}")]
     La(#[from] LaError),
 }
@@ -399,7 +409,19 @@ pub fn solve_from<'p>(
                 floor: 0.1 * target,
                 reach: q.norm2()?,
             };
-            let kind = tangent.correct(k0, contact, &state, &residual, &mut dq, scale)?;
+            let kind = match tangent.correct(k0, contact, &state, &residual, &mut dq, scale) {
+                Ok(kind) => kind,
+                Err(LaError::SingularMatrix { .. }) => {
+                    return Err(StaticError::SingularTangent {
+                        step,
+                        pressure: 100.0 * phi,
+                        friction: 100.0 * psi,
+                        iteration,
+                        residual: r,
+                    })
+                }
+                Err(e) => return Err(e.into()),
+            };
             let chosen = backtrack(&q, &dq, r, &mut trial, |t| eval(t, psi, &f, &mut residual))?;
             let Some((alpha, evaluated)) = chosen else {
                 // Leave the residual of the current iterate for the error report (and for a
