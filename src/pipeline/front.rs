@@ -38,6 +38,29 @@ pub fn analyses<'p>(
         (Some(_), None) => return Err(RunError::scene("statics", "needs a mesh model")),
         _ => None,
     };
+    // The lining's stiffness, for a noise matrix that scales it (its reduced statics also
+    // put the lining's static shape into the reduction's basis).
+    let lining = match (&scene.matrix, &model, ops.dofs.as_ref()) {
+        (Some(m), Some(model), Some(dofs)) if m.varies_lining() => {
+            Some(timings.stage("lining stiffness", || {
+                matrix::lining_stiffness(petsc, m, model, dofs, ops.k0.format())
+            })?)
+        }
+        _ => None,
+    };
+    // The parameters' static shapes for a matrix on the superelement, right after the preload:
+    // their factorization of the full tangent then has the memory the preload's had (at 600k
+    // next to the 250 real modes and the other operators it was killed for memory).
+    let shapes = match (&scene.matrix, &scene.reduction, preload.as_ref()) {
+        (Some(m), Some(_), Some(preload))
+            if m.statics == StaticsModel::Reduced && m.parameter_shapes =>
+        {
+            timings.stage("parameter shapes", || {
+                parameter_shapes(petsc, m, &ops, preload, lining.as_ref())
+            })?
+        }
+        _ => Vec::new(),
+    };
     for format in &scene.output.export_matrices {
         let k = modes::symmetric_stiffness(&ops, preload.as_ref());
         timings.stage("export matrices", || {
@@ -87,28 +110,11 @@ pub fn analyses<'p>(
         }
         None => None,
     };
-    // The lining's stiffness, for a noise matrix that scales it (its reduced statics also
-    // put the lining's static shape into the reduction's basis).
-    let lining = match (&scene.matrix, &model, ops.dofs.as_ref()) {
-        (Some(m), Some(model), Some(dofs)) if m.varies_lining() => {
-            Some(timings.stage("lining stiffness", || {
-                matrix::lining_stiffness(petsc, m, model, dofs, ops.k0.format())
-            })?)
-        }
-        _ => None,
-    };
     let reduced = match &scene.reduction {
         Some(settings) => {
             let model = need(model.as_ref(), "reduction", "a mesh model")?;
             let preload = need(preload.as_ref(), "reduction", "[statics]")?;
             let modes = need(modes.as_ref(), "reduction", "[real_modes]")?;
-            let shapes = match &scene.matrix {
-                Some(m) if m.statics == StaticsModel::Reduced && m.parameter_shapes => timings
-                    .stage("parameter shapes", || {
-                        parameter_shapes(petsc, m, &ops, preload, lining.as_ref())
-                    })?,
-                _ => Vec::new(),
-            };
             Some(timings.stage("reduction", || {
                 reduce::reduce(petsc, settings, model, &ops, preload, modes, &shapes)
             })?)

@@ -360,7 +360,6 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     /// neighbour's state), else from the unloaded state: Err(reason) when neither converges.
     ///
     /// # Collective
-    #[allow(clippy::too_many_arguments)] // the point's laws, speed and load, a start, a factor
     fn solve_static(
         petsc: &'p Petsc,
         problem: StaticProblem<'_, 'p>,
