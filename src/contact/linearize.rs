@@ -361,6 +361,8 @@ impl<'p> ContactModel<'p> {
             }
         })?;
         failed?;
+        // Every later tangent adds within these blocks: keep this assembly's messages.
+        m.fix_off_rank_pattern()?;
         for rows in &self.rows {
             let zeros = vec![0.0; rows.dofs.len() * rows.dofs.len()];
             m.add_values(&rows.dofs, &rows.dofs, &zeros)?;

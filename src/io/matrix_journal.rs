@@ -227,6 +227,7 @@ mod tests {
                 values: vec![5.0, 0.6],
                 outcome: Outcome::Failed {
                     reason: "static state: did not converge".into(),
+                    seconds: 1.5,
                 },
             },
         ];

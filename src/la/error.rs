@@ -76,6 +76,18 @@ pub enum LaError {
         "the matrix of solver '{prefix}' is numerically singular (MUMPS INFOG(1) = -10 after {eliminated} eliminated pivots)"
     )]
     SingularMatrix { prefix: String, eliminated: i32 },
+    /// MUMPS' numerical phase outgrew its work space (INFOG(1) = -8 or -9) even with
+    /// ICNTL(14) raised to `percent`: pivots delayed by the threshold pivoting, which is what a
+    /// nearly singular matrix causes.
+    #[error(
+        "the matrix of solver '{prefix}' is nearly singular: MUMPS' numerical factorization outgrew its work space (INFOG(1) = {infog1}, INFOG(2) = {infog2}) even with {percent} % over the analysis' estimate (ICNTL(14)); its threshold pivoting delayed that many pivots. A larger -{prefix}mat_mumps_icntl_14 may still factor it"
+    )]
+    NearlySingular {
+        prefix: String,
+        infog1: i32,
+        infog2: i32,
+        percent: i32,
+    },
     /// An iterative solver stopped before converging.
     #[error("{solver} did not converge: {detail}")]
     NotConverged {

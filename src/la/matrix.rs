@@ -343,6 +343,9 @@ impl<'p> SparseMatrix<'p> {
     ///
     /// # Collective
     pub fn axpy_subset(&mut self, alpha: f64, x: &SparseMatrix) -> Result<()> {
+        if super::csr::add_nested(self, alpha, x, false)? {
+            return Ok(());
+        }
         call!(MatAXPY(self.raw, alpha, x.raw, ffi::SUBSET_NONZERO_PATTERN))
     }
 
@@ -351,7 +354,21 @@ impl<'p> SparseMatrix<'p> {
     ///
     /// # Collective
     pub fn copy_values_from(&mut self, source: &SparseMatrix) -> Result<()> {
+        if super::csr::add_nested(self, 1.0, source, true)? {
+            return Ok(());
+        }
         call!(MatCopy(source.raw, self.raw, ffi::SUBSET_NONZERO_PATTERN))
+    }
+
+    /// Declares that every later assembly sends a subset of the entries for other ranks' rows
+    /// that the next one sends (a tangent re-added on a fixed pattern): PETSc then keeps that
+    /// assembly's communication pattern instead of agreeing on a new one every time.
+    pub fn fix_off_rank_pattern(&self) -> Result<()> {
+        call!(MatSetOption(
+            self.raw,
+            ffi::MAT_SUBSET_OFF_PROC_ENTRIES,
+            ffi::PETSC_TRUE
+        ))
     }
 
     /// `self *= alpha`

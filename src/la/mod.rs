@@ -4,6 +4,7 @@
 //! PETSc objects are destroyed before PETSc finalizes, and PETSc finalizes before MPI — by
 //! construction, not by convention.
 
+mod csr;
 pub mod dense_quadratic;
 pub mod eigen;
 pub(crate) mod error;
@@ -170,6 +171,12 @@ impl<'u> Petsc<'u> {
             k.as_ptr(),
             v.as_ref().map_or(std::ptr::null(), |v| v.as_ptr())
         ))
+    }
+
+    /// Removes an option from the global database (one squeal set for a single solver).
+    pub fn clear_option(&self, key: &str) -> Result<()> {
+        let k = CString::new(key).map_err(|_| LaError::Invalid(format!("bad option {key:?}")))?;
+        call!(PetscOptionsClearValue(std::ptr::null_mut(), k.as_ptr()))
     }
 
     /// Ranks sharing this rank's node.

@@ -120,6 +120,16 @@ pub(crate) fn mumps_memory_error(factor: ffi::Mat, prefix: &str) -> Option<LaErr
             prefix: prefix.to_string(),
             eliminated: infog(2).unwrap_or(-1),
         }),
+        code @ (-8 | -9) => Some(LaError::NearlySingular {
+            prefix: prefix.to_string(),
+            infog1: code,
+            infog2: infog(2).unwrap_or(-1),
+            percent: {
+                let mut v = 0;
+                call!(MatMumpsGetIcntl(factor, 14, &mut v)).ok()?;
+                v
+            },
+        }),
         _ => None,
     }
 }
@@ -177,6 +187,32 @@ impl<'p> DirectSolver<'p> {
     ///
     /// # Collective
     pub fn factorize(
+        petsc: &'p Petsc,
+        a: &SparseMatrix,
+        kind: Factorization,
+        prefix: &str,
+    ) -> Result<Self> {
+        let key = format!("-{prefix}mat_mumps_icntl_14");
+        let mut result = Self::factorize_once(petsc, a, kind, prefix);
+        if petsc.user_gave(&key) {
+            return result;
+        }
+        // The numerical phase outgrew the work space the analysis estimated (delayed pivots:
+        // the 600k brake's superelement at 35-39 bar ran out at MUMPS' default of 20 %, also
+        // after a fresh analysis): again with 5x, then 20x the margin, for this solver only.
+        for percent in ["400", "2000"] {
+            if !matches!(result, Err(LaError::NearlySingular { .. })) {
+                break;
+            }
+            drop(result);
+            petsc.set_option(&key, Some(percent))?;
+            result = Self::factorize_once(petsc, a, kind, prefix);
+            petsc.clear_option(&key)?;
+        }
+        result
+    }
+
+    fn factorize_once(
         petsc: &'p Petsc,
         a: &SparseMatrix,
         kind: Factorization,

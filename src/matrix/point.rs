@@ -104,6 +104,9 @@ pub enum Outcome {
     /// Recorded, and the matrix goes on.
     Failed {
         reason: String,
+        /// What the attempt cost (0 in journals written before this was recorded).
+        #[serde(default)]
+        seconds: f64,
     },
 }
 

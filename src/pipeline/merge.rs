@@ -208,6 +208,7 @@ mod tests {
                     values: vec![0.3 + 0.01 * i as f64],
                     outcome: Outcome::Failed {
                         reason: "test".into(),
+                        seconds: 0.0,
                     },
                 })
                 .collect(),

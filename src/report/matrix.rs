@@ -142,6 +142,21 @@ impl MatrixReport {
                 solved.iter().filter(|s| s.cold_restart).count()
             );
         }
+        let failed: Vec<f64> = r
+            .points
+            .iter()
+            .filter_map(|p| match p.outcome {
+                Outcome::Failed { seconds, .. } => Some(seconds),
+                Outcome::Solved(_) => None,
+            })
+            .collect();
+        if !failed.is_empty() {
+            let _ = writeln!(
+                t,
+                "  per failed point: {:.3} s",
+                failed.iter().sum::<f64>() / failed.len() as f64
+            );
+        }
         if let Some(e) = crate::matrix::check::reduced_error(&r.points, r.margin) {
             let _ = writeln!(t, "  {}", reduced_error_text(&e));
         }
@@ -188,7 +203,7 @@ impl MatrixReport {
             let _ = writeln!(t, "  worst region (thirds of the most influential ranges): {}: {} of {} points squeal", cell.join(", "), w.squealing, w.points);
         }
         for p in &r.points {
-            if let Outcome::Failed { reason } = &p.outcome {
+            if let Outcome::Failed { reason, .. } = &p.outcome {
                 let _ = writeln!(
                     t,
                     "  failed: point {} ({}): {reason}",
@@ -464,7 +479,7 @@ fn write_csv(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
                     );
                 }
             }
-            Outcome::Failed { reason } => {
+            Outcome::Failed { reason, .. } => {
                 let _ = writeln!(
                     points,
                     "{},{values},failed,,,,,,\"{}\",,,",

@@ -200,9 +200,11 @@ pub enum StaticError {
     )]
     NotFinite { step: usize },
     #[error(
-        "static preload, load step {step} (pressure {pressure:.0} %, friction {friction:.0} %), Newton iteration {iteration} (residual {residual:.3e} N): the tangent stiffness is singular, so no equilibrium is near this state. Either a part held only by contact has lost it (check the clamps and the contact surfaces' fit), or friction has made the static state unstable at these conditions (a divergence: lower mu or the pressure)"
+        "static preload, load step {step} (pressure {pressure:.0} %, friction {friction:.0} %), Newton iteration {iteration} (residual {residual:.3e} N): the tangent stiffness is {how}, so no equilibrium is near this state. Either a part held only by contact has lost it (check the clamps and the contact surfaces' fit), or friction has made the static state unstable at these conditions (a divergence: lower mu or the pressure)"
     )]
     SingularTangent {
+        /// "singular" or "nearly singular" and MUMPS' evidence.
+        how: String,
         step: usize,
         pressure: f64,
         friction: f64,
@@ -411,14 +413,19 @@ pub fn solve_from<'p>(
             };
             let kind = match tangent.correct(k0, contact, &state, &residual, &mut dq, scale) {
                 Ok(kind) => kind,
-                Err(LaError::SingularMatrix { .. }) => {
+                Err(e @ (LaError::SingularMatrix { .. } | LaError::NearlySingular { .. })) => {
+                    let how = match e {
+                        LaError::NearlySingular { infog1, percent, .. } => format!("nearly singular (MUMPS' pivoting outgrew its work space, INFOG(1) = {infog1}, at {percent} % over its estimate)"),
+                        _ => "singular (MUMPS INFOG(1) = -10)".to_string(),
+                    };
                     return Err(StaticError::SingularTangent {
+                        how,
                         step,
                         pressure: 100.0 * phi,
                         friction: 100.0 * psi,
                         iteration,
                         residual: r,
-                    })
+                    });
                 }
                 Err(e) => return Err(e.into()),
             };

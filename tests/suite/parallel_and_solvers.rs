@@ -11,6 +11,9 @@
 //!   Newmark Jacobian of brake M0 with friction (unsymmetric) backward stably, like MUMPS;
 //!   MUMPS in single precision within the single-precision bound, refined in double
 //!   precision to the double bound in at most 3 steps.
+//! - values copied and added between matrices whose patterns nest (the static tangent's K0)
+//!   land exactly where they belong, across the ranks' column split, and a factorization
+//!   renewed afterwards factors the new values.
 
 use std::path::{Path, PathBuf};
 
@@ -53,6 +56,10 @@ pub fn tests() -> Vec<super::NamedTest> {
         (
             "brake_m0_newmark_jacobian_single_precision_mumps",
             brake_m0_newmark_jacobian_single_precision_mumps,
+        ),
+        (
+            "nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_them",
+            nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_them,
         ),
     ]
 }
@@ -532,4 +539,113 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
         ));
     }
     Ok(())
+}
+
+/// A banded n x n matrix (|i - j| <= band) of this rank's rows `local`, entries `value(i, j)`.
+fn banded<'p>(
+    petsc: &'p Petsc,
+    n: usize,
+    local: std::ops::Range<usize>,
+    band: usize,
+    value: impl Fn(usize, usize) -> f64,
+) -> Result<SparseMatrix<'p>, String> {
+    let columns = |i: usize| i.saturating_sub(band)..(i + band + 1).min(n);
+    let p = Preallocation {
+        diag: local
+            .clone()
+            .map(|i| columns(i).filter(|j| local.contains(j)).count() as i32)
+            .collect(),
+        off: local
+            .clone()
+            .map(|i| columns(i).filter(|j| !local.contains(j)).count() as i32)
+            .collect(),
+        diag_upper: vec![0; local.len()],
+        off_upper: vec![0; local.len()],
+    };
+    let e = |e: squeal::la::LaError| e.to_string();
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p).map_err(e)?;
+    for i in local {
+        for j in columns(i) {
+            a.add_values(&[i as i32], &[j as i32], &[value(i, j)])
+                .map_err(e)?;
+        }
+    }
+    a.assemble().map_err(e)?;
+    Ok(a)
+}
+
+/// The largest |a_ij - expected(i, j)| over this rank's rows, every stored entry (NaN counts).
+fn entry_error(a: &SparseMatrix, expected: impl Fn(usize, usize) -> f64) -> Result<f64, String> {
+    let mut worst = 0.0f64;
+    a.for_each_local_row(|i, cols, vals| {
+        for (&j, &v) in cols.iter().zip(vals) {
+            worst = nan_max(worst, (v - expected(i, j as usize)).abs());
+        }
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(worst)
+}
+
+/// `copy_values_from` and `axpy_subset` move a tridiagonal matrix's values into a
+/// pentadiagonal one's pattern by PETSc's CSR arrays (src/la/csr.rs): the entries must be
+/// exactly B's (zero outside its band) and A - B/2 exactly; the rows near the ranks' split
+/// hold off-rank columns (PETSc's off-diagonal block and its column map). A MUMPS factor of A
+/// renewed after a copy must factor the new values (the copy advances A's state: a factor
+/// that skipped it would solve with the old B): x = 1 from b = B' 1 to 1e-12 (B' diagonally
+/// dominant, condition number < 3). A tridiagonal destination is not a superset of a
+/// pentadiagonal source: every rank gets an error, none hangs.
+fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_them(
+    petsc: &Petsc,
+) -> Result<(), String> {
+    let n = 40;
+    let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let local = rank * n / size..(rank + 1) * n / size;
+    let e = |e: squeal::la::LaError| e.to_string();
+    let b_value = |i: usize, j: usize| {
+        if i == j {
+            10.0 + i as f64
+        } else {
+            -1.0 - 0.01 * (i + j) as f64
+        }
+    };
+    let in_band = |i: usize, j: usize| i.abs_diff(j) <= 1;
+    let b = banded(petsc, n, local.clone(), 1, b_value)?;
+    let mut a = banded(petsc, n, local.clone(), 2, |i, j| {
+        1000.0 + i as f64 + 0.1 * j as f64
+    })?;
+    a.copy_values_from(&b).map_err(e)?;
+    let b_in_a = |i: usize, j: usize| if in_band(i, j) { b_value(i, j) } else { 0.0 };
+    let copied = entry_error(&a, b_in_a)?;
+    // A factor of A = B now, then A := B + 5 I through a second copy, renewed.
+    let mut solver = DirectSolver::factorize(petsc, &a, Factorization::Lu, "nested_").map_err(e)?;
+    let shifted = |i: usize, j: usize| b_value(i, j) + if i == j { 5.0 } else { 0.0 };
+    let b2 = banded(petsc, n, local.clone(), 1, shifted)?;
+    a.copy_values_from(&b2).map_err(e)?;
+    solver.refactorize(&a).map_err(e)?;
+    let mut ones = a.new_vector().map_err(e)?;
+    ones.set_all(1.0).map_err(e)?;
+    let mut rhs = ones.duplicate().map_err(e)?;
+    b2.mult(&ones, &mut rhs).map_err(e)?;
+    let mut x = ones.duplicate().map_err(e)?;
+    solver.solve(&rhs, &mut x).map_err(e)?;
+    x.axpy(-1.0, &ones).map_err(e)?;
+    let solve_error = x.norm_inf().map_err(e)?;
+    a.axpy_subset(-0.5, &b2).map_err(e)?;
+    let halved = entry_error(&a, |i, j| {
+        0.5 * if in_band(i, j) { shifted(i, j) } else { 0.0 }
+    })?;
+    let mut narrow = banded(petsc, n, local.clone(), 1, |_, _| 1.0)?;
+    let wide = banded(petsc, n, local, 2, |_, _| 2.0)?;
+    let refused = narrow.copy_values_from(&wide).is_err();
+    say(
+        petsc,
+        &format!("copy {copied:.1e}, axpy {halved:.1e}, solve after the renewed factor {solve_error:.1e}, wider source refused: {refused}"),
+    );
+    check_le("copied entries", copied, 0.0)?;
+    check_le("entries after axpy", halved, 0.0)?;
+    check_le("solution error with the renewed factor", solve_error, 1e-12)?;
+    match refused {
+        true => Ok(()),
+        false => Err("a wider pattern was copied into a narrower one without an error".into()),
+    }
 }
