@@ -250,6 +250,12 @@ impl Scene {
             if m.statics == crate::matrix::StaticsModel::Reduced {
                 tables.push(text(toml::to_string(&self.reduction)));
             }
+            // The saturated modes' studies and levels follow these tables.
+            if m.saturation_modes > 0 {
+                let post = self.post.as_ref();
+                tables.push(text(toml::to_string(&post.map(|p| &p.pseudo_trajectory))));
+                tables.push(text(toml::to_string(&post.map(|p| &p.loudness))));
+            }
         }
         format!(
             "{:016x}",

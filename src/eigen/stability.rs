@@ -186,7 +186,7 @@ const DAMPING: [Part; 1] = [Part::Damping];
 /// computed once; the laws of the contact model may change between states (a sweep).
 pub struct ProjectedStability {
     pub projection: ModalProjection,
-    damping: DampingSettings,
+    pub damping: DampingSettings,
 }
 
 impl ProjectedStability {

@@ -217,6 +217,7 @@ mod tests {
                     seconds_statics: 0.25,
                     seconds_factorizing: 0.125,
                     full_check: None,
+                    saturation: Vec::new(),
                     factor_solves: 0,
                     seconds_solving: 0.0,
                     seconds_modes: 0.01,

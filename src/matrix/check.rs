@@ -128,6 +128,7 @@ mod tests {
                 seconds_factorizing: 0.0,
                 seconds_modes: 0.0,
                 full_check: check,
+                saturation: Vec::new(),
                 factor_solves: 0,
                 seconds_solving: 0.0,
             }),

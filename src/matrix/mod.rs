@@ -9,6 +9,7 @@ pub mod analysis;
 pub mod check;
 pub mod point;
 pub mod sample;
+pub mod saturation;
 
 use std::collections::BTreeMap;
 
@@ -271,6 +272,16 @@ pub struct MatrixSettings {
     /// column scales. Default: inner_lining and outer_lining (the brake model's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lining_blocks: Option<Vec<String>>,
+    /// The most unstable modes (largest Re(s)) of each squealing point followed along a
+    /// pseudo trajectory ([post.pseudo_trajectory]'s settings, else its defaults) to their
+    /// saturation amplitude alpha_sat, and with [post.loudness] their A-weighted sound power
+    /// level at alpha_sat. 0 (default): none. Each mode costs a sweep of linearizations.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub saturation_modes: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// The brake model's lining blocks.

@@ -66,6 +66,29 @@ pub struct SolvedPoint {
     /// With the reduced statics at a checked point: the same point on the full model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub full_check: Option<FullCheck>,
+    /// With `matrix.saturation_modes`: the pseudo-trajectory study of the most unstable
+    /// modes, the largest Re(s) first.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub saturation: Vec<ModeSaturation>,
+}
+
+/// An unstable mode of a point followed along its pseudo trajectory.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeSaturation {
+    /// The nominal mode it continues (as its [`PointMode`]), its frequency (Hz) and Re(s).
+    pub label: Option<usize>,
+    pub frequency_hz: f64,
+    pub re: f64,
+    /// Contact amplitudes (m) where the mean damping over a period turns negative and back
+    /// positive (None: outside the swept range).
+    pub alpha_crit: Option<f64>,
+    pub alpha_sat: Option<f64>,
+    /// A-weighted sound power level (dB re 1 pW) at alpha_sat, with [post.loudness].
+    pub level_db_a: Option<f64>,
+    pub seconds: f64,
+    /// Why the study failed (then the amplitudes and the level are None).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
 }
 
 /// A point of a reduced-statics matrix solved again on the full model: the reduced route's

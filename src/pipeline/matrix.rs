@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::io::matrix_journal::{self, Journal, JournalHeader, JournalWriter, FORMAT, JOURNAL};
 use crate::la::Petsc;
 use crate::matrix::point::PointResult;
+use crate::matrix::saturation::SaturationInputs;
 use crate::matrix::MatrixSettings;
 use crate::report::matrix::MatrixReport;
 use crate::scene::Scene;
@@ -42,6 +43,26 @@ pub(super) fn noise_matrix<'p>(
         return Err(RunError::scene("matrix.axes", message));
     }
     let complex = scene.complex_modes.clone().unwrap_or_default();
+    let post = scene.post.as_ref();
+    let air = post.and_then(|p| p.loudness.as_ref());
+    // The radiating surfaces, when the points' saturated modes get their levels.
+    let radiator = match (settings.saturation_modes, air, &a.model, &a.ops.dofs) {
+        (0, _, _, _) | (_, None, _, _) => None,
+        (_, Some(air), Some(model), Some(dofs)) => Some(timings.stage("radiator", || {
+            crate::stages::loudness::radiator(petsc, &model.mesh, dofs, air)
+        })?),
+        _ => {
+            let message = "saturation_modes with [post.loudness] needs a mesh model";
+            return Err(RunError::scene("matrix.saturation_modes", message));
+        }
+    };
+    let saturation = (settings.saturation_modes > 0).then(|| SaturationInputs {
+        modes: settings.saturation_modes,
+        trajectory: post
+            .and_then(|p| p.pseudo_trajectory.clone())
+            .unwrap_or_default(),
+        loudness: radiator.as_ref().zip(air),
+    });
     let input = MatrixInputs {
         k0: &a.ops.k0,
         modes,
@@ -52,6 +73,7 @@ pub(super) fn noise_matrix<'p>(
         damping: scene.damping.unwrap_or_default(),
         reduced: a.reduced.as_ref(),
         lining: a.lining.as_ref(),
+        saturation,
     };
     let nominal = crate::stages::matrix::nominal_values(&settings.axis_list(), &input);
     let header = JournalHeader {

@@ -31,6 +31,9 @@ pub struct ContactPseudoSystem<'a, 'p> {
     pub contact: &'a ContactModel<'p>,
     pub nominal: &'a ContactState,
     pub stability: &'a ProjectedStability,
+    /// Added to the projected stiffness (with its Rayleigh part to the damping): a change of
+    /// K0 on the basis, e.g. a noise-matrix point's lining stiffness. Empty: none.
+    extra_stiffness: Vec<f64>,
     cache: RefCell<Option<Observation>>,
 }
 
@@ -46,8 +49,16 @@ impl<'a, 'p> ContactPseudoSystem<'a, 'p> {
             contact,
             nominal,
             stability,
+            extra_stiffness: Vec::new(),
             cache: RefCell::new(None),
         }
+    }
+
+    /// The same system with `extra` (m x m, column-major) added to the projected elastic
+    /// stiffness, as [`ProjectedStability::modes_with_stiffness`] adds it.
+    pub fn with_extra_stiffness(mut self, extra: Vec<f64>) -> Self {
+        self.extra_stiffness = extra;
+        self
     }
 
     /// |(gap, slip 1, slip 2)| at each local point of the observed shape.
@@ -139,7 +150,14 @@ impl PseudoSystem for ContactPseudoSystem<'_, '_> {
             let v = -omega * alpha * (ch[1][k].0 * s + ch[1][k].1 * c);
             (d, v)
         });
-        let (kp, cp) = self.stability.operators_at(self.comm, self.contact, &state);
+        let (mut kp, mut cp) = self.stability.operators_at(self.comm, self.contact, &state);
+        if !self.extra_stiffness.is_empty() {
+            let beta = self.stability.damping.rayleigh_beta;
+            for ((k, c), e) in kp.iter_mut().zip(cp.iter_mut()).zip(&self.extra_stiffness) {
+                *k += e;
+                *c += beta * e;
+            }
+        }
         // Statuses over the sliding interfaces (the pads), and the sample point's.
         let mut counts = [0.0; 4];
         for (k, r) in state.response.iter().enumerate() {

@@ -160,6 +160,9 @@ impl MatrixReport {
         if let Some(e) = crate::matrix::check::reduced_error(&r.points, r.margin) {
             let _ = writeln!(t, "  {}", reduced_error_text(&e));
         }
+        if let Some(line) = super::matrix_saturation::text(r) {
+            let _ = writeln!(t, "  {line}");
+        }
         let mut bands = a.bands.clone();
         bands.sort_by_key(|b| std::cmp::Reverse(b.points));
         let list: Vec<String> = bands
@@ -347,6 +350,7 @@ pub fn write_matrix(
     )?;
     file.write_table(&format!("{m}/mac"), &mode_column(&|_, m| m.mac), "1")?;
     write_full_checks(file, run)?;
+    super::matrix_saturation::write_h5(file, run)?;
     if rank == 0 {
         write_files(r, output)?;
     }
@@ -415,6 +419,10 @@ fn write_full_checks(file: &ResultsFile, run: &MatrixOutput) -> Result<(), Write
 /// The CSVs and figures (no MPI: `squeal merge` calls it too).
 pub fn write_files(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
     write_csv(r, output)?;
+    if let Some(text) = super::matrix_saturation::csv(&r.run) {
+        write_text(&output.join("matrix-saturation.csv"), &text)?;
+    }
+    super::matrix_saturation::plot_levels(&r.run, output)?;
     plot_bands(r, output)?;
     for d in 0..r.run.axes.len() {
         plot_propensity(r, d, output)?;
@@ -591,12 +599,19 @@ pub fn html_section(r: &MatrixReport, output: &Path) -> std::io::Result<String> 
     let caption =
         "Noise-dynamometer chart: operating points with an unstable mode, per 1/3-octave band.";
     let mut body = figure(output, "matrix_bands.png", caption)?;
+    if output.join("matrix_levels.png").exists() {
+        let caption = "Squealing points per class of their loudest predicted sound power level: each point's most unstable modes followed along their pseudo trajectories to alpha_sat (matrix.saturation_modes).";
+        body += &figure(output, "matrix_levels.png", caption)?;
+    }
     for a in &r.run.axes {
         let caption = format!("Squeal propensity against {}: frequencies of the unstable modes (coloured by Re(s)) over the points; stable modes grey when there are at most 20,000.", a.label());
         body += &figure(output, &format!("matrix_{}.png", a.name()), &caption)?;
     }
     body += &format!("<pre>{}</pre>", escape(&r.text()));
     body += "<p>Every point: <code>matrix.csv</code>; every point's modes: <code>matrix-modes.csv</code>; both in <code>/matrix</code> of results.h5.</p>";
+    if output.join("matrix-saturation.csv").exists() {
+        body += "<p>The followed modes' alpha_crit, alpha_sat and levels: <code>matrix-saturation.csv</code>, <code>/matrix/saturation</code>.</p>";
+    }
     Ok(body)
 }
 

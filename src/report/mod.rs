@@ -9,6 +9,7 @@ pub mod html;
 pub mod link;
 pub mod loudness;
 pub mod matrix;
+pub mod matrix_saturation;
 pub mod modes;
 pub mod post;
 pub mod pseudo;

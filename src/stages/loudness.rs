@@ -282,8 +282,9 @@ pub fn loudness<'p>(
         let t = &study.trajectory;
         let shape = (&t.name[..], t.nominal, &t.psi[..]);
         let sat = t.alpha_sat.alpha();
+        let shapes = &nominal.modes.shapes;
         modes.push(mode_loudness(
-            petsc, radiator, settings, nominal, shape, sat,
+            petsc, radiator, settings, shapes, shape, sat,
         )?);
     }
     for mode in unstable {
@@ -291,8 +292,9 @@ pub fn loudness<'p>(
             continue;
         }
         let shape = (&mode.name[..], mode.nominal, &mode.psi[..]);
+        let shapes = &nominal.modes.shapes;
         modes.push(mode_loudness(
-            petsc, radiator, settings, nominal, shape, None,
+            petsc, radiator, settings, shapes, shape, None,
         )?);
     }
     // The levels at alpha_sat first, then those per unit amplitude: loudest first in each.
@@ -321,17 +323,17 @@ pub fn loudness<'p>(
 /// amplitude 1).
 ///
 /// # Collective
-fn mode_loudness<'p>(
+pub fn mode_loudness<'p>(
     petsc: &'p Petsc,
     radiator: &Radiator<'p>,
     settings: &LoudnessSettings,
-    nominal: Nominal<'_, 'p>,
+    shapes: &[Vector<'p>],
     (name, eigenvalue, psi): (&str, Complex, &[Complex]),
     alpha_sat: Option<f64>,
 ) -> Result<ModeLoudness, RunError> {
     // psi has contact amplitude 1 (m per m): at amplitude alpha the velocity is
     // i omega alpha psi; its normal component at the points, per unit alpha.
-    let (xr, xi) = expand(&nominal.modes.shapes, psi)?;
+    let (xr, xi) = expand(shapes, psi)?;
     let (nr, ni) = (
         radiator.normal_velocity(&xr)?,
         radiator.normal_velocity(&xi)?,

@@ -23,7 +23,9 @@ use crate::eigen::tracking::pair_modes;
 use crate::la::{Petsc, SparseMatrix, Vector};
 use crate::matrix::point::{FullCheck, Outcome, PointMode, PointResult, SolvedPoint};
 use crate::matrix::sample::{points, warm_order, Slice};
+use crate::matrix::saturation::{study, SaturationInputs};
 use crate::matrix::{Axis, MatrixSettings, Sampling, StaticsModel};
+use crate::post::pseudo_contact::ContactPseudoSystem;
 use crate::statics::{Factored, Start, StaticError, StaticSettings, StaticState};
 
 /// What the matrix needs from the earlier stages.
@@ -40,6 +42,8 @@ pub struct MatrixInputs<'a, 'p> {
     pub reduced: Option<&'a Reduced<'p>>,
     /// The lining blocks' part of K0, when a point scales the lining's stiffness.
     pub lining: Option<&'a SparseMatrix<'p>>,
+    /// With `matrix.saturation_modes`: the pseudo trajectories' settings and the radiator.
+    pub saturation: Option<SaturationInputs<'a, 'p>>,
 }
 
 /// Which points this run computes: a slice, less those a journal already holds.
@@ -231,6 +235,13 @@ pub fn matrix<'p>(
         nominal,
         margin: solver.input.complex.instability_margin,
     })
+}
+
+/// A point's complex modes: those reported (below f_max, by frequency) with their index among
+/// all the eigenpairs, which keep their coordinates on the basis.
+struct PointModes {
+    modes: Vec<(usize, PointMode)>,
+    pairs: Vec<DenseEigenpair>,
 }
 
 /// The fixed parts of every point: the projection basis and the nominal modes that label.
@@ -458,6 +469,23 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             Err(reason) => return Ok((failed(reason), Some(point.state.displacement))),
         };
         let seconds_modes = t.elapsed().as_secs_f64();
+        let saturation = match &self.input.saturation {
+            Some(inputs) => {
+                let system = ContactPseudoSystem::new(
+                    petsc.world(),
+                    &point.contact,
+                    &point.state.contact,
+                    &self.stability,
+                )
+                .with_extra_stiffness(self.lining_extra(lining));
+                let shapes = &self.input.modes.shapes;
+                let margin = self.input.complex.instability_margin;
+                let found = (&modes.pairs[..], &modes.modes[..]);
+                study(petsc, inputs, &system, shapes, found, margin)?
+            }
+            None => Vec::new(),
+        };
+        let modes: Vec<PointMode> = modes.modes.into_iter().map(|(_, m)| m).collect();
         let full_check = match reduced && self.checks.contains(&index) {
             true => Some(self.full_check(petsc, &conditions, &point.state.displacement)?),
             false => None,
@@ -476,6 +504,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             seconds_solving: state.seconds_solving,
             seconds_modes,
             full_check,
+            saturation,
         };
         let result = PointResult {
             index,
@@ -494,27 +523,35 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         contact: &ContactModel<'p>,
         state: &ContactState,
         lining: f64,
-    ) -> Result<Vec<PointMode>, String> {
+    ) -> Result<PointModes, String> {
         // The superelement's contact model has the full one's points, in the same order on
         // the same ranks: its state projects on the same observed modes.
         let comm = petsc.world();
-        let pairs = match &self.lining {
-            Some(l) => {
-                let extra: Vec<f64> = l.projected.iter().map(|k| (lining - 1.0) * k).collect();
+        let mut pairs = match &self.lining {
+            Some(_) => {
+                let extra = self.lining_extra(lining);
                 self.stability
                     .modes_with_stiffness(comm, contact, state, &extra)
             }
             None => self.stability.modes_at(comm, contact, state),
         }
         .map_err(|e| format!("complex modes: {e}"))?;
-        let modes = self.labelled(pairs);
+        let modes = self.labelled(&mut pairs);
         if modes
             .iter()
-            .any(|m| !(m.re.is_finite() && m.im.is_finite()))
+            .any(|(_, m)| !(m.re.is_finite() && m.im.is_finite()))
         {
             return Err("complex modes: an eigenvalue is not finite (NaN or Inf)".to_string());
         }
-        Ok(modes)
+        Ok(PointModes { modes, pairs })
+    }
+
+    /// (e - 1) Phi^T K_l Phi: the lining factor e's change of the projected stiffness (empty
+    /// without a lining axis).
+    fn lining_extra(&self, lining: f64) -> Vec<f64> {
+        self.lining.as_ref().map_or(Vec::new(), |l| {
+            l.projected.iter().map(|k| (lining - 1.0) * k).collect()
+        })
     }
 
     /// The point solved again on the full model, from the superelement's static displacement
@@ -559,7 +596,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             &point.state.contact,
             conditions.lining,
         ) {
-            Ok(m) => m,
+            Ok(m) => m.modes.into_iter().map(|(_, m)| m).collect(),
             Err(reason) => return Ok(failed(reason)),
         };
         let q = &point.state.displacement;
@@ -578,10 +615,11 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     }
 
     /// The modes below f_max by frequency, each labelled by the nominal mode it continues.
-    fn labelled(&self, mut pairs: Vec<DenseEigenpair>) -> Vec<PointMode> {
+    /// `pairs` are sorted by frequency; each mode comes with its index among them.
+    fn labelled(&self, pairs: &mut [DenseEigenpair]) -> Vec<(usize, PointMode)> {
         pairs.sort_by(|a, b| a.0 .1.total_cmp(&b.0 .1).then(a.0 .0.total_cmp(&b.0 .0)));
         let mut label = vec![None; pairs.len()];
-        for (n, paired) in pair_modes(&self.nominal, &pairs).into_iter().enumerate() {
+        for (n, paired) in pair_modes(&self.nominal, pairs).into_iter().enumerate() {
             if let Some((j, mac)) = paired {
                 label[j] = Some((n + 1, mac));
             }
@@ -590,12 +628,16 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         pairs
             .iter()
             .zip(label)
-            .filter(|(p, _)| f_max.is_none_or(|f| frequency_hz(p.0) <= f))
-            .map(|(p, l)| PointMode {
-                label: l.map(|l| l.0),
-                re: p.0 .0,
-                im: p.0 .1,
-                mac: l.map_or(0.0, |l| l.1),
+            .enumerate()
+            .filter(|(_, (p, _))| f_max.is_none_or(|f| frequency_hz(p.0) <= f))
+            .map(|(j, (p, l))| {
+                let mode = PointMode {
+                    label: l.map(|l| l.0),
+                    re: p.0 .0,
+                    im: p.0 .1,
+                    mac: l.map_or(0.0, |l| l.1),
+                };
+                (j, mode)
             })
             .collect()
     }

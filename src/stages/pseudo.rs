@@ -61,7 +61,11 @@ pub const CYCLES: f64 = 3.0;
 
 /// The modes unstable beyond `margin` (damping ratio < -margin) in the order of the pairs,
 /// or only the `limit` with the largest Re(s) (in that order).
-fn most_unstable(pairs: &[DenseEigenpair], margin: f64, limit: Option<usize>) -> Vec<usize> {
+pub(crate) fn most_unstable(
+    pairs: &[DenseEigenpair],
+    margin: f64,
+    limit: Option<usize>,
+) -> Vec<usize> {
     let mut unstable: Vec<usize> = (0..pairs.len())
         .filter(|&k| damping_ratio(pairs[k].0) < -margin)
         .collect();

@@ -138,6 +138,10 @@ const LONG_TESTS: &[(&str, u64)] = &[
         110,
     ), // 22 s (beside another 2-rank job)
     (
+        "noise_matrix_saturation_at_the_nominal_point_is_the_pseudo_trajectory_and_loudness_stages",
+        100,
+    ), // 20 s
+    (
         "brake_transient_impulse_start_moves_along_the_impulse_and_scales_with_it",
         90,
     ), // 16 s

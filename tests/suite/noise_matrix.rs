@@ -27,6 +27,13 @@
 //!   the error is second order in the parameter's distance from the nominal value: halving
 //!   the distance must divide it by at least 2^1.5 (rate >= 1.5; measured 1.9 in pressure, 2.2
 //!   in lining stiffness on this brake), for pressure and lining stiffness alike.
+//! - Saturated modes (`saturation_modes = 1`): at the scene's own parameters the point's most
+//!   unstable mode, followed along its pseudo trajectory, is the one the pseudo-trajectory
+//!   stage follows at the nominal state (same label), with the same alpha_sat and alpha_crit
+//!   within the bisections' tolerance (1 % by default: both bisect the same bracket on states
+//!   equal to the static tolerance) and the loudness stage's level at alpha_sat within
+//!   20 log10(1.01) = 0.09 dB of it (asserted 0.1 dB). Route against route, not against a
+//!   reference: the pseudo trajectory itself is verified on the 2-DOF model elsewhere.
 
 use std::path::{Path, PathBuf};
 
@@ -52,6 +59,10 @@ pub fn tests() -> Vec<super::NamedTest> {
         (
             "noise_matrix_lining_modulus_is_the_scaled_material_and_superelement_statics_converge_quadratically",
             lining_and_superelement,
+        ),
+        (
+            "noise_matrix_saturation_at_the_nominal_point_is_the_pseudo_trajectory_and_loudness_stages",
+            saturation_at_the_nominal_point,
         ),
     ]
 }
@@ -444,4 +455,100 @@ fn lining_and_superelement(petsc: &Petsc) -> Result<(), String> {
         return Err(format!("the superelement's static error converges at rate {rate_p} in pressure and {rate_l} in lining stiffness, below 1.5 (second order expected)"));
     }
     agrees_with_one_rank(petsc, "noise-matrix-lining", &pts)
+}
+
+fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
+    // The pseudo-trajectory suite's brake (40 modes: C35, the most unstable, saturates in the
+    // coarse sweep).
+    let post = "[post.pseudo_trajectory]\nmost_unstable = 1\nalphas = 9\nphases = 16\n\
+                [post.loudness]\n";
+    let matrix = "[matrix]\nsampling = \"grid\"\nsaturation_modes = 1\n[matrix.axes]\n\
+                  mu = { values = [0.4, 0.42] }\n";
+    fresh(petsc, "matrix-saturation");
+    let text = brake(20.0, 0.4).replace("count = 30", "count = 40") + post + matrix;
+    let summary = run(petsc, &text, "matrix-saturation", &RunOptions::default())?;
+    let pts = points(&summary)?;
+    let at = pts[0].solved().ok_or("the nominal point failed")?;
+    let sat = at
+        .saturation
+        .first()
+        .ok_or("no saturated mode at the nominal point")?;
+    if let Some(f) = &sat.failure {
+        return Err(format!("the nominal point's study failed: {f}"));
+    }
+    let study = summary
+        .pseudo
+        .as_ref()
+        .and_then(|p| p.studies.first())
+        .ok_or("no pseudo-trajectory study")?;
+    let t = &study.trajectory;
+    let label = sat.label.map(|l| format!("C{l}"));
+    if label.as_deref() != Some(t.name.as_str()) {
+        return Err(format!(
+            "the point followed {label:?}, the stage {}",
+            t.name
+        ));
+    }
+    let (a, b) = (sat.alpha_sat, t.alpha_sat.alpha());
+    let (Some(a), Some(b)) = (a, b) else {
+        return Err(format!("alpha_sat: point {a:?}, stage {b:?}"));
+    };
+    let crit = match (sat.alpha_crit, t.alpha_crit.alpha()) {
+        (Some(x), Some(y)) => rel(x, y),
+        (None, None) => 0.0,
+        (x, y) => return Err(format!("alpha_crit: point {x:?}, stage {y:?}")),
+    };
+    let loud = summary.loudness.as_ref().ok_or("no loudness report")?;
+    let stage_level = loud
+        .modes
+        .iter()
+        .find(|m| m.name == t.name)
+        .map(|m| m.level_a())
+        .ok_or(format!("the loudness stage has no level of {}", t.name))?;
+    let level = sat.level_db_a.ok_or("no level at the nominal point")?;
+    let (d_sat, d_level) = (rel(a, b), (level - stage_level).abs());
+    say(petsc, &format!("{}: alpha_sat {a:.4e} m (stage {b:.4e}, {d_sat:.1e}), alpha_crit {crit:.1e} apart, level {level:.2} dB(A) (stage {stage_level:.2}); the other point: {:?}", t.name, pts[1].solved().and_then(|s| s.saturation.first()).map(|m| (m.label, m.alpha_sat, m.level_db_a))));
+    if exceeds(d_sat, 0.01) || exceeds(crit, 0.01) || exceeds(d_level, 0.1) {
+        return Err(format!("alpha_sat {d_sat:e} and alpha_crit {crit:e} apart (bound 1 %), level {d_level:e} dB (bound 0.1 dB)"));
+    }
+    let mine: Vec<f64> = pts
+        .iter()
+        .flat_map(|p| p.solved().into_iter().flat_map(|s| s.saturation.iter()))
+        .flat_map(|m| {
+            [
+                m.alpha_sat.unwrap_or(f64::NAN),
+                m.level_db_a.unwrap_or(f64::NAN),
+            ]
+        })
+        .collect();
+    let Some(one) = one_rank_values(petsc, "noise-matrix-saturation", &mine)? else {
+        return Ok(());
+    };
+    let mut d = 0.0f64;
+    for (k, (x, y)) in mine.iter().zip(&one).enumerate() {
+        d = nan_max(
+            d,
+            if k % 2 == 0 {
+                rel(*x, *y) / 0.01
+            } else {
+                (x - y).abs() / 0.1
+            },
+        );
+    }
+    say(
+        petsc,
+        &format!(
+            "1 vs {} ranks: {d:.2} of the bounds (1 %, 0.1 dB)",
+            petsc.size()
+        ),
+    );
+    match mine.len() == one.len() && !exceeds(d, 1.0) {
+        true => Ok(()),
+        false => Err(format!(
+            "1 vs {} ranks: {d} of the bounds, {} vs {} values",
+            petsc.size(),
+            mine.len(),
+            one.len()
+        )),
+    }
 }
