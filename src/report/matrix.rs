@@ -83,6 +83,18 @@ impl MatrixReport {
                 axis.name()
             );
         }
+        if let Some((level, p, m)) = super::matrix_saturation::loudest(&self.run) {
+            let name = m
+                .label
+                .map_or("an unpaired mode".to_string(), |l| format!("C{l}"));
+            let _ = write!(
+                line,
+                "; loudest predicted {level:.1} dB(A) at point {} ({name} at {:.0} Hz, alpha_sat {:.2e} m)",
+                p.index + 1,
+                m.frequency_hz,
+                m.alpha_sat.unwrap_or(f64::NAN)
+            );
+        }
         if a.failed > 0 {
             let _ = write!(line, "; {} points failed", a.failed);
         }

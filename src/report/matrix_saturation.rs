@@ -86,6 +86,14 @@ pub fn csv(run: &MatrixOutput) -> Option<String> {
     Some(out)
 }
 
+/// The loudest predicted level over the points: (dB(A), point, mode).
+pub fn loudest(run: &MatrixOutput) -> Option<(f64, &PointResult, &ModeSaturation)> {
+    studies(run)
+        .into_iter()
+        .filter_map(|(p, m)| m.level_db_a.map(|l| (l, p, m)))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+}
+
 /// The summary's line: how many were followed, where they saturate, the loudest point.
 pub fn text(run: &MatrixOutput) -> Option<String> {
     let rows = studies(run);
@@ -110,11 +118,7 @@ pub fn text(run: &MatrixOutput) -> Option<String> {
         sorted.sort_by(f64::total_cmp);
         let _ = write!(t, " (median {:.3e} m)", sorted[sorted.len() / 2]);
     }
-    let loudest = rows
-        .iter()
-        .filter_map(|&(p, m)| m.level_db_a.map(|l| (l, p, m)))
-        .max_by(|a, b| a.0.total_cmp(&b.0));
-    if let Some((level, p, m)) = loudest {
+    if let Some((level, p, m)) = loudest(run) {
         let name = m
             .label
             .map_or("an unpaired mode".to_string(), |l| format!("C{l}"));

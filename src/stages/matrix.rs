@@ -300,6 +300,9 @@ struct StaticProblem<'a, 'p> {
     load: &'a Vector<'p>,
 }
 
+/// Halved load increments a point's static solve from the unloaded state may take.
+const COLD_CUTS: usize = 4;
+
 /// A point's static state on one model, with the contact model at the point's laws.
 struct PointStatics<'p> {
     contact: ContactModel<'p>,
@@ -387,11 +390,14 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         f.scale(conditions.scale)?;
         let t = Instant::now();
         // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
-        // (numerical phase only) when it stops contracting. From the unloaded state afresh.
-        let mut solve = |displacement| {
+        // (numerical phase only) when it stops contracting. From the unloaded state afresh,
+        // with at most COLD_CUTS halved load increments: the 600k brake's superelement took
+        // 10+ minutes for one point at 38 bar, creeping up the friction ramp by halvings.
+        let mut solve = |displacement: Option<&Vector<'p>>| {
             let start = Start {
                 displacement,
                 factor: &mut *factor,
+                cut_budget: displacement.is_none().then_some(COLD_CUTS),
             };
             crate::statics::solve_from(petsc, problem.k0, &contact, &f, statics, start, |_| {})
         };

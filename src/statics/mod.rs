@@ -278,6 +278,7 @@ pub fn solve<'p>(
     let start = Start {
         displacement: start_from,
         factor: &mut None,
+        cut_budget: None,
     };
     solve_from(petsc, k0, contact, f_ext, settings, start, progress)
 }
@@ -290,6 +291,8 @@ pub fn solve<'p>(
 pub struct Start<'a, 'p> {
     pub displacement: Option<&'a Vector<'p>>,
     pub factor: &'a mut Option<Factored<'p>>,
+    /// How many load increments may be halved in all (None: the preload's 24).
+    pub cut_budget: Option<usize>,
 }
 
 /// A tangent matrix (K0's pattern joined with the contacts) and its LU factor.
@@ -318,6 +321,7 @@ pub fn solve_from<'p>(
     mut progress: impl FnMut(&NewtonRecord),
 ) -> Result<StaticState<'p>, StaticError> {
     let (start_from, factor) = (start_at.displacement, start_at.factor);
+    let cut_budget = start_at.cut_budget.unwrap_or(4 * MAX_CUTS);
     let start = Instant::now();
     let friction = contact
         .interfaces()
@@ -466,7 +470,7 @@ pub fn solve_from<'p>(
             Err((iterations, r, target)) => {
                 // A warm start has no smaller load step to fall back to: the caller decides
                 // (a sweep restarts cold).
-                if cuts >= MAX_CUTS || cut_steps >= 4 * MAX_CUTS || start_from.is_some() {
+                if cuts >= MAX_CUTS || cut_steps >= cut_budget || start_from.is_some() {
                     return Err(StaticError::NotConverged {
                         step,
                         pressure: 100.0 * phi,
