@@ -519,6 +519,19 @@ fn save(fig: &Figure, output: &Path, name: &str) -> Result<(), WriteError> {
         .map_err(|source| WriteError::Io { path, source })
 }
 
+/// A bar of height `n` over [lo, hi] (a tenth inset on each side), its count above it.
+pub(super) fn bar(fig: &mut Figure, (lo, hi): (f64, f64), n: usize) {
+    let (inset, h) = (0.1 * (hi - lo), n as f64);
+    let outline = [
+        (lo + inset, 0.0),
+        (lo + inset, h),
+        (hi - inset, h),
+        (hi - inset, 0.0),
+    ];
+    fig.line(&outline, BLUE);
+    fig.label(0.5 * (lo + hi), h, &n.to_string(), BLACK, false);
+}
+
 /// matrix_bands.png: squealing points per 1/3-octave band, as bars on a log frequency axis.
 fn plot_bands(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
     let a = &r.analysis;
@@ -538,18 +551,7 @@ fn plot_bands(r: &MatrixReport, output: &Path) -> Result<(), WriteError> {
     )
     .log_x();
     for b in &a.bands {
-        let (lo, hi, n) = (b.lower.log10(), b.upper.log10(), b.points as f64);
-        let inset = 0.1 * (hi - lo);
-        fig.line(
-            &[
-                (lo + inset, 0.0),
-                (lo + inset, n),
-                (hi - inset, n),
-                (hi - inset, 0.0),
-            ],
-            BLUE,
-        );
-        fig.label(0.5 * (lo + hi), n, &b.points.to_string(), BLACK, false);
+        bar(&mut fig, (b.lower.log10(), b.upper.log10()), b.points);
     }
     save(&fig, output, "matrix_bands.png")
 }

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::WriteError;
-use crate::io::figure::{Figure, BLACK, BLUE};
+use crate::io::figure::Figure;
 use crate::io::results::ResultsFile;
 use crate::matrix::point::{ModeSaturation, PointResult};
 use crate::measure::greatest;
@@ -181,19 +181,8 @@ pub fn plot_levels(run: &MatrixOutput, output: &Path) -> Result<bool, WriteError
         "points",
     );
     for (k, &n) in counts.iter().enumerate() {
-        let (a, b) = (lo + k as f64 * CLASS, lo + (k + 1) as f64 * CLASS);
-        let inset = 0.1 * CLASS;
-        let n = n as f64;
-        fig.line(
-            &[
-                (a + inset, 0.0),
-                (a + inset, n),
-                (b - inset, n),
-                (b - inset, 0.0),
-            ],
-            BLUE,
-        );
-        fig.label(0.5 * (a + b), n, &format!("{n}"), BLACK, false);
+        let class = (lo + k as f64 * CLASS, lo + (k + 1) as f64 * CLASS);
+        super::matrix::bar(&mut fig, class, n);
     }
     let path = output.join("matrix_levels.png");
     fig.save(&path)
