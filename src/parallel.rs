@@ -48,6 +48,28 @@ pub fn max(comm: &SimpleCommunicator, value: f64) -> f64 {
     global
 }
 
+/// `data` of rank `root` on every rank (its length too).
+///
+/// # Collective
+pub fn broadcast_f64s(comm: &SimpleCommunicator, root: i32, data: &mut Vec<f64>) {
+    let mut len = data.len() as u64;
+    comm.process_at_rank(root).broadcast_into(&mut len);
+    data.resize(len as usize, 0.0);
+    comm.process_at_rank(root).broadcast_into(&mut data[..]);
+}
+
+/// `text` of rank `root` on every rank.
+///
+/// # Collective
+pub fn broadcast_string(comm: &SimpleCommunicator, root: i32, text: &mut String) {
+    let mut bytes = std::mem::take(text).into_bytes();
+    let mut len = bytes.len() as u64;
+    comm.process_at_rank(root).broadcast_into(&mut len);
+    bytes.resize(len as usize, 0);
+    comm.process_at_rank(root).broadcast_into(&mut bytes[..]);
+    *text = String::from_utf8_lossy(&bytes).into_owned();
+}
+
 /// # Collective
 pub fn barrier(comm: &SimpleCommunicator) {
     comm.barrier();

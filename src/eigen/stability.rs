@@ -243,14 +243,32 @@ impl ProjectedStability {
         state: &ContactState,
         extra: &[f64],
     ) -> Result<Vec<DenseEigenpair>, DenseError> {
+        let (kp, cp) = self.operators_with_stiffness(comm, contact, state, extra);
+        solve_dense(self.projection.size, &kp, &cp)
+    }
+
+    /// [`Self::operators_at`] with `extra` (m x m, column-major; empty: none) added to the
+    /// projected elastic stiffness, and its Rayleigh part to the damping.
+    ///
+    /// # Collective
+    pub fn operators_with_stiffness(
+        &self,
+        comm: &SimpleCommunicator,
+        contact: &ContactModel,
+        state: &ContactState,
+        extra: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
         let (mut kp, mut cp) = self.operators_at(comm, contact, state);
+        if extra.is_empty() {
+            return (kp, cp);
+        }
         assert_eq!(extra.len(), kp.len(), "extra stiffness: m x m");
         let beta = self.damping.rayleigh_beta;
         for ((k, c), e) in kp.iter_mut().zip(cp.iter_mut()).zip(extra) {
             *k += e;
             *c += beta * e;
         }
-        solve_dense(self.projection.size, &kp, &cp)
+        (kp, cp)
     }
 
     /// The complex modes at `state` (of `contact`, whose points and rows are the basis'):

@@ -14,7 +14,8 @@ use super::statics::Preloaded;
 use super::RunError;
 use crate::contact::{ContactModel, ContactState, ResolvedInterface};
 use crate::eigen::complex_modes::{
-    frequency_hz, projected_coordinates, ComplexModeSettings, DampingSettings, DenseEigenpair,
+    frequency_hz, projected_coordinates, solve_dense, ComplexModeSettings, DampingSettings,
+    DenseEigenpair,
 };
 use crate::eigen::real_modes::RealModes;
 use crate::eigen::stability::{project_operator, ProjectedStability};
@@ -27,6 +28,10 @@ use crate::matrix::saturation::{study, SaturationInputs};
 use crate::matrix::{Axis, MatrixSettings, Sampling, StaticsModel};
 use crate::post::pseudo_contact::ContactPseudoSystem;
 use crate::statics::{Factored, Start, StaticError, StaticSettings, StaticState};
+
+pub use super::matrix_lining::lining_stiffness;
+use super::matrix_lining::{LiningOperator, LiningParts};
+use super::matrix_share::share_dense;
 
 /// What the matrix needs from the earlier stages.
 pub struct MatrixInputs<'a, 'p> {
@@ -206,20 +211,42 @@ pub fn matrix<'p>(
     }
     let mut bar = crate::progress::Progress::new("matrix", order.len(), petsc.rank());
     let mut computed = Vec::with_capacity(order.len());
-    for (k, &(i, from)) in order.iter().enumerate() {
-        let warm = from.and_then(|f| kept.get(&f)).unwrap_or(statics_state);
-        let (result, state) = solver.point(petsc, settings, &axes, i, &values[i], warm)?;
-        record(&result)?;
-        if let (Some(q), true) = (state, last_use.contains_key(&i)) {
-            kept.insert(i, q);
-        }
-        if let Some(f) = from {
-            if last_use.get(&f) == Some(&k) {
-                kept.remove(&f);
+    // Points go in batches of the group's size: their static states and projected operators
+    // together, then each rank solves one point's dense eigenproblem (the same order on any
+    // rank, so it does not matter which) and shares it: at 600k the dense solve is a quarter
+    // of a point, and every rank used to compute every point's.
+    let comm = petsc.world();
+    let (group, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let m = solver.stability.projection.size;
+    for first in (0..order.len()).step_by(group) {
+        let batch = &order[first..order.len().min(first + group)];
+        let mut prepared = Vec::with_capacity(batch.len());
+        for (b, &(i, from)) in batch.iter().enumerate() {
+            let warm = from.and_then(|f| kept.get(&f)).unwrap_or(statics_state);
+            let point = solver.prepare(petsc, settings, &axes, i, &values[i], warm)?;
+            if let (Some(q), true) = (point.displacement(), last_use.contains_key(&i)) {
+                let mut copy = q.duplicate()?;
+                copy.copy_from(q)?;
+                kept.insert(i, copy);
             }
+            if let Some(f) = from {
+                if last_use.get(&f) == Some(&(first + b)) {
+                    kept.remove(&f);
+                }
+            }
+            prepared.push(point);
         }
-        computed.push(result);
-        bar.update(k + 1, &format!("point {}", i + 1));
+        let mut own = prepared.get(rank).and_then(|p| p.solve_dense(m));
+        for (b, point) in prepared.into_iter().enumerate() {
+            let dense = match point.statics.is_ok() {
+                true => share_dense(comm, b, (b == rank).then(|| own.take()).flatten(), m),
+                false => Err(String::new()),
+            };
+            let result = solver.finish(petsc, settings, point, dense)?;
+            record(&result)?;
+            computed.push(result);
+            bar.update(first + b + 1, &format!("point {}", batch[b].0 + 1));
+        }
     }
     bar.finish();
     let resumed = done.len();
@@ -244,6 +271,44 @@ struct PointModes {
     pairs: Vec<DenseEigenpair>,
 }
 
+/// A point's static state and projected operators (K_p, C_p) with the seconds they took, or
+/// why its static state failed.
+struct Prepared<'p> {
+    index: usize,
+    values: Vec<f64>,
+    started: Instant,
+    conditions: Conditions,
+    statics: Result<Projected<'p>, String>,
+}
+
+/// A point's static state and its projected stiffness and damping (m x m, column-major).
+struct Projected<'p> {
+    point: PointStatics<'p>,
+    kp: Vec<f64>,
+    cp: Vec<f64>,
+    seconds: f64,
+}
+
+impl<'p> Prepared<'p> {
+    /// The static displacement, when solved.
+    fn displacement(&self) -> Option<&Vector<'p>> {
+        self.statics
+            .as_ref()
+            .ok()
+            .map(|p| &p.point.state.displacement)
+    }
+
+    /// The dense complex modes of the projected operators (m coordinates) and the seconds
+    /// they took; None without a static state.
+    fn solve_dense(&self, m: usize) -> Option<Result<(Vec<DenseEigenpair>, f64), String>> {
+        let projected = self.statics.as_ref().ok()?;
+        let t = Instant::now();
+        let pairs =
+            solve_dense(m, &projected.kp, &projected.cp).map_err(|e| format!("complex modes: {e}"));
+        Some(pairs.map(|p| (p, t.elapsed().as_secs_f64())))
+    }
+}
+
 /// The fixed parts of every point: the projection basis and the nominal modes that label.
 struct PointSolver<'a, 'p> {
     input: MatrixInputs<'a, 'p>,
@@ -256,40 +321,8 @@ struct PointSolver<'a, 'p> {
     checks: Vec<usize>,
     /// The lining's stiffness on each model, when points scale it.
     lining: Option<LiningParts<'p>>,
-}
-
-/// The lining blocks' stiffness K_l on the models a point uses, and the point's K0 + (e - 1)
-/// K_l (e the point's lining factor) in a matrix whose pattern holds both.
-struct LiningParts<'p> {
-    /// Phi^T K_l Phi on the projection basis.
-    projected: Vec<f64>,
-    full: LiningOperator<'p>,
-    reduced: Option<LiningOperator<'p>>,
-}
-
-struct LiningOperator<'p> {
-    lining: SparseMatrix<'p>,
-    /// K0 + (e - 1) K_l of the last point (pattern: the union of K0's and K_l's).
-    point: SparseMatrix<'p>,
-}
-
-impl<'p> LiningOperator<'p> {
-    /// # Collective
-    fn new(k0: &SparseMatrix<'p>, lining: SparseMatrix<'p>) -> Result<Self, RunError> {
-        let mut point = lining.try_clone()?;
-        point.axpy(1.0, k0)?;
-        Ok(LiningOperator { lining, point })
-    }
-
-    /// K0 + (e - 1) K_l, in `self.point`.
-    ///
-    /// # Collective
-    fn at(&mut self, k0: &SparseMatrix<'p>, e: f64) -> Result<&SparseMatrix<'p>, RunError> {
-        self.point.zero_entries()?;
-        self.point.axpy_subset(1.0, k0)?;
-        self.point.axpy_subset(e - 1.0, &self.lining)?;
-        Ok(&self.point)
-    }
+    /// Newton iterations of a static solve from the unloaded state.
+    cold_budget: usize,
 }
 
 /// What a static solve runs on: a stiffness, the contact points in its unknowns, the load at
@@ -302,6 +335,14 @@ struct StaticProblem<'a, 'p> {
 
 /// Halved load increments a point's static solve from the unloaded state may take.
 const COLD_CUTS: usize = 4;
+
+/// Newton iterations a point's static solve from the unloaded state may take in all: twice
+/// the preload's own from the same state (at least 20). The 600k superelement's solve of one
+/// point spent 596 s within its 4 halvings (2026-11-27): halvings alone do not bound the cost.
+fn cold_iteration_budget(preload: &StaticState) -> usize {
+    let iterations = preload.log.iter().filter(|r| r.step_length > 0.0).count();
+    (2 * iterations).max(20)
+}
 
 /// A point's static state on one model, with the contact model at the point's laws.
 struct PointStatics<'p> {
@@ -343,6 +384,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             None => None,
         };
         Ok(PointSolver {
+            cold_budget: cold_iteration_budget(&input.preload.state),
             input,
             stability,
             nominal,
@@ -381,6 +423,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         conditions: &Conditions,
         warm: &Vector<'p>,
         factor: &mut Option<Factored<'p>>,
+        cold_budget: usize,
     ) -> Result<Result<PointStatics<'p>, String>, RunError> {
         let contact = problem
             .contact
@@ -391,13 +434,15 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         let t = Instant::now();
         // Modified Newton from the previous point's factor (a neighbour's tangent): a new one
         // (numerical phase only) when it stops contracting. From the unloaded state afresh,
-        // with at most COLD_CUTS halved load increments: the 600k brake's superelement took
-        // 10+ minutes for one point at 38 bar, creeping up the friction ramp by halvings.
+        // with at most COLD_CUTS halved load increments and `cold_budget` Newton iterations:
+        // the 600k brake's superelement took 10+ minutes for one point at 38 bar, creeping
+        // up the friction ramp by halvings.
         let mut solve = |displacement: Option<&Vector<'p>>| {
             let start = Start {
                 displacement,
                 factor: &mut *factor,
                 cut_budget: displacement.is_none().then_some(COLD_CUTS),
+                iteration_budget: displacement.is_none().then_some(cold_budget),
             };
             crate::statics::solve_from(petsc, problem.k0, &contact, &f, statics, start, |_| {})
         };
@@ -425,11 +470,11 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         }))
     }
 
-    /// One point: its result, and its static displacement (in the unknowns of the model the
-    /// matrix solves on) when solved.
+    /// A point's static state and its projected operators (the dense eigenproblem is
+    /// [`Prepared::solve_dense`]'s, on one rank of the group).
     ///
     /// # Collective
-    fn point(
+    fn prepare(
         &mut self,
         petsc: &'p Petsc,
         settings: &MatrixSettings,
@@ -437,18 +482,10 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         index: usize,
         values: &[f64],
         warm: &Vector<'p>,
-    ) -> Result<(PointResult, Option<Vector<'p>>), RunError> {
+    ) -> Result<Prepared<'p>, RunError> {
         let started = Instant::now();
         let conditions = point_conditions(settings, axes, values, &self.input)?;
         let reduced = settings.statics == StaticsModel::Reduced;
-        let failed = |reason: String| PointResult {
-            index,
-            values: values.to_vec(),
-            outcome: Outcome::Failed {
-                reason,
-                seconds: started.elapsed().as_secs_f64(),
-            },
-        };
         let mut problem = self.problem(reduced);
         let statics = self.input.statics;
         let lining = match (&mut self.lining, reduced) {
@@ -463,18 +500,70 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             true => &mut self.reduced_factor,
             false => &mut self.factor,
         };
-        let solved = Self::solve_static(petsc, problem, statics, &conditions, warm, factor)?;
-        let point = match solved {
-            Ok(p) => p,
-            Err(reason) => return Ok((failed(reason), None)),
+        let budget = self.cold_budget;
+        let solved =
+            Self::solve_static(petsc, problem, statics, &conditions, warm, factor, budget)?;
+        let statics = solved.map(|point| {
+            let t = Instant::now();
+            let extra = self.lining_extra(conditions.lining);
+            let comm = petsc.world();
+            let (contact, state) = (&point.contact, &point.state.contact);
+            let (kp, cp) = self
+                .stability
+                .operators_with_stiffness(comm, contact, state, &extra);
+            let seconds = t.elapsed().as_secs_f64();
+            Projected {
+                point,
+                kp,
+                cp,
+                seconds,
+            }
+        });
+        Ok(Prepared {
+            index,
+            values: values.to_vec(),
+            started,
+            conditions,
+            statics,
+        })
+    }
+
+    /// A prepared point finished with its dense complex modes (`dense`: eigenpairs and the
+    /// seconds they took, or why they failed): its result.
+    ///
+    /// # Collective
+    fn finish(
+        &mut self,
+        petsc: &'p Petsc,
+        settings: &MatrixSettings,
+        prepared: Prepared<'p>,
+        dense: Result<(Vec<DenseEigenpair>, f64), String>,
+    ) -> Result<PointResult, RunError> {
+        let Prepared {
+            index,
+            values,
+            started,
+            conditions,
+            statics,
+        } = prepared;
+        let failed = |reason: String, values: Vec<f64>| PointResult {
+            index,
+            values,
+            outcome: Outcome::Failed {
+                reason,
+                seconds: started.elapsed().as_secs_f64(),
+            },
         };
-        let t = Instant::now();
-        let lining = conditions.lining;
-        let modes = match self.modes(petsc, &point.contact, &point.state.contact, lining) {
+        let (point, seconds_operators) = match statics {
+            Ok(p) => (p.point, p.seconds),
+            Err(reason) => return Ok(failed(reason, values)),
+        };
+        let modes = match dense.and_then(|(pairs, seconds)| Ok((self.label(pairs)?, seconds))) {
             Ok(m) => m,
-            Err(reason) => return Ok((failed(reason), Some(point.state.displacement))),
+            Err(reason) => return Ok(failed(reason, values)),
         };
-        let seconds_modes = t.elapsed().as_secs_f64();
+        let (modes, seconds_dense) = modes;
+        let lining = conditions.lining;
         let saturation = match &self.input.saturation {
             Some(inputs) => {
                 let system = ContactPseudoSystem::new(
@@ -492,6 +581,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             None => Vec::new(),
         };
         let modes: Vec<PointMode> = modes.modes.into_iter().map(|(_, m)| m).collect();
+        let reduced = settings.statics == StaticsModel::Reduced;
         let full_check = match reduced && self.checks.contains(&index) {
             true => Some(self.full_check(petsc, &conditions, &point.state.displacement)?),
             false => None,
@@ -508,16 +598,15 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             seconds_factorizing: state.seconds_factorizing,
             factor_solves: state.solves,
             seconds_solving: state.seconds_solving,
-            seconds_modes,
+            seconds_modes: seconds_operators + seconds_dense,
             full_check,
             saturation,
         };
-        let result = PointResult {
+        Ok(PointResult {
             index,
-            values: values.to_vec(),
+            values,
             outcome: Outcome::Solved(solved),
-        };
-        Ok((result, Some(point.state.displacement)))
+        })
     }
 
     /// The labelled complex modes at a static contact state, or why they failed.
@@ -532,16 +621,18 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     ) -> Result<PointModes, String> {
         // The superelement's contact model has the full one's points, in the same order on
         // the same ranks: its state projects on the same observed modes.
+        let extra = self.lining_extra(lining);
         let comm = petsc.world();
-        let mut pairs = match &self.lining {
-            Some(_) => {
-                let extra = self.lining_extra(lining);
-                self.stability
-                    .modes_with_stiffness(comm, contact, state, &extra)
-            }
-            None => self.stability.modes_at(comm, contact, state),
-        }
-        .map_err(|e| format!("complex modes: {e}"))?;
+        let (kp, cp) = self
+            .stability
+            .operators_with_stiffness(comm, contact, state, &extra);
+        let pairs = solve_dense(self.stability.projection.size, &kp, &cp)
+            .map_err(|e| format!("complex modes: {e}"))?;
+        self.label(pairs)
+    }
+
+    /// Complex modes labelled, or why they cannot be.
+    fn label(&self, mut pairs: Vec<DenseEigenpair>) -> Result<PointModes, String> {
         let modes = self.labelled(&mut pairs);
         if modes
             .iter()
@@ -583,7 +674,9 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         reduction.recover(petsc, reduced_q, &mut start)?;
         let statics = self.input.statics;
         let factor = &mut self.factor;
-        let solved = Self::solve_static(petsc, problem, statics, conditions, &start, factor)?;
+        let budget = self.cold_budget;
+        let solved =
+            Self::solve_static(petsc, problem, statics, conditions, &start, factor, budget)?;
         let failed = |reason: String| FullCheck {
             displacement_error: f64::NAN,
             braking_torque: f64::NAN,
@@ -647,36 +740,4 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             })
             .collect()
     }
-}
-
-/// The lining blocks' part of K0 (`matrix.lining_blocks`), in K0's `format`: what a lining
-/// stiffness factor e turns K0 into, K0 + (e - 1) K_l.
-///
-/// # Collective
-pub fn lining_stiffness<'p>(
-    petsc: &'p Petsc,
-    settings: &MatrixSettings,
-    model: &super::model::Model,
-    dofs: &crate::fem::dofmap::DofMap,
-    format: crate::la::MatrixFormat,
-) -> Result<SparseMatrix<'p>, RunError> {
-    let blocks = &model.mesh.blocks;
-    let mut include = vec![false; blocks.len()];
-    for name in settings.lining_block_names() {
-        match blocks.iter().position(|b| b.name == name) {
-            Some(i) => include[i] = true,
-            None => {
-                let known: Vec<&str> = blocks.iter().map(|b| b.name.as_str()).collect();
-                let message = format!(
-                    ": no block '{name}' in the mesh (its blocks: {}); name the lining's blocks in matrix.lining_blocks",
-                    known.join(", ")
-                );
-                return Err(RunError::scene("matrix.lining_blocks", message));
-            }
-        }
-    }
-    let mesh = &model.mesh;
-    let k_l =
-        crate::la::fem_assembly::assemble_block_stiffness(petsc, mesh, dofs, &include, format)?;
-    Ok(k_l)
 }

@@ -15,6 +15,8 @@ pub mod complex;
 pub mod link;
 pub mod loudness;
 pub mod matrix;
+mod matrix_lining;
+mod matrix_share;
 pub mod model;
 pub mod modes;
 pub mod operators;

@@ -211,6 +211,17 @@ pub enum StaticError {
         iteration: usize,
         residual: f64,
     },
+    #[error(
+        "static solve gave up after its budget of {iterations} Newton iterations in all, at load step {step} (pressure {pressure:.0} %, friction {friction:.0} %): residual {residual:.3e} N > tolerance {target:.3e} N"
+    )]
+    BudgetSpent {
+        iterations: usize,
+        step: usize,
+        pressure: f64,
+        friction: f64,
+        residual: f64,
+        target: f64,
+    },
     #[error("static preload: {0}")]
     La(#[from] LaError),
 }
@@ -279,6 +290,7 @@ pub fn solve<'p>(
         displacement: start_from,
         factor: &mut None,
         cut_budget: None,
+        iteration_budget: None,
     };
     solve_from(petsc, k0, contact, f_ext, settings, start, progress)
 }
@@ -293,6 +305,9 @@ pub struct Start<'a, 'p> {
     pub factor: &'a mut Option<Factored<'p>>,
     /// How many load increments may be halved in all (None: the preload's 24).
     pub cut_budget: Option<usize>,
+    /// How many Newton iterations the solve may take in all, over its load steps and their
+    /// cuts (None: no limit beyond `max_iterations` per step).
+    pub iteration_budget: Option<usize>,
 }
 
 /// A tangent matrix (K0's pattern joined with the contacts) and its LU factor.
@@ -322,6 +337,8 @@ pub fn solve_from<'p>(
 ) -> Result<StaticState<'p>, StaticError> {
     let (start_from, factor) = (start_at.displacement, start_at.factor);
     let cut_budget = start_at.cut_budget.unwrap_or(4 * MAX_CUTS);
+    let iteration_budget = start_at.iteration_budget.unwrap_or(usize::MAX);
+    let mut iterations_spent = 0usize;
     let start = Instant::now();
     let friction = contact
         .interfaces()
@@ -407,9 +424,20 @@ pub fn solve_from<'p>(
                 log.push(rec);
                 break Ok(state);
             }
+            if iterations_spent >= iteration_budget {
+                return Err(StaticError::BudgetSpent {
+                    iterations: iterations_spent,
+                    step,
+                    pressure: 100.0 * phi,
+                    friction: 100.0 * psi,
+                    residual: r,
+                    target,
+                });
+            }
             if iteration >= settings.max_iterations || !r.is_finite() || stalled(&history, r) {
                 break Err((iteration, r, target));
             }
+            iterations_spent += 1;
             residual.scale(-1.0)?;
             let scale = Scale {
                 floor: 0.1 * target,

@@ -241,6 +241,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         ));
     }
     krylov_route_reaches_the_same_state(petsc, &system, &contact, &f, &state)?;
+    an_iteration_budget_stops_the_solve(petsc, &system, &contact, &f, &state)?;
     tangent_operator_equals_assembled(petsc, &contact, &state.contact, &f)?;
     low_rank_update_of_the_tangent(petsc, &contact, &state.contact, &system.stiffness, &f)?;
     // 1 vs 2 ranks: contact pressures in point order.
@@ -534,6 +535,64 @@ fn low_rank_update_of_the_tangent<'p>(
 }
 
 /// The static preload with the suite's error type.
+/// A solve from the unloaded state with a budget of Newton iterations: given fewer than the
+/// solve needs, it stops where the budget is spent (and says so); given as many, it is the
+/// solve without a budget, iteration for iteration.
+fn an_iteration_budget_stops_the_solve<'p>(
+    petsc: &'p Petsc,
+    system: &AssembledSystem<'p>,
+    contact: &ContactModel<'p>,
+    f: &squeal::la::Vector<'p>,
+    state: &squeal::statics::StaticState<'p>,
+) -> Result<(), String> {
+    use squeal::statics::{solve_from, Start, StaticError};
+    let settings = StaticSettings::default();
+    let needed = state.log.iter().filter(|r| r.step_length > 0.0).count();
+    let budgeted = |budget: usize| {
+        let mut factor = None;
+        let start = Start {
+            displacement: None,
+            factor: &mut factor,
+            cut_budget: None,
+            iteration_budget: Some(budget),
+        };
+        solve_from(
+            petsc,
+            &system.stiffness,
+            contact,
+            f,
+            &settings,
+            start,
+            |_| {},
+        )
+    };
+    match budgeted(needed / 2) {
+        Err(StaticError::BudgetSpent { iterations, .. }) if iterations == needed / 2 => {}
+        Err(e) => return Err(format!("budget {}: {e}", needed / 2)),
+        Ok(_) => {
+            return Err(format!(
+                "budget {} of {needed} iterations: converged",
+                needed / 2
+            ))
+        }
+    }
+    let full = budgeted(needed).map_err(|e| format!("budget {needed} (what it needs): {e}"))?;
+    let mut d = full.displacement.try_clone().map_err(|e| e.to_string())?;
+    d.axpy(-1.0, &state.displacement)
+        .map_err(|e| e.to_string())?;
+    let difference = d.norm2().map_err(|e| e.to_string())?;
+    // The same iterations; on several ranks MUMPS' distributed solves differ by round-off
+    // (4e-15 m here): bounded by the Newton tolerance's share of the displacement (1e-9
+    // relative; this state's Newton error estimates are ~2e-12 m, see above).
+    let size = state.displacement.norm2().map_err(|e| e.to_string())?;
+    if !(difference <= 1e-9 * size) {
+        return Err(format!(
+            "with a budget of what it needs: {difference:e} m from the solve without one (|q| {size:e} m)"
+        ));
+    }
+    Ok(())
+}
+
 fn preload<'p>(
     petsc: &'p Petsc,
     system: &AssembledSystem<'p>,
