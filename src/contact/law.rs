@@ -280,7 +280,10 @@ impl FrictionLaw {
             return StickTraction::default();
         }
         let r = k / p;
-        let dr = (n.stiffness_slope * p + k * k) / (p * p);
+        // d(k/p)/dg = k'/p + (k/p)^2, not (k' p + k^2)/p^2: a joint open by ~2 mm has an
+        // exponential pressure whose square underflows, and 0/0 put NaN into the 600k
+        // superelement's projected operators at high pressure (2026-11-27).
+        let dr = n.stiffness_slope / p + r * r;
         let s = [r * delta[0], r * delta[1]];
         let rho = s[0].hypot(s[1]);
         // phi = tanh(rho) / rho and psi = phi'(rho) / rho, by their series near 0.
@@ -431,6 +434,44 @@ mod tests {
                 );
                 // Friction opposes the relative motion and never exceeds mu_static p.
                 assert!(t.traction * w >= 0.0 && t.traction.abs() <= 0.5 * p * (1.0 + 1e-12));
+            }
+        }
+    }
+
+    /// A joint point far open (the exponential pressure ~1e-255 Pa at 3 mm, whose square
+    /// underflows) has a finite, vanishing traction and finite derivatives; nearer, the gap
+    /// derivative matches a central difference.
+    #[test]
+    fn stick_traction_is_finite_far_open_and_its_gap_derivative_matches_differences() {
+        let exp = NormalLaw::Exponential {
+            p0: 1e6,
+            lambda: 2e5,
+            linear_below_gap: None,
+        };
+        let stick = FrictionLaw::Stick { mu: 0.2 };
+        let delta = [3e-6, -1e-6];
+        for g in [3e-3, 2.5e-3, 1.95e-3, 1e-3] {
+            let t = stick.stick_traction(&exp.eval(g), delta);
+            let all = [t.traction, t.d_gap, t.d_slip[0], t.d_slip[1]];
+            assert!(
+                all.iter().flatten().all(|x| x.is_finite()),
+                "g = {g}: {t:?}"
+            );
+        }
+        for g in [2e-5, 0.0, -2e-6] {
+            let h = 1e-10;
+            let t = stick.stick_traction(&exp.eval(g), delta);
+            let (tp, tm) = (
+                stick.stick_traction(&exp.eval(g + h), delta),
+                stick.stick_traction(&exp.eval(g - h), delta),
+            );
+            for i in 0..2 {
+                let fd = (tp.traction[i] - tm.traction[i]) / (2.0 * h);
+                assert!(
+                    rel(fd, t.d_gap[i]) < 1e-6,
+                    "g = {g}: {fd} vs {}",
+                    t.d_gap[i]
+                );
             }
         }
     }
