@@ -585,7 +585,7 @@ fn an_iteration_budget_stops_the_solve<'p>(
     // (4e-15 m here): bounded by the Newton tolerance's share of the displacement (1e-9
     // relative; this state's Newton error estimates are ~2e-12 m, see above).
     let size = state.displacement.norm2().map_err(|e| e.to_string())?;
-    if !(difference <= 1e-9 * size) {
+    if squeal::measure::exceeds(difference, 1e-9 * size) {
         return Err(format!(
             "with a budget of what it needs: {difference:e} m from the solve without one (|q| {size:e} m)"
         ));
