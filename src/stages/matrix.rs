@@ -449,9 +449,10 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         let (state, cold_restart) = match solve(Some(warm)) {
             Ok(s) => (s, false),
             // A (nearly) singular tangent at the point's own load and laws: the neighbour's
-            // branch of equilibria ends before this point. Not retried from the unloaded
-            // state: the 11 such points of the 100k and 600k matrices (2026-11-27) failed
-            // there as well, each retry costing 4-5x the warm attempt.
+            // branch of equilibria ends before this point (a divergence). Not retried from
+            // the unloaded state, which reaches the same load and laws at 4-5x the cost. (The
+            // 11 points of the 100k and 600k matrices that failed so on 2026-11-27, warm and
+            // cold, had NaN in their tangent instead: a joint's stick law, since fixed.)
             Err(e @ StaticError::SingularTangent { .. }) => {
                 return Ok(Err(format!("static state: from the nearest point: {e}; not retried from the unloaded state (to check it, run this point as a scene of its own)")));
             }
