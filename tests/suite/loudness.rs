@@ -125,6 +125,14 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     states
         .read(0, &mut x0, &mut v0)
         .map_err(|e| e.to_string())?;
+    // From the superelement's static state, about which the transient vibrates (it starts
+    // from it as an equilibrium), not the full model's: the two differ by the reduction's
+    // static error, which on this frictionless brake (pads held tangentially by open
+    // abutment contacts only) varies with round-off from run to run, and counting it as
+    // vibration moved this closed form by up to 0.35 dB between runs on 2 ranks.
+    let mut dx0 = x0.try_clone().map_err(|e| e.to_string())?;
+    dx0.axpy(-1.0, &reduced.q_static)
+        .map_err(|e| e.to_string())?;
     let mut x = preload
         .state
         .displacement
@@ -133,9 +141,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     reduced
         .model
         .reduction
-        .recover(petsc, &x0, &mut x)
-        .map_err(|e| e.to_string())?;
-    x.axpy(-1.0, &preload.state.displacement)
+        .recover(petsc, &dx0, &mut x)
         .map_err(|e| e.to_string())?;
     let omega = 2.0 * std::f64::consts::PI * f;
     let expected = radiator
