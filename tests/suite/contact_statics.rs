@@ -534,7 +534,6 @@ fn low_rank_update_of_the_tangent<'p>(
     Ok(())
 }
 
-/// The static preload with the suite's error type.
 /// A solve from the unloaded state with a budget of Newton iterations: given fewer than the
 /// solve needs, it stops where the budget is spent (and says so); given as many, it is the
 /// solve without a budget, iteration for iteration.
@@ -593,6 +592,7 @@ fn an_iteration_budget_stops_the_solve<'p>(
     Ok(())
 }
 
+/// The static preload with the suite's error type.
 fn preload<'p>(
     petsc: &'p Petsc,
     system: &AssembledSystem<'p>,
