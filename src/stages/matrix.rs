@@ -225,9 +225,7 @@ pub fn matrix<'p>(
             let warm = from.and_then(|f| kept.get(&f)).unwrap_or(statics_state);
             let point = solver.prepare(petsc, settings, &axes, i, &values[i], warm)?;
             if let (Some(q), true) = (point.displacement(), last_use.contains_key(&i)) {
-                let mut copy = q.duplicate()?;
-                copy.copy_from(q)?;
-                kept.insert(i, copy);
+                kept.insert(i, q.try_clone()?);
             }
             if let Some(f) = from {
                 if last_use.get(&f) == Some(&(first + b)) {
