@@ -10,7 +10,8 @@ use super::kernel::{self, Channel, Part};
 use super::{ContactModel, ContactState};
 use crate::fem::assembly::Preallocation;
 use crate::la::{
-    ColumnKey, Dominant, LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange, Vector,
+    BlockAddPlan, ColumnKey, Dominant, LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange,
+    Vector,
 };
 
 /// What a linearized matrix starts from: a base operator plus the tangent, or only the
@@ -163,28 +164,72 @@ impl<'p> ContactModel<'p> {
         matrix: &mut SparseMatrix,
     ) -> Result<(), LaError> {
         let mut dense = Vec::new();
-        for (k, &id) in self.local.iter().enumerate() {
-            let rows = &self.rows[k];
+        for (k, rows) in self.rows.iter().enumerate() {
             let n = rows.dofs.len();
             dense.clear();
             dense.resize(n * n, 0.0);
-            let sliding = self.interfaces[self.points[id].interface]
-                .friction
-                .is_sliding();
-            let omega = if sliding { self.disc_speed } else { 0.0 };
-            for &part in parts {
-                kernel::add_tangent(
-                    rows,
-                    self.points[id].weight,
-                    omega,
-                    &state.response[k],
-                    part,
-                    &mut dense,
-                );
-            }
+            self.point_tangent(k, state, parts, &mut dense);
             matrix.add_values(&rows.dofs, &rows.dofs, &dense)?;
         }
         Ok(())
+    }
+
+    /// A plan for [`add_tangent_planned`](Self::add_tangent_planned) into `matrix` (None when
+    /// its pattern lacks a point's couplings: use `add_tangent`).
+    ///
+    /// # Collective
+    pub fn tangent_plan(&self, matrix: &SparseMatrix) -> Result<Option<BlockAddPlan>, LaError> {
+        BlockAddPlan::new(matrix, &self.point_dofs())
+    }
+
+    /// Whether `plan` is of `matrix` and these points, on every rank.
+    ///
+    /// # Collective
+    pub fn tangent_plan_fits(
+        &self,
+        plan: &BlockAddPlan,
+        matrix: &SparseMatrix,
+    ) -> Result<bool, LaError> {
+        plan.fits_everywhere(matrix, &self.point_dofs())
+    }
+
+    /// As [`add_tangent`](Self::add_tangent) followed by the assembly, through a plan of
+    /// where every entry lands (no sort of other ranks' entries; see [`BlockAddPlan`]).
+    ///
+    /// # Collective
+    pub fn add_tangent_planned(
+        &self,
+        state: &ContactState,
+        parts: &[Part],
+        matrix: &mut SparseMatrix,
+        plan: &mut BlockAddPlan,
+    ) -> Result<(), LaError> {
+        plan.add(matrix, &self.point_dofs(), |k, dense| {
+            self.point_tangent(k, state, parts, dense)
+        })
+    }
+
+    fn point_dofs(&self) -> Vec<&[i32]> {
+        self.rows.iter().map(|r| r.dofs.as_slice()).collect()
+    }
+
+    /// Local point k's tangent `parts` added to `dense` (its DOFs' square, row-major).
+    fn point_tangent(&self, k: usize, state: &ContactState, parts: &[Part], dense: &mut [f64]) {
+        let id = self.local[k];
+        let sliding = self.interfaces[self.points[id].interface]
+            .friction
+            .is_sliding();
+        let omega = if sliding { self.disc_speed } else { 0.0 };
+        for &part in parts {
+            kernel::add_tangent(
+                &self.rows[k],
+                self.points[id].weight,
+                omega,
+                &state.response[k],
+                part,
+                dense,
+            );
+        }
     }
 
     /// The rank-one terms of every local point's tangent `parts` (see

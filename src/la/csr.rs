@@ -14,21 +14,21 @@ use super::matrix::SparseMatrix;
 /// One sequential block of a rank's rows: the matrix itself on one rank, or the diagonal
 /// and off-diagonal parts of an MPIAIJ matrix (the latter's columns numbered through
 /// `colmap`, PETSc's garray, increasing).
-struct Block {
-    mat: ffi::Mat,
-    colmap: Option<*const ffi::PetscInt>,
-    rows: usize,
+pub(super) struct Block {
+    pub(super) mat: ffi::Mat,
+    pub(super) colmap: Option<*const ffi::PetscInt>,
+    pub(super) rows: usize,
     ia: *const ffi::PetscInt,
     ja: *const ffi::PetscInt,
 }
 
 impl Block {
-    fn row(&self, r: usize) -> std::ops::Range<usize> {
+    pub(super) fn row(&self, r: usize) -> std::ops::Range<usize> {
         // SAFETY: ia has rows + 1 entries while the row structure is held (see `blocks`).
         unsafe { *self.ia.add(r) as usize..*self.ia.add(r + 1) as usize }
     }
 
-    fn column(&self, k: usize) -> ffi::PetscInt {
+    pub(super) fn column(&self, k: usize) -> ffi::PetscInt {
         // SAFETY: k < ia[rows] (a position of a row); colmap covers every local column index.
         unsafe {
             let j = *self.ja.add(k);
@@ -39,7 +39,7 @@ impl Block {
         }
     }
 
-    fn entries(&self) -> usize {
+    pub(super) fn entries(&self) -> usize {
         // SAFETY: as in `row`.
         unsafe { *self.ia.add(self.rows) as usize }
     }
@@ -47,7 +47,7 @@ impl Block {
 
 /// The sequential blocks of `m` with their row structure taken (give them back with
 /// [`release`]), or None when `m` is not AIJ.
-fn blocks(m: ffi::Mat) -> Result<Option<Vec<Block>>> {
+pub(super) fn blocks(m: ffi::Mat) -> Result<Option<Vec<Block>>> {
     let mut kind: ffi::MatType = std::ptr::null();
     call!(MatGetType(m, &mut kind))?;
     // SAFETY: PETSc returns its static type name.
@@ -93,7 +93,7 @@ fn blocks(m: ffi::Mat) -> Result<Option<Vec<Block>>> {
     Ok(Some(out))
 }
 
-fn release(blocks: &[Block]) -> Result<()> {
+pub(super) fn release(blocks: &[Block]) -> Result<()> {
     for b in blocks {
         let (mut n, mut ia, mut ja, mut done) =
             (b.rows as ffi::PetscInt, b.ia, b.ja, ffi::PETSC_FALSE);
@@ -202,7 +202,7 @@ fn move_values(d: &Block, s: &Block, alpha: f64, overwrite: bool) -> Result<()> 
 }
 
 /// Whether `ok` holds on every rank of `m`'s communicator.
-fn all_ranks(m: ffi::Mat, ok: bool) -> Result<bool> {
+pub(super) fn all_ranks(m: ffi::Mat, ok: bool) -> Result<bool> {
     let mut comm = ffi::mpi_sys::MPI_Comm(std::ptr::null_mut());
     call!(PetscObjectGetComm(m as ffi::PetscObject, &mut comm))?;
     let (local, mut all) = (i32::from(ok), 0i32);

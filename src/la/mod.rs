@@ -4,6 +4,7 @@
 //! PETSc objects are destroyed before PETSc finalizes, and PETSc finalizes before MPI — by
 //! construction, not by convention.
 
+pub mod block_add;
 mod csr;
 pub mod dense_quadratic;
 pub mod eigen;
@@ -30,6 +31,7 @@ use mpi::environment::Universe;
 use mpi::topology::{Communicator, SimpleCommunicator};
 use petsc_sys as ffi;
 
+pub use block_add::BlockAddPlan;
 pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
 use error::call;
 pub use error::{DenseError, LaError, PetscError, Result};

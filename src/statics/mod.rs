@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::contact::surface::Face;
 use crate::contact::{ContactModel, ContactState, InterfaceSummary};
 use crate::fem::dofmap::DofMap;
-use crate::la::{DirectSolver, LaError, Petsc, SparseMatrix, Vector};
+use crate::la::{BlockAddPlan, DirectSolver, LaError, Petsc, SparseMatrix, Vector};
 use crate::mesh::{Mesh, PressureLoad};
 
 pub mod tangent;
@@ -313,6 +313,8 @@ pub struct Start<'a, 'p> {
 /// A tangent matrix (K0's pattern joined with the contacts) and its LU factor.
 pub struct Factored<'p> {
     jac: SparseMatrix<'p>,
+    /// Where the contact tangent's entries land in `jac`.
+    plan: Option<BlockAddPlan>,
     solver: DirectSolver<'p>,
     /// What the factorization took (GMRES' budget with this factor).
     seconds: f64,
@@ -346,10 +348,18 @@ pub fn solve_from<'p>(
         .any(|i| i.friction.is_sliding() && i.friction.mu() > 0.0)
         && contact.disc_speed() != 0.0;
     let mut tangent = match factor.take() {
-        Some(f) => TangentSolver::new(petsc, f.jac, Some(f.solver), f.seconds, settings.krylov),
+        Some(f) => TangentSolver::new(
+            petsc,
+            f.jac,
+            f.plan,
+            Some(f.solver),
+            f.seconds,
+            settings.krylov,
+        ),
         None => TangentSolver::new(
             petsc,
             contact.joined_matrix(petsc, k0)?,
+            None,
             None,
             0.0,
             settings.krylov,
@@ -543,9 +553,10 @@ pub fn solve_from<'p>(
         seconds: start.elapsed().as_secs_f64(),
         load_norm,
     };
-    let (jac, solver, seconds) = tangent.into_parts();
+    let (jac, plan, solver, seconds) = tangent.into_parts();
     *factor = solver.map(|solver| Factored {
         jac,
+        plan,
         solver,
         seconds,
     });

@@ -14,7 +14,7 @@ use std::time::Instant;
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, ContactState};
 use crate::la::gmres::{gmres, Preconditioned};
-use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::la::{BlockAddPlan, DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
 
 /// GMRES' relative residual: an inexact Newton correction whose linear error (1e-3 of the
 /// residual) is far below what a load step's first iterations gain, and costs one or two
@@ -66,6 +66,9 @@ pub struct TangentSolver<'p> {
     /// Krylov or fresh correction (the factor may be of an older one: PETSc keeps a factor
     /// until `refactorize`).
     jac: SparseMatrix<'p>,
+    /// Where the contact tangent's entries land in `jac` (None: not planned yet, or the
+    /// pattern lacks them and MatSetValues adds them); kept with `jac` from solve to solve.
+    plan: Option<BlockAddPlan>,
     solver: Option<DirectSolver<'p>>,
     /// The factor is of an earlier iterate's tangent and stopped contracting.
     stale: bool,
@@ -92,11 +95,13 @@ pub struct TangentSolver<'p> {
 }
 
 impl<'p> TangentSolver<'p> {
-    /// From a matrix of the joined pattern and possibly its factor of a nearby state
-    /// (`factor_seconds`: what that factorization took, 0 if unknown).
+    /// From a matrix of the joined pattern, possibly its plan of contact entries and its
+    /// factor of a nearby state (`factor_seconds`: what that factorization took, 0 if
+    /// unknown).
     pub fn new(
         petsc: &'p Petsc<'p>,
         jac: SparseMatrix<'p>,
+        plan: Option<BlockAddPlan>,
         solver: Option<DirectSolver<'p>>,
         factor_seconds: f64,
         krylov: bool,
@@ -104,6 +109,7 @@ impl<'p> TangentSolver<'p> {
         TangentSolver {
             petsc,
             jac,
+            plan,
             solver,
             stale: false,
             krylov,
@@ -139,9 +145,16 @@ impl<'p> TangentSolver<'p> {
         self.solver.as_ref().map_or(0.0, |s| s.report().flops)
     }
 
-    /// The matrix, its factor and what the factorization took, for the next solve.
-    pub fn into_parts(self) -> (SparseMatrix<'p>, Option<DirectSolver<'p>>, f64) {
-        (self.jac, self.solver, self.last_factor_seconds)
+    /// The matrix, its plan, its factor and what the factorization took, for the next solve.
+    pub fn into_parts(
+        self,
+    ) -> (
+        SparseMatrix<'p>,
+        Option<BlockAddPlan>,
+        Option<DirectSolver<'p>>,
+        f64,
+    ) {
+        (self.jac, self.plan, self.solver, self.last_factor_seconds)
     }
 
     /// dq with J dq = -R at the iterate q whose contact state is `state` (`minus_residual` =
@@ -204,8 +217,23 @@ impl<'p> TangentSolver<'p> {
             Part::Friction,
             Part::StickCoupling,
         ];
-        contact.add_tangent(state, &parts, &mut self.jac)?;
-        self.jac.assemble()
+        // A plan from an earlier solve may be of another contact model's points: planned
+        // anew then (it costs about one assembly through MatSetValues).
+        let fits = match &self.plan {
+            Some(plan) => contact.tangent_plan_fits(plan, &self.jac)?,
+            None => false,
+        };
+        if !fits {
+            self.plan = None;
+            self.plan = contact.tangent_plan(&self.jac)?;
+        }
+        match &mut self.plan {
+            Some(plan) => contact.add_tangent_planned(state, &parts, &mut self.jac, plan),
+            None => {
+                contact.add_tangent(state, &parts, &mut self.jac)?;
+                self.jac.assemble()
+            }
+        }
     }
 
     /// LU of `jac`: by the old factor's numerical phase when it factors `jac`, else anew (the
