@@ -529,7 +529,7 @@ pub(super) fn bar(fig: &mut Figure, (lo, hi): (f64, f64), n: usize) {
         (hi - inset, 0.0),
     ];
     fig.line(&outline, BLUE);
-    fig.label(0.5 * (lo + hi), h, &n.to_string(), BLACK, false);
+    fig.label_centred(0.5 * (lo + hi), h, &n.to_string(), BLACK);
 }
 
 /// matrix_bands.png: squealing points per 1/3-octave band, as bars on a log frequency axis.

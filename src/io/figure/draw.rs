@@ -3,7 +3,9 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{colormap, tick, Figure, Layer, Layout, Rgb, FONT, MAX_CELLS};
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::{colormap, tick, Figure, Layer, Layout, Rgb, TextPlace, FONT, MAX_CELLS};
 
 /// A failure of the drawing backend (plotters' error, with the backend's as its source).
 #[derive(Debug, thiserror::Error)]
@@ -200,13 +202,19 @@ fn draw_layer<DB: DrawingBackend<ErrorType: 'static>>(
             }
             Ok(label.is_some())
         }
-        Layer::Text(at, s, c, below) => {
+        Layer::Text(at, s, c, place) => {
             if inside(at) {
                 let colour = rgb(*c);
                 let style = TextStyle::from((FONT, 13).into_font()).color(&colour);
-                let dy = if *below { 4 } else { -16 };
+                let (style, offset) = match place {
+                    TextPlace::RightAbove => (style, (6, -16)),
+                    TextPlace::RightBelow => (style, (6, 4)),
+                    TextPlace::CentredAbove => {
+                        (style.pos(Pos::new(HPos::Center, VPos::Bottom)), (0, -3))
+                    }
+                };
                 let text =
-                    EmptyElement::at(*at) + plotters::element::Text::new(s.clone(), (6, dy), style);
+                    EmptyElement::at(*at) + plotters::element::Text::new(s.clone(), offset, style);
                 chart
                     .draw_series(std::iter::once(text))
                     .map_err(text_error)?;

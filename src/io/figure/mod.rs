@@ -86,6 +86,14 @@ pub fn tick(v: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
+/// Where a text goes relative to its point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum TextPlace {
+    RightAbove,
+    RightBelow,
+    CentredAbove,
+}
+
 enum Layer {
     Line(Vec<(f64, f64)>, Rgb, Option<String>),
     Markers(Vec<(f64, f64)>, Rgb, u32),
@@ -93,7 +101,8 @@ enum Layer {
     Valued(Vec<(f64, f64)>, Vec<f64>, u32),
     HLine(f64, Rgb),
     VLine(f64, Rgb, Option<String>),
-    Text((f64, f64), String, Rgb, bool),
+    /// Text at a point: right of it (above or below) or centred above it.
+    Text((f64, f64), String, Rgb, TextPlace),
     /// A grid of values (column-major), `columns` across x0..x1 and `rows` across y0..y1.
     Cells {
         columns: usize,
@@ -216,7 +225,18 @@ impl Figure {
 
     /// Text next to a data point (right of it, above or below).
     pub fn label(&mut self, x: f64, y: f64, s: &str, c: Rgb, below: bool) {
-        self.layers.push(Layer::Text((x, y), s.into(), c, below));
+        let place = if below {
+            TextPlace::RightBelow
+        } else {
+            TextPlace::RightAbove
+        };
+        self.layers.push(Layer::Text((x, y), s.into(), c, place));
+    }
+
+    /// Text centred above a point (a bar's count: it stays over its own bar).
+    pub fn label_centred(&mut self, x: f64, y: f64, s: &str, c: Rgb) {
+        self.layers
+            .push(Layer::Text((x, y), s.into(), c, TextPlace::CentredAbove));
     }
 
     /// A legend entry (the `index` of the old API is the order of the calls).
