@@ -116,6 +116,54 @@ fn starts_of(counts: &[i32]) -> Vec<i32> {
         .collect()
 }
 
+/// Sends each owner the (row, column) pairs asked of it (`requests`, `counts[r]` pairs for
+/// rank r, in rank order): how many pairs each rank asked of this one, and the pairs.
+///
+/// # Collective
+fn ask_owners(
+    comm: ffi::mpi_sys::MPI_Comm,
+    counts: &[i32],
+    requests: &[i64],
+) -> Result<(Vec<i32>, Vec<i64>)> {
+    let mut receive_counts = vec![0i32; counts.len()];
+    // SAFETY: one i32 to and from every rank of the communicator.
+    mpi(
+        unsafe {
+            ffi::mpi_sys::MPI_Alltoall(
+                counts.as_ptr().cast(),
+                1,
+                ffi::mpi_sys::RSMPI_INT32_T,
+                receive_counts.as_mut_ptr().cast(),
+                1,
+                ffi::mpi_sys::RSMPI_INT32_T,
+                comm,
+            )
+        },
+        "MPI_Alltoall",
+    )?;
+    let pairs = |v: &[i32]| v.iter().map(|&c| 2 * c).collect::<Vec<i32>>();
+    let received: usize = receive_counts.iter().map(|&c| c as usize).sum();
+    let mut asked = vec![0i64; 2 * received];
+    // SAFETY: counts and starts (in i64s: two per pair) match both buffers' lengths.
+    mpi(
+        unsafe {
+            ffi::mpi_sys::MPI_Alltoallv(
+                requests.as_ptr().cast(),
+                pairs(counts).as_ptr(),
+                pairs(&starts_of(counts)).as_ptr(),
+                ffi::mpi_sys::RSMPI_INT64_T,
+                asked.as_mut_ptr().cast(),
+                pairs(&receive_counts).as_ptr(),
+                pairs(&starts_of(&receive_counts)).as_ptr(),
+                ffi::mpi_sys::RSMPI_INT64_T,
+                comm,
+            )
+        },
+        "MPI_Alltoallv",
+    )?;
+    Ok((receive_counts, asked))
+}
+
 impl BlockAddPlan {
     /// Plans adding square dense blocks, block k at rows and columns `blocks[k]`, into
     /// `matrix`. None, on every rank alike, when the matrix is not AIJ or its pattern lacks
@@ -127,7 +175,8 @@ impl BlockAddPlan {
         let parts = blocks(m)?;
         let planned = match &parts {
             Some(parts) => Self::plan(m, parts, blocks_indices),
-            None => Ok(None),
+            // Matches `plan`'s first agreement, where the other ranks then stop too.
+            None => all_ranks(m, false).map(|_| None),
         };
         if let Some(parts) = &parts {
             release(parts)?;
@@ -208,43 +257,9 @@ impl BlockAddPlan {
             }
         }
         let send_counts: Vec<i32> = remote.iter().map(|o| o.len() as i32).collect();
-        let mut receive_counts = vec![0i32; size];
-        // SAFETY: one i32 to and from every rank of the communicator.
-        mpi(
-            unsafe {
-                ffi::mpi_sys::MPI_Alltoall(
-                    send_counts.as_ptr().cast(),
-                    1,
-                    ffi::mpi_sys::RSMPI_INT32_T,
-                    receive_counts.as_mut_ptr().cast(),
-                    1,
-                    ffi::mpi_sys::RSMPI_INT32_T,
-                    comm,
-                )
-            },
-            "MPI_Alltoall",
-        )?;
+        let (receive_counts, asked) = ask_owners(comm, &send_counts, &requests)?;
         let (send_starts, receive_starts) = (starts_of(&send_counts), starts_of(&receive_counts));
-        let pairs = |v: &[i32]| v.iter().map(|&c| 2 * c).collect::<Vec<i32>>();
-        let received_total: usize = receive_counts.iter().map(|&c| c as usize).sum();
-        let mut asked = vec![0i64; 2 * received_total];
-        // SAFETY: counts and starts (in i64s: two per entry) match both buffers' lengths.
-        mpi(
-            unsafe {
-                ffi::mpi_sys::MPI_Alltoallv(
-                    requests.as_ptr().cast(),
-                    pairs(&send_counts).as_ptr(),
-                    pairs(&send_starts).as_ptr(),
-                    ffi::mpi_sys::RSMPI_INT64_T,
-                    asked.as_mut_ptr().cast(),
-                    pairs(&receive_counts).as_ptr(),
-                    pairs(&receive_starts).as_ptr(),
-                    ffi::mpi_sys::RSMPI_INT64_T,
-                    comm,
-                )
-            },
-            "MPI_Alltoallv",
-        )?;
+        let received_total = asked.len() / 2;
         let mut ok = true;
         let received_targets: Vec<u32> = asked
             .chunks_exact(2)
