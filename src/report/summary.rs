@@ -182,7 +182,8 @@ impl StepCost {
             bytes_linear_force: t.operator_entries * entry + 3.0 * 8.0 * t.unknowns as f64,
             seconds_linear_force: t.seconds_in_linear_force / steps,
             force_evaluations_per_step: t.force_evaluations as f64 / steps,
-            bytes_per_force_evaluation: (2.0 * nor + 3.0 * tan + 2.0 * tan2 + conv) * entry,
+            // The stacked channels forward and back, the tangent rows once more (velocity).
+            bytes_per_force_evaluation: (2.0 * (nor + tan + tan2 + conv) + tan) * entry,
             seconds_per_force_evaluation: per(t.seconds_in_forces, t.force_evaluations),
             tangent_products_per_step: t.tangent_products as f64 / steps,
             bytes_per_tangent_product: 2.0 * (nor + tan + tan2 + conv) * entry,
