@@ -36,6 +36,19 @@ use squeal::measure::{exceeds, nan_max, nan_min};
 
 use super::common::{check_le, one_rank_rows, rel, say, solve_modes, steel, suite_dir};
 
+/// max |x - 1| where `solver` solves x from b = `m` 1.
+fn error_solving_for_ones(solver: &DirectSolver, m: &SparseMatrix) -> Result<f64, String> {
+    let e = |e: squeal::la::LaError| e.to_string();
+    let mut ones = m.new_vector().map_err(e)?;
+    ones.set_all(1.0).map_err(e)?;
+    let mut rhs = ones.duplicate().map_err(e)?;
+    m.mult(&ones, &mut rhs).map_err(e)?;
+    let mut x = ones.duplicate().map_err(e)?;
+    solver.solve(&rhs, &mut x).map_err(e)?;
+    x.axpy(-1.0, &ones).map_err(e)?;
+    x.norm_inf().map_err(e)
+}
+
 /// Rank r's blocks for the plan test: (global id, indices); one holds a -1 (skipped).
 fn rank_blocks(r: usize, n: usize) -> Vec<(usize, Vec<i32>)> {
     let mut blocks: Vec<(usize, Vec<i32>)> = (0..5)
@@ -102,14 +115,7 @@ fn planned_block_addition_lands_exactly_where_matsetvalues_would(
     plan.add(&mut a, &indices, fill).map_err(e)?;
     let twice = entry_error(&a, |i, j| base(i, j) + 2.0 * sum[i * n + j])?;
     solver.refactorize(&a).map_err(e)?;
-    let mut ones = a.new_vector().map_err(e)?;
-    ones.set_all(1.0).map_err(e)?;
-    let mut rhs = ones.duplicate().map_err(e)?;
-    a.mult(&ones, &mut rhs).map_err(e)?;
-    let mut x = ones.duplicate().map_err(e)?;
-    solver.solve(&rhs, &mut x).map_err(e)?;
-    x.axpy(-1.0, &ones).map_err(e)?;
-    let solve_error = x.norm_inf().map_err(e)?;
+    let solve_error = error_solving_for_ones(&solver, &a)?;
     let outside: Vec<i32> = vec![0, 5];
     let no_plan = BlockAddPlan::new(&a, &[outside.as_slice()])
         .map_err(e)?
@@ -724,14 +730,7 @@ fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_the
     let b2 = banded(petsc, n, local.clone(), 1, shifted)?;
     a.copy_values_from(&b2).map_err(e)?;
     solver.refactorize(&a).map_err(e)?;
-    let mut ones = a.new_vector().map_err(e)?;
-    ones.set_all(1.0).map_err(e)?;
-    let mut rhs = ones.duplicate().map_err(e)?;
-    b2.mult(&ones, &mut rhs).map_err(e)?;
-    let mut x = ones.duplicate().map_err(e)?;
-    solver.solve(&rhs, &mut x).map_err(e)?;
-    x.axpy(-1.0, &ones).map_err(e)?;
-    let solve_error = x.norm_inf().map_err(e)?;
+    let solve_error = error_solving_for_ones(&solver, &b2)?;
     a.axpy_subset(-0.5, &b2).map_err(e)?;
     let halved = entry_error(&a, |i, j| {
         0.5 * if in_band(i, j) { shifted(i, j) } else { 0.0 }

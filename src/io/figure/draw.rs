@@ -204,20 +204,7 @@ fn draw_layer<DB: DrawingBackend<ErrorType: 'static>>(
         }
         Layer::Text(at, s, c, place) => {
             if inside(at) {
-                let colour = rgb(*c);
-                let style = TextStyle::from((FONT, 13).into_font()).color(&colour);
-                let (style, offset) = match place {
-                    TextPlace::RightAbove => (style, (6, -16)),
-                    TextPlace::RightBelow => (style, (6, 4)),
-                    TextPlace::CentredAbove => {
-                        (style.pos(Pos::new(HPos::Center, VPos::Bottom)), (0, -3))
-                    }
-                };
-                let text =
-                    EmptyElement::at(*at) + plotters::element::Text::new(s.clone(), offset, style);
-                chart
-                    .draw_series(std::iter::once(text))
-                    .map_err(text_error)?;
+                draw_text(chart, *at, s, *c, *place)?;
             }
             Ok(false)
         }
@@ -278,6 +265,28 @@ fn draw_layer<DB: DrawingBackend<ErrorType: 'static>>(
             Ok(true)
         }
     }
+}
+
+/// A text at a data point, placed as `place` says.
+fn draw_text<DB: DrawingBackend<ErrorType: 'static>>(
+    chart: &mut Chart<'_, DB>,
+    at: (f64, f64),
+    s: &str,
+    c: Rgb,
+    place: TextPlace,
+) -> Result<(), DrawError> {
+    let colour = rgb(c);
+    let style = TextStyle::from((FONT, 13).into_font()).color(&colour);
+    let (style, offset) = match place {
+        TextPlace::RightAbove => (style, (6, -16)),
+        TextPlace::RightBelow => (style, (6, 4)),
+        TextPlace::CentredAbove => (style.pos(Pos::new(HPos::Center, VPos::Bottom)), (0, -3)),
+    };
+    let text = EmptyElement::at(at) + plotters::element::Text::new(s.to_string(), offset, style);
+    chart
+        .draw_series(std::iter::once(text))
+        .map_err(text_error)?;
+    Ok(())
 }
 
 /// A heat map's cells (merged down to at most `MAX_CELLS`), coloured on the colour bar.
