@@ -322,7 +322,7 @@ pub struct Factored<'p> {
 
 /// [`solve`] from `start_at`.
 ///
-/// About 225 lines, on purpose: load stepping with cutting around a Newton loop; the iterate,
+/// About 235 lines, on purpose: load stepping with cutting around a Newton loop; the iterate,
 /// the residual and the tangent's state pass between the two loops, which read best in one
 /// view (the corrections, the factorization and the line search are their own functions).
 ///
