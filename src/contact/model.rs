@@ -44,22 +44,11 @@ pub struct ContactModel<'p> {
     pub(super) point_columns: Vec<Vec<i32>>,
     pub(super) disc_speed: f64,
     pub(super) pairing_seconds: f64,
-    /// Point vectors reused by `evaluate` and `force` (the transient calls them every
-    /// iteration; creating PETSc vectors there cost a tenth of an iteration).
-    work: std::cell::RefCell<[Vector<'p>; 5]>,
-    /// A vector of `c_all`'s rows, reused the same way.
+    /// Vectors reused by `evaluate` and `force` (the transient calls them every iteration;
+    /// creating PETSc vectors there cost a tenth of an iteration): one of `c_all`'s rows, one
+    /// of the points (the tangential velocity).
     stacked: std::cell::RefCell<Vector<'p>>,
-}
-
-/// Five point vectors of the observation matrices' row layout.
-fn point_work<'p>(c: &ObservationMatrix<'p>) -> Result<[Vector<'p>; 5], LaError> {
-    Ok([
-        c.new_point_vector()?,
-        c.new_point_vector()?,
-        c.new_point_vector()?,
-        c.new_point_vector()?,
-        c.new_point_vector()?,
-    ])
+    velocity: std::cell::RefCell<Vector<'p>>,
 }
 
 /// Rows per point of the stacked observation matrix.
@@ -130,8 +119,7 @@ impl<'p> ContactModel<'p> {
             .collect();
         let [c_nor, c_tan, c_tan2, c_conv, c_all] =
             observation_matrices(petsc, first_row, &rows, dofs.owned_dofs())?;
-        let work = point_work(&c_nor)?;
-        let stacked = c_all.new_point_vector()?;
+        let (stacked, velocity) = (c_all.new_point_vector()?, c_nor.new_point_vector()?);
         Ok(ContactModel {
             interfaces,
             misses: pairing.misses,
@@ -151,8 +139,8 @@ impl<'p> ContactModel<'p> {
             point_columns,
             disc_speed: settings.disc_speed,
             pairing_seconds: start.elapsed().as_secs_f64(),
-            work: work.into(),
             stacked: stacked.into(),
+            velocity: velocity.into(),
         })
     }
 
@@ -203,8 +191,7 @@ impl<'p> ContactModel<'p> {
             .collect::<Result<Vec<_>, ContactError>>()?;
         let [c_nor, c_tan, c_tan2, c_conv, c_all] =
             observation_matrices(petsc, self.first_row, &rows, columns.clone())?;
-        let work = point_work(&c_nor)?;
-        let stacked = c_all.new_point_vector()?;
+        let (stacked, velocity) = (c_all.new_point_vector()?, c_nor.new_point_vector()?);
         Ok(ContactModel {
             interfaces: self.interfaces.clone(),
             points: self.points.clone(),
@@ -224,8 +211,8 @@ impl<'p> ContactModel<'p> {
             point_columns,
             disc_speed: self.disc_speed,
             pairing_seconds: self.pairing_seconds,
-            work: work.into(),
             stacked: stacked.into(),
+            velocity: velocity.into(),
         })
     }
 
@@ -248,12 +235,11 @@ impl<'p> ContactModel<'p> {
         v: Option<&Vector>,
         friction_scale: f64,
     ) -> Result<ContactState, LaError> {
-        let mut work = self.work.borrow_mut();
-        let w = &mut work[4];
+        let mut w = self.velocity.borrow_mut();
         let mut stacked = self.stacked.borrow_mut();
         self.c_all.mult(q, &mut stacked)?;
         match v {
-            Some(v) => self.c_tan.mult(v, w)?,
+            Some(v) => self.c_tan.mult(v, &mut w)?,
             None => w.set_all(0.0)?,
         }
         let (o, w) = (stacked.local()?, w.local()?);
@@ -492,8 +478,8 @@ impl<'p> ContactModel<'p> {
                 ),
             });
         }
-        let work = point_work(&self.c_nor)?;
         let stacked = self.c_all.new_point_vector()?;
+        let velocity = self.c_nor.new_point_vector()?;
         Ok(ContactModel {
             interfaces,
             points: self.points.clone(),
@@ -513,8 +499,8 @@ impl<'p> ContactModel<'p> {
             point_columns: self.point_columns.clone(),
             disc_speed,
             pairing_seconds: self.pairing_seconds,
-            work: work.into(),
             stacked: stacked.into(),
+            velocity: velocity.into(),
         })
     }
 }
