@@ -163,12 +163,23 @@ impl<'p> ContactModel<'p> {
         parts: &[Part],
         matrix: &mut SparseMatrix,
     ) -> Result<(), LaError> {
+        self.add_tangent_terms(state, &[(parts, 1.0)], matrix)
+    }
+
+    /// As [`add_tangent`](Self::add_tangent) with each `(parts, scale)` adding `scale` times
+    /// those parts.
+    pub fn add_tangent_terms(
+        &self,
+        state: &ContactState,
+        terms: &[(&[Part], f64)],
+        matrix: &mut SparseMatrix,
+    ) -> Result<(), LaError> {
         let mut dense = Vec::new();
         for (k, rows) in self.rows.iter().enumerate() {
             let n = rows.dofs.len();
             dense.clear();
             dense.resize(n * n, 0.0);
-            self.point_tangent(k, state, parts, &mut dense);
+            self.point_tangent(k, state, terms, &mut dense);
             matrix.add_values(&rows.dofs, &rows.dofs, &dense)?;
         }
         Ok(())
@@ -204,8 +215,23 @@ impl<'p> ContactModel<'p> {
         matrix: &mut SparseMatrix,
         plan: &mut BlockAddPlan,
     ) -> Result<(), LaError> {
+        self.add_tangent_terms_planned(state, &[(parts, 1.0)], matrix, plan)
+    }
+
+    /// As [`add_tangent_planned`](Self::add_tangent_planned) with each `(parts, scale)` adding
+    /// `scale` times those parts (the transient's Jacobian: the friction damping through
+    /// gamma / (beta h)).
+    ///
+    /// # Collective
+    pub fn add_tangent_terms_planned(
+        &self,
+        state: &ContactState,
+        terms: &[(&[Part], f64)],
+        matrix: &mut SparseMatrix,
+        plan: &mut BlockAddPlan,
+    ) -> Result<(), LaError> {
         plan.add(matrix, &self.point_dofs(), |k, dense| {
-            self.point_tangent(k, state, parts, dense)
+            self.point_tangent(k, state, terms, dense)
         })
     }
 
@@ -213,22 +239,31 @@ impl<'p> ContactModel<'p> {
         self.rows.iter().map(|r| r.dofs.as_slice()).collect()
     }
 
-    /// Local point k's tangent `parts` added to `dense` (its DOFs' square, row-major).
-    fn point_tangent(&self, k: usize, state: &ContactState, parts: &[Part], dense: &mut [f64]) {
+    /// Local point k's tangent added to `dense` (its DOFs' square, row-major): each `(parts,
+    /// scale)` adds `scale` times those parts (the tangent is linear in the point's weight).
+    fn point_tangent(
+        &self,
+        k: usize,
+        state: &ContactState,
+        terms: &[(&[Part], f64)],
+        dense: &mut [f64],
+    ) {
         let id = self.local[k];
         let sliding = self.interfaces[self.points[id].interface]
             .friction
             .is_sliding();
         let omega = if sliding { self.disc_speed } else { 0.0 };
-        for &part in parts {
-            kernel::add_tangent(
-                &self.rows[k],
-                self.points[id].weight,
-                omega,
-                &state.response[k],
-                part,
-                dense,
-            );
+        for &(parts, scale) in terms {
+            for &part in parts {
+                kernel::add_tangent(
+                    &self.rows[k],
+                    scale * self.points[id].weight,
+                    omega,
+                    &state.response[k],
+                    part,
+                    dense,
+                );
+            }
         }
     }
 

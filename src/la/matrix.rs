@@ -418,6 +418,12 @@ impl<'p> SparseMatrix<'p> {
         })
     }
 
+    /// An identity of this matrix while it lives (two live matrices never share one): to
+    /// recognize a matrix handed back as the one built earlier.
+    pub fn identity(&self) -> usize {
+        self.raw as usize
+    }
+
     /// Same layout, pattern and values.
     ///
     /// # Collective

@@ -27,6 +27,7 @@ type MumpsInt8 = i64;
 /// MUMPS' job codes.
 const JOB_INIT: i32 = -1;
 const JOB_END: i32 = -2;
+const JOB_FACTORIZE: i32 = 2;
 const JOB_ANALYSE_FACTORIZE: i32 = 4;
 const JOB_SOLVE: i32 = 3;
 
@@ -43,6 +44,10 @@ pub struct SingleLu<'p> {
     gather: ffi::VecScatter,
     whole: ffi::Vec,
     symmetric: bool,
+    /// The matrix factored and its nonzero state then: a refactorization needs the same
+    /// matrix with the same pattern (its entries in the same order).
+    matrix: ffi::Mat,
+    nonzero_state: ffi::PetscObjectState,
     /// MUMPS holds an instance (JOB = -1 succeeded): ended with JOB = -2 on drop.
     started: bool,
     report: FactorizationReport,
@@ -86,6 +91,8 @@ impl<'p> SingleLu<'p> {
             gather: std::ptr::null_mut(),
             whole: std::ptr::null_mut(),
             symmetric,
+            matrix: a.raw,
+            nonzero_state: nonzero_state(a)?,
             started: false,
             report: FactorizationReport::unknown(),
             _petsc: PhantomData,
@@ -108,20 +115,7 @@ impl<'p> SingleLu<'p> {
         id.jcn_loc = solver._cols.as_mut_ptr();
         id.a_loc = solver._values.as_mut_ptr();
         solver.call(JOB_ANALYSE_FACTORIZE, "factorization")?;
-        let infog = |i: usize| solver.id.infog[i - 1];
-        let entries = infog(29);
-        solver.report = FactorizationReport {
-            factor_entries: if entries < 0 {
-                -(entries as f64) * 1e6
-            } else {
-                entries as f64
-            },
-            ordering: infog(7),
-            memory_max_mb: infog(21),
-            memory_mb: infog(22),
-            flops: f64::from(solver.id.rinfog[2]),
-            negative_pivots: infog(12),
-        };
+        solver.report = solver.read_report();
         let layout = a.new_vector()?;
         call!(VecScatterCreateToZero(
             layout.raw,
@@ -134,8 +128,69 @@ impl<'p> SingleLu<'p> {
         Ok(solver)
     }
 
+    fn read_report(&self) -> FactorizationReport {
+        let infog = |i: usize| self.id.infog[i - 1];
+        let entries = infog(29);
+        FactorizationReport {
+            factor_entries: if entries < 0 {
+                -(entries as f64) * 1e6
+            } else {
+                entries as f64
+            },
+            ordering: infog(7),
+            memory_max_mb: infog(21),
+            memory_mb: infog(22),
+            flops: f64::from(self.id.rinfog[2]),
+            negative_pivots: infog(12),
+        }
+    }
+
     pub fn report(&self) -> FactorizationReport {
         self.report
+    }
+
+    /// Whether `a` is the matrix this factor was computed from, with the same pattern (what
+    /// [`Self::refactorize`] needs).
+    pub fn factors(&self, a: &SparseMatrix) -> Result<bool> {
+        Ok(a.raw == self.matrix && nonzero_state(a)? == self.nonzero_state)
+    }
+
+    /// Factorizes `a` again after its values changed in place: MUMPS' numerical phase on the
+    /// first factorization's ordering and analysis (the analysis of a reduced model with
+    /// dense modal rows is a large part of a factorization). `a` must be the matrix factored
+    /// first, with its pattern unchanged ([`Self::factors`]).
+    ///
+    /// # Collective
+    pub fn refactorize(&mut self, a: &SparseMatrix) -> Result<()> {
+        if !self.factors(a)? {
+            return Err(super::LaError::Invalid(
+                "single-precision refactorization: not the matrix (or pattern) factored".into(),
+            ));
+        }
+        let symmetric = self.symmetric;
+        let mut k = 0;
+        let values = &mut self._values;
+        a.for_each_local_row(|row, c, v| {
+            for (&col, &value) in c.iter().zip(v) {
+                if symmetric && (col as usize) < row {
+                    continue;
+                }
+                if let Some(slot) = values.get_mut(k) {
+                    *slot = value as f32;
+                }
+                k += 1;
+            }
+        })?;
+        if k != values.len() {
+            return Err(super::LaError::Invalid(format!(
+                "single-precision refactorization: {k} local entries, {} factored",
+                values.len()
+            )));
+        }
+        self.id.a_loc = self._values.as_mut_ptr();
+        self.call(JOB_FACTORIZE, "factorization")?;
+        self.report = self.read_report();
+        Ok(())
     }
 
     pub fn is_symmetric(&self) -> bool {
@@ -202,6 +257,12 @@ impl<'p> SingleLu<'p> {
         }
         Ok(())
     }
+}
+
+fn nonzero_state(a: &SparseMatrix) -> Result<ffi::PetscObjectState> {
+    let mut state = 0;
+    call!(MatGetNonzeroState(a.raw, &mut state))?;
+    Ok(state)
 }
 
 impl Drop for SingleLu<'_> {

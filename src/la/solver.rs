@@ -351,11 +351,12 @@ impl<'p> DirectSolver<'p> {
         self.report
     }
 
-    /// Whether this is a MUMPS (or other PETSc) factor of the matrix `a` itself, which
+    /// Whether this is a factor of the matrix `a` itself (MUMPS or another PETSc factor; the
+    /// single-precision factor also needs `a`'s pattern unchanged), which
     /// [`Self::refactorize`] can renew.
     pub fn factors(&self, a: &SparseMatrix) -> Result<bool> {
-        if self.single.is_some() {
-            return Ok(false);
+        if let Some(single) = &self.single {
+            return single.borrow().factors(a);
         }
         let (mut amat, mut pmat) = (std::ptr::null_mut(), std::ptr::null_mut());
         call!(KSPGetOperators(self.raw, &mut amat, &mut pmat))?;
@@ -370,6 +371,12 @@ impl<'p> DirectSolver<'p> {
     ///
     /// # Collective
     pub fn refactorize(&mut self, a: &SparseMatrix) -> Result<()> {
+        if let Some(single) = &self.single {
+            let mut single = single.borrow_mut();
+            single.refactorize(a)?;
+            self.report = single.report();
+            return Ok(());
+        }
         if !self.factors(a)? {
             return Err(LaError::Invalid(
                 "refactorize: not a PETSc factor of this matrix".into(),

@@ -111,6 +111,8 @@ pub struct TransientSummary {
     pub seconds_per_step: f64,
     pub factor_entries: f64,
     pub seconds_factorizing: f64,
+    /// Of `seconds_factorizing`: assembling the Jacobians.
+    pub seconds_assembling_jacobians: f64,
     pub cuts: usize,
     pub refreshes: usize,
     pub krylov_retries: usize,
@@ -390,6 +392,7 @@ impl TransientSummary {
             seconds_per_step: stepping / steps_run,
             factor_entries: t.factor_entries,
             seconds_factorizing: t.seconds_factorizing,
+            seconds_assembling_jacobians: t.seconds_assembling_jacobians,
             cuts: t.cuts,
             refreshes: t.refreshes,
             krylov_retries: t.krylov_retries,

@@ -34,6 +34,14 @@ pub fn write_transient(
         ("factor_entries", tr.factor_entries),
         ("states_written", tr.states as f64),
         ("seconds_stepping", tr.seconds_stepping),
+        (
+            "seconds_factorizing_jacobians_in_loop",
+            tr.seconds_jacobians,
+        ),
+        (
+            "seconds_assembling_jacobians",
+            tr.seconds_assembling_jacobians,
+        ),
         ("seconds_in_corrections", tr.seconds_solving),
         ("factor_solves", tr.factor_solves as f64),
         ("seconds_in_factor_solves", tr.seconds_in_factor_solves),

@@ -178,12 +178,18 @@ pub fn integrate_adaptive<'p>(
     } = adaptivity;
     let nominal = settings.step;
     let step_of = |level: u32| nominal / f64::from(1u32 << level);
+    // The Jacobian a refresh replaces, handed back to be renewed in place.
+    let mut retired = None;
     while state.time < end_time - 0.25 * step_of(control.level) {
         let step_settings = NewmarkSettings {
             step: step_of(control.level),
             ..settings
         };
-        let factor = factorize(&step_settings, control.refreshed.then_some(&*state))?;
+        let factor = factorize(
+            &step_settings,
+            control.refreshed.then_some(&*state),
+            retired.take(),
+        )?;
         control.factorizations += 1;
         let mut integrator = Newmark::new(step_settings, m, c, k, &factor)?;
         loop {
@@ -318,6 +324,8 @@ pub fn integrate_adaptive<'p>(
                 Err(e) => return Err(e),
             }
         }
+        drop(integrator);
+        retired = factor.retire();
     }
     Ok(())
 }

@@ -390,7 +390,7 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
         let (q, v) = (s.q.gather_all()?, s.v.gather_all()?);
         Ok(([q[0], q[1]], [v[0], v[1]]))
     };
-    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
+    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>, _retired| {
         let (q, v) = match at {
             Some(s) => pair(s)?,
             None => ([static_x(), 0.0], [0.0; 2]),

@@ -10,7 +10,7 @@
 //! - the transient's per-rank LU (PETSc's sequential LU on every rank, no pivoting) solves the
 //!   Newmark Jacobian of brake M0 with friction (unsymmetric) backward stably, like MUMPS;
 //!   MUMPS in single precision within the single-precision bound, refined in double
-//!   precision to the double bound in at most 3 steps.
+//!   precision to the double bound in at most 3 steps, and renewed in place on new values.
 //! - values copied and added between matrices whose patterns nest (the static tangent's K0)
 //!   land exactly where they belong, across the ranks' column split, and a factorization
 //!   renewed afterwards factors the new values.
@@ -160,6 +160,10 @@ pub fn tests() -> Vec<super::NamedTest> {
         (
             "brake_m0_newmark_jacobian_single_precision_mumps",
             brake_m0_newmark_jacobian_single_precision_mumps,
+        ),
+        (
+            "brake_m0_single_precision_factor_renewed_in_place",
+            brake_m0_single_precision_factor_renewed_in_place,
         ),
         (
             "nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_them",
@@ -504,6 +508,14 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
 /// The brake M0 Newmark Jacobian (see the test below) and b = J x_true for an x_true with
 /// entries of both signs and several magnitudes.
 fn m0_newmark_system<'p>(petsc: &'p Petsc) -> Result<(SparseMatrix<'p>, Vector<'p>), String> {
+    m0_newmark_system_with_friction(petsc, 1.0)
+}
+
+/// [`m0_newmark_system`] with the friction stiffness KR scaled by `friction`.
+fn m0_newmark_system_with_friction<'p>(
+    petsc: &'p Petsc,
+    friction: f64,
+) -> Result<(SparseMatrix<'p>, Vector<'p>), String> {
     let (h, beta, gamma, omega) = (1e-6, 0.25, 0.5, 4.0 * std::f64::consts::PI);
     let term = |f: &str, c: f64| MatrixTerm {
         file: PathBuf::from(f),
@@ -516,7 +528,7 @@ fn m0_newmark_system<'p>(petsc: &'p Petsc) -> Result<(SparseMatrix<'p>, Vector<'
         term("D1.mtx.gz", c1),
         term("DG.mtx.gz", c1 * omega),
         term("K1.mtx.gz", 1.0),
-        term("KR.mtx.gz", 1.0),
+        term("KR.mtx.gz", friction),
     ];
     let j = load_sum(petsc, &terms, &data_dir()).map_err(|e| e.to_string())?;
     if j.asymmetry.is_nan() || j.asymmetry < 1e-12 {
@@ -647,6 +659,51 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
         ));
     }
     Ok(())
+}
+
+/// The single-precision factor renewed in place (the transient's refreshed Jacobian: new
+/// values on the pattern of the first, MUMPS' numerical phase on the first analysis): J's
+/// values are overwritten by those of J with twice the friction stiffness KR (same pattern),
+/// the factor renewed, and one solve of the new system must meet the single-precision bound
+/// of the test above (n_row u = 1.2e-5), which the old factor misses by orders of magnitude
+/// (checked, so the renewal is not vacuous); another matrix is refused.
+fn brake_m0_single_precision_factor_renewed_in_place(petsc: &Petsc) -> Result<(), String> {
+    let e = |e: squeal::la::LaError| e.to_string();
+    let (mut j, _) = m0_newmark_system(petsc)?;
+    let (j2, b2) = m0_newmark_system_with_friction(petsc, 2.0)?;
+    let mut factor =
+        DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_renewed_").map_err(e)?;
+    j.copy_values_from(&j2).map_err(e)?;
+    let (j_inf, b_inf) = (j.norm_infinity().map_err(e)?, b2.norm_inf().map_err(e)?);
+    let backward = |factor: &DirectSolver| -> Result<f64, String> {
+        let mut x = b2.duplicate().map_err(e)?;
+        factor.solve(&b2, &mut x).map_err(e)?;
+        let mut r = b2.duplicate().map_err(e)?;
+        j.mult(&x, &mut r).map_err(e)?;
+        r.axpy(-1.0, &b2).map_err(e)?;
+        Ok(r.norm_inf().map_err(e)? / (j_inf * x.norm_inf().map_err(e)? + b_inf))
+    };
+    let stale = backward(&factor)?;
+    let renews = factor.factors(&j).map_err(e)?;
+    factor.refactorize(&j).map_err(e)?;
+    let renewed = backward(&factor)?;
+    let refused = factor.refactorize(&j2).is_err() && !factor.factors(&j2).map_err(e)?;
+    say(
+        petsc,
+        &format!("M0 Newmark J, friction doubled in place: the old single-precision factor's backward error {stale:.2e}, renewed {renewed:.2e} (bound 1.2e-5); another matrix refused: {refused}"),
+    );
+    check_le("backward error of the renewed factor", renewed, 1.2e-5)?;
+    // NaN in either fails here too.
+    if stale.is_nan() || stale <= 100.0 * renewed {
+        return Err(format!(
+            "the old factor solves the new system nearly as well ({stale:e} vs {renewed:e}): the test does not see a renewal"
+        ));
+    }
+    match (renews, refused) {
+        (false, _) => Err("the factor does not recognize its own matrix".into()),
+        (_, false) => Err("a factor was renewed from another matrix".into()),
+        _ => Ok(()),
+    }
 }
 
 /// A banded n x n matrix (|i - j| <= band) of this rank's rows `local`, entries `value(i, j)`.

@@ -161,7 +161,7 @@ fn run(
     // The fixed J knows nothing of the friction (the sliding start has none); refreshed ones
     // carry it at their state, unless `frictionless_jacobian` (then only the linearization
     // does, and the Newton-Krylov retries must carry the steps).
-    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
+    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>, _retired| {
         let c = match at {
             Some(s) if !frictionless_jacobian => damping_at(ns, s)?,
             _ => 0.0,

@@ -111,8 +111,9 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
     let mut state = one_dof_state(petsc, 1.0, 0.0)?;
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
-    let mut factorize =
-        |ns: &NewmarkSettings, _at: Option<&State>| one_dof_jacobian(petsc, ns, &m, &k, 1.0, false);
+    let mut factorize = |ns: &NewmarkSettings, _at: Option<&State>, _retired| {
+        one_dof_jacobian(petsc, ns, &m, &k, 1.0, false)
+    };
     let mut accepted = 0;
     let mut on_step = |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl| {
         accepted += 1;
@@ -228,7 +229,7 @@ fn cut_and_restore(
     initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
     // The contact stiffness the current factor was built with.
     let factored = std::cell::Cell::new(1.0);
-    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>| {
+    let mut factorize = |ns: &NewmarkSettings, at: Option<&State>, _retired| {
         // The mock 1, or the contact tangent -df/dg = exp(-g) of the given state.
         let stiffness = match at {
             Some(s) => (-s.q.gather_all()?[0]).exp(),

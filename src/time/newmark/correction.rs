@@ -3,13 +3,19 @@
 //! rebuilt at every iterate, or Newton-Krylov (`krylov.rs`); and what a correction changes in
 //! the carried linear force.
 
-use super::{Jacobian, Newmark, NewmarkSettings, State, StepReport};
+use super::{Jacobian, Newmark, NewmarkSettings, RetiredJacobian, State, StepReport};
 use crate::la::{DirectSolver, LaError, LowRankUpdate, TangentChange, Vector};
 
 /// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
-/// the tangent of that state.
-pub type Factorize<'f, 'p> =
-    dyn FnMut(&NewmarkSettings, Option<&State<'p>>) -> Result<Jacobian<'f, 'p>, LaError> + 'f;
+/// the tangent of that state. The third argument hands back the matrix and factor of the
+/// Jacobian this one replaces, which a builder may renew in place (numerical refactorization
+/// on the same pattern) instead of building anew.
+pub type Factorize<'f, 'p> = dyn FnMut(
+        &NewmarkSettings,
+        Option<&State<'p>>,
+        Option<RetiredJacobian<'p>>,
+    ) -> Result<Jacobian<'f, 'p>, LaError>
+    + 'f;
 
 /// The change of the nonlinear forces' tangent between the Jacobian's factor and an iterate,
 /// X(iterate) - extra (X = K_c + K_stick + K_f + gamma/(beta h) C_f for contact: the

@@ -97,6 +97,20 @@ pub struct Jacobian<'x, 'p> {
     pub matrix: Option<SparseMatrix<'p>>,
 }
 
+impl<'p> Jacobian<'_, 'p> {
+    /// Its matrix and factor, for a builder to renew in place (None: no matrix kept).
+    pub fn retire(self) -> Option<RetiredJacobian<'p>> {
+        let factor = self.factor;
+        self.matrix.map(|matrix| RetiredJacobian { matrix, factor })
+    }
+}
+
+/// A replaced Jacobian's matrix and factor, handed back to its builder ([`Factorize`]).
+pub struct RetiredJacobian<'p> {
+    pub matrix: SparseMatrix<'p>,
+    pub factor: DirectSolver<'p>,
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum TimeError {
     #[error(
@@ -201,6 +215,8 @@ pub struct Newmark<'a, 'p> {
     low_rank: LowRankUpdate<'p>,
     /// Iterations of the last attempt that did not converge (its solves: `solves`).
     failed_iterations: usize,
+    /// The full Newton's last J, renewed in place at the next iterate.
+    full_newton_spare: Option<RetiredJacobian<'p>>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -235,6 +251,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             solves: SolveCount::default(),
             low_rank: LowRankUpdate::default(),
             failed_iterations: 0,
+            full_newton_spare: None,
             q1,
         })
     }
@@ -424,9 +441,11 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     self.updated_correction(tangent.as_ref(), &mut report)?;
                 }
                 Correction::Full(build) => {
-                    let fresh = build(&self.settings, Some(&iterate(self)?))?;
+                    let retired = self.full_newton_spare.take();
+                    let fresh = build(&self.settings, Some(&iterate(self)?), retired)?;
                     self.solves.solve(&fresh.factor, &self.r, &mut self.dq)?;
                     self.linear_change(&fresh, &mut report)?;
+                    self.full_newton_spare = fresh.retire();
                 }
                 Correction::Krylov(linearize) => {
                     let tangent = linearize(&self.settings, &iterate(self)?)?;

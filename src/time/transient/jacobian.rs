@@ -13,8 +13,8 @@ use crate::contact::kernel::Part;
 use crate::contact::linearize::Base;
 use crate::contact::linearize::TangentOperator;
 use crate::contact::{ContactModel, ContactState};
-use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
-use crate::time::newmark::{jacobian, Damping, Jacobian, NewmarkSettings, State};
+use crate::la::{BlockAddPlan, DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::time::newmark::{jacobian, Damping, Jacobian, NewmarkSettings, RetiredJacobian, State};
 
 /// The contact tangent parts of the consistent Jacobian (with the friction damping through
 /// gamma / (beta h)): the joints' stick traction also moves with the gap
@@ -33,7 +33,6 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     contact: &'a ContactModel<'p>,
     /// K0 on the pattern joined with the contact couplings (the input K0 for that pattern).
     k0: &'a SparseMatrix<'p>,
-    k0_input: &'a SparseMatrix<'p>,
     m: &'a SparseMatrix<'p>,
     c: Damping<'a, 'p>,
     static_state: &'a ContactState,
@@ -57,6 +56,20 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     /// All factorizations, and those within the stepping loop.
     pub seconds_factorizing: f64,
     pub seconds_in_loop: f64,
+    /// Of `seconds_factorizing`: assembling J (contact tangent and sums), before MUMPS.
+    pub seconds_assembling: f64,
+    /// What the refreshed Jacobians of the current step size share.
+    base: Option<RefreshBase<'p>>,
+}
+
+/// J's values without the contact tangent, M / (beta h^2) + gamma / (beta h) C + K0 on J's
+/// pattern, for one step size; where the tangent's entries land in the last refreshed J, and
+/// which matrix that is (a refresh renews it in place when it is handed back).
+struct RefreshBase<'p> {
+    step: f64,
+    values: SparseMatrix<'p>,
+    plan: Option<BlockAddPlan>,
+    last: Option<usize>,
 }
 
 impl<'a, 'p> JacobianBuilder<'a, 'p> {
@@ -83,7 +96,6 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             petsc,
             contact,
             k0,
-            k0_input,
             m,
             c,
             static_state,
@@ -98,6 +110,8 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             built: 0,
             seconds_factorizing: 0.0,
             seconds_in_loop: 0.0,
+            seconds_assembling: 0.0,
+            base: None,
         })
     }
 
@@ -138,13 +152,16 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
     /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
     /// mock; a restart's saved state takes precedence once. The contact tangent beyond K0
     /// comes back as an operator applied through the observation rows (the iteration's
-    /// correction of the carried linear force).
+    /// correction of the carried linear force). `retired`, the Jacobian this one replaces:
+    /// when it is the last refreshed J of this step size, its matrix takes the new values in
+    /// place and its factor is renewed by the numerical phase alone.
     ///
     /// # Collective
     pub fn factorize(
         &mut self,
         ns: &NewmarkSettings,
         at: Option<&State<'p>>,
+        retired: Option<RetiredJacobian<'p>>,
     ) -> Result<Jacobian<'a, 'p>, LaError> {
         let t = Instant::now();
         let saved = self.restart_at.take();
@@ -153,61 +170,158 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             (None, Some(s)) => Some((&s.q, &s.v)),
             (None, None) => None,
         };
+        let Some((q, v)) = at else {
+            drop(retired);
+            return self.factorize_mock(ns, t);
+        };
         let contact = self.contact;
         // The friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
-        // enters through gamma / (beta h).
+        // enters through gamma / (beta h); the joints' stick traction also moves with the gap
+        // (StickCoupling).
         let c1 = ns.gamma / (ns.beta * ns.step);
-        let (j, extra) = if let Some((q, v)) = at {
-            let cs = contact.evaluate(q, Some(v), 1.0)?;
-            // The consistent tangent: the joints' stick traction also moves with
-            // the gap (StickCoupling).
-            let parts = CONSISTENT;
-            let mut tangent =
-                contact.linearize(self.petsc, Base::PatternOf(self.k0_input), &cs, &parts)?;
-            let damping = contact.linearize(
-                self.petsc,
-                Base::PatternOf(self.k0_input),
-                &cs,
-                &[Part::Damping],
-            )?;
-            tangent.axpy(c1, &damping)?;
-            self.built_at = Some((q.try_clone()?, v.try_clone()?));
-            self.built_damping = c1;
-            let extra = contact.tangent_operator(
-                self.petsc,
-                &cs,
-                &[(&parts, 1.0), (&[Part::Damping], c1)],
-            )?;
-            self.built_contact = Some(cs);
-            (
-                jacobian(ns, self.m, self.c, self.k0, Some(&tangent))?,
-                extra,
-            )
-        } else {
-            self.built_contact = None;
-            self.built_damping = 0.0;
-            let extra = contact.tangent_operator(
-                self.petsc,
-                self.static_state,
-                &[(&[Part::Normal, Part::Stick], 1.0)],
-            )?;
-            let j = jacobian(ns, self.m, self.c, self.k0, Some(&self.mock))?;
-            j.set_symmetric(true)?;
-            (j, extra)
+        let terms: [(&[Part], f64); 2] = [(&CONSISTENT, 1.0), (&[Part::Damping], c1)];
+        let cs = contact.evaluate(q, Some(v), 1.0)?;
+        let (mut j, old_factor) = self.refresh_matrix(ns, retired)?;
+        self.add_tangent(&cs, &terms, &mut j)?;
+        self.built_at = Some((q.try_clone()?, v.try_clone()?));
+        self.built_damping = c1;
+        let extra = contact.tangent_operator(self.petsc, &cs, &terms)?;
+        self.built_contact = Some(cs);
+        self.seconds_assembling += t.elapsed().as_secs_f64();
+        let factor = match old_factor {
+            Some(mut factor) => match factor.refactorize(&j) {
+                Ok(()) => factor,
+                Err(e @ LaError::MumpsMemory { .. }) => return Err(e),
+                // The numerical phase on the earlier analysis can outgrow MUMPS' work space
+                // where these values pivot differently: a fresh analysis of them.
+                Err(_) => {
+                    drop(factor);
+                    self.factorize_matrix(&j, Factorization::Lu)?
+                }
+            },
+            None => self.factorize_matrix(&j, Factorization::Lu)?,
         };
-        // The static mock is symmetric (Cholesky); a state's tangent has the friction part.
-        let kind = if at.is_some() {
-            Factorization::Lu
-        } else {
-            Factorization::Cholesky
-        };
-        let factor = match self.factor {
-            JacobianFactor::PerRank => DirectSolver::factorize_per_rank(self.petsc, &j, "time_")?,
-            JacobianFactor::Single => {
-                DirectSolver::factorize_single(self.petsc, &j, kind, "time_")?
+        self.finish(&factor, Factorization::Lu, t);
+        Ok(Jacobian {
+            factor,
+            extra: Some(Box::new(extra)),
+            matrix: Some(j),
+        })
+    }
+
+    /// J with the static mock contact stiffness (symmetric: Cholesky).
+    ///
+    /// # Collective
+    fn factorize_mock(
+        &mut self,
+        ns: &NewmarkSettings,
+        t: Instant,
+    ) -> Result<Jacobian<'a, 'p>, LaError> {
+        self.built_contact = None;
+        self.built_damping = 0.0;
+        self.built_at = None;
+        let extra = self.contact.tangent_operator(
+            self.petsc,
+            self.static_state,
+            &[(&[Part::Normal, Part::Stick], 1.0)],
+        )?;
+        let j = jacobian(ns, self.m, self.c, self.k0, Some(&self.mock))?;
+        j.set_symmetric(true)?;
+        self.seconds_assembling += t.elapsed().as_secs_f64();
+        let factor = self.factorize_matrix(&j, Factorization::Cholesky)?;
+        self.finish(&factor, Factorization::Cholesky, t);
+        Ok(Jacobian {
+            factor,
+            extra: Some(Box::new(extra)),
+            matrix: Some(j),
+        })
+    }
+
+    /// A refreshed J's matrix holding M / (beta h^2) + gamma / (beta h) C + K0 (the contact
+    /// tangent still to add): `retired`'s matrix, with its factor, when it is the last one
+    /// refreshed for this step size, else a new copy of those values (`retired` freed
+    /// first: peak memory).
+    ///
+    /// # Collective
+    fn refresh_matrix(
+        &mut self,
+        ns: &NewmarkSettings,
+        retired: Option<RetiredJacobian<'p>>,
+    ) -> Result<(SparseMatrix<'p>, Option<DirectSolver<'p>>), LaError> {
+        if self.base.as_ref().map(|b| b.step) != Some(ns.step) {
+            self.base = None;
+            self.base = Some(RefreshBase {
+                step: ns.step,
+                values: jacobian(ns, self.m, self.c, self.k0, None)?,
+                plan: None,
+                last: None,
+            });
+        }
+        let base = self.base.as_mut().expect("set above");
+        let renewable = retired.filter(|r| Some(r.matrix.identity()) == base.last);
+        // The same decision on every rank (a renewal and a new build are collective).
+        let (matrix, factor) = match renewable {
+            Some(RetiredJacobian { mut matrix, factor }) => {
+                let keeps = factor.factors(&matrix)?;
+                matrix.copy_values_from(&base.values)?;
+                (matrix, keeps.then_some(factor))
             }
-            _ => DirectSolver::factorize(self.petsc, &j, kind, "time_")?,
+            None => {
+                let matrix = base.values.try_clone()?;
+                base.plan = None;
+                (matrix, None)
+            }
         };
+        base.last = Some(matrix.identity());
+        Ok((matrix, factor))
+    }
+
+    /// Adds the contact tangent `terms` at `state` to a refreshed J, through the plan of where
+    /// its entries land (planned once per matrix).
+    ///
+    /// # Collective
+    fn add_tangent(
+        &mut self,
+        state: &ContactState,
+        terms: &[(&[Part], f64)],
+        j: &mut SparseMatrix<'p>,
+    ) -> Result<(), LaError> {
+        let contact = self.contact;
+        let base = self.base.as_mut().expect("a refresh sets its base first");
+        let fits = match &base.plan {
+            Some(plan) => contact.tangent_plan_fits(plan, j)?,
+            None => false,
+        };
+        if !fits {
+            base.plan = None;
+            base.plan = contact.tangent_plan(j)?;
+        }
+        match &mut base.plan {
+            Some(plan) => contact.add_tangent_terms_planned(state, terms, j, plan),
+            None => {
+                contact.add_tangent_terms(state, terms, j)?;
+                j.assemble()
+            }
+        }
+    }
+
+    /// A new factor of `j` where this builder factorizes.
+    ///
+    /// # Collective
+    fn factorize_matrix(
+        &self,
+        j: &SparseMatrix<'p>,
+        kind: Factorization,
+    ) -> Result<DirectSolver<'p>, LaError> {
+        match self.factor {
+            JacobianFactor::PerRank => DirectSolver::factorize_per_rank(self.petsc, j, "time_"),
+            JacobianFactor::Single => DirectSolver::factorize_single(self.petsc, j, kind, "time_"),
+            _ => DirectSolver::factorize(self.petsc, j, kind, "time_"),
+        }
+    }
+
+    /// Records a factorization's size, streaming and time.
+    fn finish(&mut self, factor: &DirectSolver<'p>, kind: Factorization, t: Instant) {
         self.factor_entries = factor.report().factor_entries;
         let value_bytes = if self.factor == JacobianFactor::Single {
             4.0
@@ -223,10 +337,5 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         self.built += 1;
         self.seconds_factorizing += t.elapsed().as_secs_f64();
         self.seconds_in_loop += t.elapsed().as_secs_f64();
-        Ok(Jacobian {
-            factor,
-            extra: Some(Box::new(extra)),
-            matrix: Some(j),
-        })
     }
 }

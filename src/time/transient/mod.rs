@@ -90,6 +90,8 @@ pub struct Transient {
     /// The stepping loop, and the Jacobian factorizations within it.
     pub seconds_stepping: f64,
     pub seconds_jacobians: f64,
+    /// Of the factorizations' time: assembling the Jacobians (before the factor).
+    pub seconds_assembling_jacobians: f64,
     /// Time in the factor's solves, steps and iterations (solves), over this process's steps.
     pub seconds_solving: f64,
     /// Solves with the factor, and the time inside them alone.
@@ -182,6 +184,7 @@ impl Transient {
         (self.factor_value_bytes, self.factor_passes) = b.factor_streaming;
         self.seconds_factorizing = seconds_start + b.seconds_factorizing;
         self.seconds_jacobians = b.seconds_in_loop;
+        self.seconds_assembling_jacobians = b.seconds_assembling;
         self.cuts = control.cuts;
         self.refreshes = control.refreshes;
         self.krylov_retries = control.krylov_retries;
@@ -215,6 +218,7 @@ impl Transient {
             seconds_factorizing: 0.0,
             seconds_stepping: 0.0,
             seconds_jacobians: 0.0,
+            seconds_assembling_jacobians: 0.0,
             seconds_solving: 0.0,
             factor_solves: 0,
             seconds_in_factor_solves: 0.0,
@@ -381,8 +385,9 @@ pub fn run<'p>(
         restart_at,
         settings.jacobian_factor.resolve(k0.global_rows()),
     )?);
-    let mut factorize =
-        |ns: &NewmarkSettings, at: Option<&State<'p>>| builder.borrow_mut().factorize(ns, at);
+    let mut factorize = |ns: &NewmarkSettings, at: Option<&State<'p>>, retired| {
+        builder.borrow_mut().factorize(ns, at, retired)
+    };
     let mut linearize = |ns: &NewmarkSettings, at: &State<'p>| {
         let op = builder.borrow().linearize(ns, at)?;
         Ok(Box::new(op) as Box<dyn crate::la::TangentChange<'p> + '_>)
