@@ -201,12 +201,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             },
             None => self.factorize_matrix(&j, Factorization::Lu)?,
         };
-        self.finish(&factor, Factorization::Lu, t);
-        Ok(Jacobian {
-            factor,
-            extra: Some(Box::new(extra)),
-            matrix: Some(j),
-        })
+        Ok(self.finish(factor, Factorization::Lu, t, extra, j))
     }
 
     /// J with the static mock contact stiffness (symmetric: Cholesky).
@@ -229,12 +224,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         j.set_symmetric(true)?;
         self.seconds_assembling += t.elapsed().as_secs_f64();
         let factor = self.factorize_matrix(&j, Factorization::Cholesky)?;
-        self.finish(&factor, Factorization::Cholesky, t);
-        Ok(Jacobian {
-            factor,
-            extra: Some(Box::new(extra)),
-            matrix: Some(j),
-        })
+        Ok(self.finish(factor, Factorization::Cholesky, t, extra, j))
     }
 
     /// A refreshed J's matrix holding M / (beta h^2) + gamma / (beta h) C + K0 (the contact
@@ -320,8 +310,15 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         }
     }
 
-    /// Records a factorization's size, streaming and time.
-    fn finish(&mut self, factor: &DirectSolver<'p>, kind: Factorization, t: Instant) {
+    /// Records a factorization's size, streaming and time, and makes the Jacobian.
+    fn finish(
+        &mut self,
+        factor: DirectSolver<'p>,
+        kind: Factorization,
+        t: Instant,
+        extra: TangentOperator<'a, 'p>,
+        j: SparseMatrix<'p>,
+    ) -> Jacobian<'a, 'p> {
         self.factor_entries = factor.report().factor_entries;
         let value_bytes = if self.factor == JacobianFactor::Single {
             4.0
@@ -337,5 +334,10 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         self.built += 1;
         self.seconds_factorizing += t.elapsed().as_secs_f64();
         self.seconds_in_loop += t.elapsed().as_secs_f64();
+        Jacobian {
+            factor,
+            extra: Some(Box::new(extra)),
+            matrix: Some(j),
+        }
     }
 }
