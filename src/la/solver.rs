@@ -401,6 +401,29 @@ impl<'p> DirectSolver<'p> {
         Ok(())
     }
 
+    /// This factor renewed for `a`'s new values ([`Self::refactorize`]) or, where the
+    /// numerical phase on the old analysis fails (short of MUMPS running out of memory, which
+    /// is returned), a new factor from `fresh`, this one freed first (peak memory). The
+    /// numerical phase can outgrow MUMPS' workspace where pivoting fills the factor more than
+    /// the old analysis foresaw (INFOG(1) = -8 on the 100k superelement at 35-39 bar): a
+    /// fresh analysis of these values (MUMPS' scaling and pivot order depend on them).
+    ///
+    /// # Collective
+    pub fn renewed_or(
+        mut self,
+        a: &SparseMatrix,
+        fresh: impl FnOnce() -> Result<Self>,
+    ) -> Result<Self> {
+        match self.refactorize(a) {
+            Ok(()) => Ok(self),
+            Err(e @ LaError::MumpsMemory { .. }) => Err(e),
+            Err(_) => {
+                drop(self);
+                fresh()
+            }
+        }
+    }
+
     /// Solves `A x = b` with the stored factors.
     ///
     /// # Collective

@@ -241,18 +241,9 @@ impl<'p> TangentSolver<'p> {
     fn factorize(&mut self) -> Result<(), LaError> {
         let t = Instant::now();
         self.solver = Some(match self.solver.take() {
-            Some(mut solver) if solver.factors(&self.jac)? => match solver.refactorize(&self.jac) {
-                Ok(()) => solver,
-                Err(e @ LaError::MumpsMemory { .. }) => return Err(e),
-                // The numerical phase on an earlier analysis can outgrow MUMPS' workspace
-                // where pivoting fills the factor more than that analysis foresaw (INFOG(1)
-                // = -8 on the 100k superelement at 35-39 bar, analysed at 20): a fresh
-                // analysis of these values (MUMPS' scaling and pivot order depend on them).
-                Err(_) => {
-                    drop(solver);
-                    DirectSolver::factorize(self.petsc, &self.jac, Factorization::Lu, "static_")?
-                }
-            },
+            Some(solver) if solver.factors(&self.jac)? => solver.renewed_or(&self.jac, || {
+                DirectSolver::factorize(self.petsc, &self.jac, Factorization::Lu, "static_")
+            })?,
             other => {
                 drop(other);
                 DirectSolver::factorize(self.petsc, &self.jac, Factorization::Lu, "static_")?

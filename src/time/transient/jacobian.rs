@@ -31,7 +31,7 @@ const CONSISTENT: [Part; 4] = [
 pub(super) struct JacobianBuilder<'a, 'p> {
     petsc: &'p Petsc<'p>,
     contact: &'a ContactModel<'p>,
-    /// K0 on the pattern joined with the contact couplings (the input K0 for that pattern).
+    /// K0 on the pattern joined with the contact couplings.
     k0: &'a SparseMatrix<'p>,
     m: &'a SparseMatrix<'p>,
     c: Damping<'a, 'p>,
@@ -189,16 +189,9 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         self.built_contact = Some(cs);
         self.seconds_assembling += t.elapsed().as_secs_f64();
         let factor = match old_factor {
-            Some(mut factor) => match factor.refactorize(&j) {
-                Ok(()) => factor,
-                Err(e @ LaError::MumpsMemory { .. }) => return Err(e),
-                // The numerical phase on the earlier analysis can outgrow MUMPS' work space
-                // where these values pivot differently: a fresh analysis of them.
-                Err(_) => {
-                    drop(factor);
-                    self.factorize_matrix(&j, Factorization::Lu)?
-                }
-            },
+            Some(factor) => {
+                factor.renewed_or(&j, || self.factorize_matrix(&j, Factorization::Lu))?
+            }
             None => self.factorize_matrix(&j, Factorization::Lu)?,
         };
         Ok(self.finish(factor, Factorization::Lu, t, extra, j))
