@@ -351,6 +351,11 @@ impl<'p> DirectSolver<'p> {
         self.report
     }
 
+    /// A single-precision factor ([`DirectSolver::factorize_single`]).
+    pub fn is_single(&self) -> bool {
+        self.single.is_some()
+    }
+
     /// Whether this is a factor of the matrix `a` itself (MUMPS or another PETSc factor; the
     /// single-precision factor also needs `a`'s pattern unchanged), which
     /// [`Self::refactorize`] can renew.

@@ -32,8 +32,8 @@ impl RunSummary {
         let s = self;
         if let Some(st) = &s.statics {
             writeln!(f,
-                "static preload: {} contact points (per rank {:?}), {} load steps, {} Newton iterations ({} solves; {} by GMRES with an earlier factor, {} GMRES iterations), {} LU factorizations ({:.3e} entries, {:.1} s), final residual {:.2e} N",
-                st.points, st.points_per_rank, st.load_steps, st.newton_iterations, st.solves, st.krylov_corrections, st.krylov_iterations, st.factorizations, st.factor_entries, st.seconds_factorizing, st.final_residual
+                "static preload: {} contact points (per rank {:?}), {} load steps, {} Newton iterations ({} solves; {} by GMRES with an earlier factor, {} GMRES iterations), {} LU factorizations{} ({:.3e} entries, {:.1} s), final residual {:.2e} N",
+                st.points, st.points_per_rank, st.load_steps, st.newton_iterations, st.solves, st.krylov_corrections, st.krylov_iterations, st.factorizations, if st.single_precision { " in single precision" } else { "" }, st.factor_entries, st.seconds_factorizing, st.final_residual
             )?;
             for (name, missed, of) in &st.misses {
                 if *missed > 0 {

@@ -92,6 +92,8 @@ pub struct StaticSummary {
     pub krylov_corrections: usize,
     pub krylov_iterations: usize,
     pub factor_entries: f64,
+    /// The factors were single-precision (`[statics] factor = "single"`).
+    pub single_precision: bool,
     pub pairing_seconds: f64,
     pub seconds: f64,
     pub seconds_factorizing: f64,
@@ -338,6 +340,7 @@ impl StaticSummary {
             krylov_corrections: state.krylov_corrections,
             krylov_iterations: state.krylov_iterations,
             factor_entries: state.factor_entries,
+            single_precision: state.factor_precision == crate::statics::StaticFactor::Single,
             pairing_seconds: contact.pairing_seconds(),
             seconds: state.seconds,
             seconds_factorizing: state.seconds_factorizing,

@@ -11,6 +11,7 @@
 
 use std::time::Instant;
 
+use super::StaticFactor;
 use crate::contact::kernel::Part;
 use crate::contact::{ContactModel, ContactState};
 use crate::la::gmres::{gmres, Preconditioned};
@@ -73,6 +74,8 @@ pub struct TangentSolver<'p> {
     /// The factor is of an earlier iterate's tangent and stopped contracting.
     stale: bool,
     krylov: bool,
+    /// The precision of a new factor.
+    precision: StaticFactor,
     basis: Vec<Vector<'p>>,
     preconditioned: Option<Vector<'p>>,
     /// What the last factorization took (handed on with the factor, for its report).
@@ -105,6 +108,7 @@ impl<'p> TangentSolver<'p> {
         solver: Option<DirectSolver<'p>>,
         factor_seconds: f64,
         krylov: bool,
+        precision: StaticFactor,
     ) -> Self {
         TangentSolver {
             petsc,
@@ -113,6 +117,7 @@ impl<'p> TangentSolver<'p> {
             solver,
             stale: false,
             krylov,
+            precision,
             basis: Vec::new(),
             preconditioned: None,
             last_factor_seconds: factor_seconds,
@@ -139,6 +144,15 @@ impl<'p> TangentSolver<'p> {
         self.solver
             .as_ref()
             .map_or(0.0, |s| s.report().factor_entries)
+    }
+
+    /// The precision of the factor held (that of the settings for a new one).
+    pub fn factor_precision(&self) -> StaticFactor {
+        match &self.solver {
+            Some(s) if s.is_single() => StaticFactor::Single,
+            Some(_) => StaticFactor::Double,
+            None => self.precision,
+        }
     }
 
     pub fn factor_flops(&self) -> f64 {
@@ -240,13 +254,20 @@ impl<'p> TangentSolver<'p> {
     /// old one freed first: peak memory).
     fn factorize(&mut self) -> Result<(), LaError> {
         let t = Instant::now();
+        let (petsc, jac, precision) = (self.petsc, &self.jac, self.precision);
+        let anew = || match precision {
+            StaticFactor::Double => {
+                DirectSolver::factorize(petsc, jac, Factorization::Lu, "static_")
+            }
+            StaticFactor::Single => {
+                DirectSolver::factorize_single(petsc, jac, Factorization::Lu, "static_")
+            }
+        };
         self.solver = Some(match self.solver.take() {
-            Some(solver) if solver.factors(&self.jac)? => solver.renewed_or(&self.jac, || {
-                DirectSolver::factorize(self.petsc, &self.jac, Factorization::Lu, "static_")
-            })?,
+            Some(solver) if solver.factors(jac)? => solver.renewed_or(jac, anew)?,
             other => {
                 drop(other);
-                DirectSolver::factorize(self.petsc, &self.jac, Factorization::Lu, "static_")?
+                anew()?
             }
         });
         self.last_factor_seconds = t.elapsed().as_secs_f64();

@@ -16,8 +16,9 @@
 //! - the contact tangent applied through the observation rows (the transient's residual
 //!   update) equals the assembled tangent's product at the preloaded state (normal, stick,
 //!   friction with the convective term, and scaled friction damping) to 1e-12 relative.
-//! - the preload with GMRES on a stale factor and the one with a new factor each time equal
-//!   each other within their Newton error estimates.
+//! - the preload with GMRES on a stale factor, the one with a new factor each time and the one
+//!   with single-precision factors (`[statics] factor = "single"`) reach the same state within
+//!   their Newton error estimates.
 
 use squeal::contact::kernel::Part;
 use squeal::contact::law::{FrictionLaw, NormalLaw};
@@ -29,7 +30,7 @@ use squeal::measure::{exceeds, nan_max};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
 use squeal::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
-use squeal::statics::{pressure_load, solve, StaticSettings};
+use squeal::statics::{pressure_load, solve, StaticFactor, StaticSettings};
 
 use super::common::{rel, say, steel, suite_dir};
 
@@ -240,7 +241,17 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             "pad force vs piston {worst_force:e}, torque vs mu F r {worst_torque:e}"
         ));
     }
-    krylov_route_reaches_the_same_state(petsc, &system, &contact, &f, &state)?;
+    let new_factors = StaticSettings {
+        krylov: false,
+        ..Default::default()
+    };
+    let single = StaticSettings {
+        factor: StaticFactor::Single,
+        ..Default::default()
+    };
+    for route in [("new factors", &new_factors), ("single precision", &single)] {
+        route_reaches_the_same_state(petsc, &system, &contact, &f, &state, route)?;
+    }
     an_iteration_budget_stops_the_solve(petsc, &system, &contact, &f, &state)?;
     tangent_operator_equals_assembled(petsc, &contact, &state.contact, &f)?;
     low_rank_update_of_the_tangent(petsc, &contact, &state.contact, &system.stiffness, &f)?;
@@ -286,23 +297,27 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     Ok(())
 }
 
-/// The preload with GMRES on the stale factor (the default, `state`) and with a new factor
-/// whenever the old one stops contracting (`krylov = false`, the route before) reach the same
-/// static state: their difference is within the sum of their Newton error estimates
-/// |J(q)^-1 R(q)| (J factorized anew at each end state; the distance to the exact solution
-/// where Newton converges quadratically), doubled for the linearization.
-fn krylov_route_reaches_the_same_state<'p>(
+/// The preload by the default route (GMRES on the stale factor, double precision: `state`)
+/// and by another (`route`: a new factor whenever the old one stops contracting, as before
+/// GMRES; or single-precision factors) reach the same static state: their difference is
+/// within the sum of their Newton error estimates |J(q)^-1 R(q)| (J factorized anew, in double
+/// precision, at each end state; the distance to the exact solution where Newton converges
+/// quadratically), doubled for the linearization.
+fn route_reaches_the_same_state<'p>(
     petsc: &'p Petsc,
     system: &AssembledSystem<'p>,
     contact: &ContactModel<'p>,
     f: &squeal::la::Vector<'p>,
     state: &squeal::statics::StaticState<'p>,
+    (name, route): (&str, &StaticSettings),
 ) -> Result<(), String> {
-    let direct_settings = StaticSettings {
-        krylov: false,
-        ..Default::default()
-    };
-    let direct = preload(petsc, system, contact, f, &direct_settings)?;
+    let direct = preload(petsc, system, contact, f, route)?;
+    if direct.factor_precision != route.factor {
+        return Err(format!(
+            "{name}: the preload factorized in {:?}, the settings asked for {:?}",
+            direct.factor_precision, route.factor
+        ));
+    }
     let estimate = |q: &squeal::la::Vector<'p>| -> Result<f64, squeal::la::LaError> {
         let at = contact.evaluate(q, None, 1.0)?;
         let mut r = q.duplicate()?;
@@ -340,13 +355,13 @@ fn krylov_route_reaches_the_same_state<'p>(
     say(
         petsc,
         &format!(
-            "GMRES route: {} factorizations, {} solves ({} GMRES corrections); new factors: {} factorizations, {} solves; |q - q_direct| = {diff:.2e} m of {size:.2e}, Newton error estimates {e_krylov:.2e} and {e_direct:.2e} m",
-            state.factorizations, state.solves, state.krylov_corrections, direct.factorizations, direct.solves
+            "default route: {} factorizations, {} solves ({} GMRES corrections); {name}: {} factorizations, {} solves ({} GMRES corrections); |q - q_{name}| = {diff:.2e} m of {size:.2e}, Newton error estimates {e_krylov:.2e} and {e_direct:.2e} m",
+            state.factorizations, state.solves, state.krylov_corrections, direct.factorizations, direct.solves, direct.krylov_corrections
         ),
     );
     if exceeds(diff, 2.0 * (e_krylov + e_direct)) {
         return Err(format!(
-            "the two routes' static states differ by {diff:e} m, their Newton error estimates are {e_krylov:e} and {e_direct:e} m"
+            "the default route's and {name}'s static states differ by {diff:e} m, their Newton error estimates are {e_krylov:e} and {e_direct:e} m"
         ));
     }
     Ok(())
