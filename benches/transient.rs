@@ -200,7 +200,7 @@ fn cost_table(say: &dyn Fn(&str), t: &TransientSummary, bw: Bandwidth, ranks: us
     );
     row(
         "linear force (K x)",
-        1.0,
+        c.linear_forces_per_step,
         c.bytes_linear_force,
         bw.triad_all,
         c.seconds_linear_force,
@@ -220,7 +220,7 @@ fn cost_table(say: &dyn Fn(&str), t: &TransientSummary, bw: Bandwidth, ranks: us
         c.seconds_per_tangent_product,
     );
     let parts = c.solves_per_step * c.seconds_per_solve
-        + c.seconds_linear_force
+        + c.linear_forces_per_step * c.seconds_linear_force
         + c.force_evaluations_per_step * c.seconds_per_force_evaluation
         + c.tangent_products_per_step * c.seconds_per_tangent_product;
     say(&format!(

@@ -155,8 +155,10 @@ pub struct StepCost {
     pub solves_per_step: f64,
     pub bytes_per_solve: f64,
     pub seconds_per_solve: f64,
-    /// The predictor's linear force (the product with K; with M and C only where the damping
-    /// needs them, not counted): bytes and seconds per step.
+    /// The linear force (the predictor's product with K, with M and C only where the damping
+    /// needs them, not counted; with a single-precision factor also the accepted iterate's
+    /// product with J, of about K's entries): per step, bytes and seconds per computation.
+    pub linear_forces_per_step: f64,
     pub bytes_linear_force: f64,
     pub seconds_linear_force: f64,
     /// Contact force evaluations (5 products with observation rows, 3 with their
@@ -184,7 +186,8 @@ impl StepCost {
             bytes_per_solve: t.factor_entries * t.factor_value_bytes * t.factor_passes,
             seconds_per_solve: per(t.seconds_in_factor_solves, t.factor_solves),
             bytes_linear_force: t.operator_entries * entry + 3.0 * 8.0 * t.unknowns as f64,
-            seconds_linear_force: t.seconds_in_linear_force / steps,
+            linear_forces_per_step: t.linear_force_calls as f64 / steps,
+            seconds_linear_force: per(t.seconds_in_linear_force, t.linear_force_calls),
             force_evaluations_per_step: t.force_evaluations as f64 / steps,
             // The stacked channels forward and back, the tangent rows once more (velocity).
             bytes_per_force_evaluation: (2.0 * (nor + tan + tan2 + conv) + tan) * entry,

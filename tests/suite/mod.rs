@@ -14,6 +14,7 @@ pub mod parallel_and_solvers;
 pub mod pseudo_trajectory;
 pub mod real_modes_verification;
 pub mod reduction;
+pub mod single_precision;
 pub mod stages;
 pub mod static_solve;
 pub mod stick_slip;
@@ -31,6 +32,7 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(real_modes_verification::tests());
     v.extend(convergence::tests());
     v.extend(parallel_and_solvers::tests());
+    v.extend(single_precision::tests());
     v.extend(static_solve::tests());
     v.extend(contact_statics::tests());
     v.extend(complex_modes::tests());

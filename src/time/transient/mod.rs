@@ -104,6 +104,7 @@ pub struct Transient {
     /// Of which the predictor's linear force (products with M, C, K), and how many force
     /// evaluations and contact-tangent products there were.
     pub seconds_in_linear_force: f64,
+    pub linear_force_calls: usize,
     pub force_evaluations: usize,
     pub tangent_products: usize,
     /// What those stream (for the cost model of benches/transient.rs): the stored entries of
@@ -225,6 +226,7 @@ impl Transient {
             seconds_in_forces: 0.0,
             seconds_in_products: 0.0,
             seconds_in_linear_force: 0.0,
+            linear_force_calls: 0,
             force_evaluations: 0,
             tangent_products: 0,
             operator_entries: 0.0,
@@ -410,6 +412,7 @@ pub fn run<'p>(
             out.seconds_in_forces += report.force_seconds;
             out.seconds_in_products += report.product_seconds + report.linear_force_seconds;
             out.seconds_in_linear_force += report.linear_force_seconds;
+            out.linear_force_calls += report.linear_force_calls;
             out.force_evaluations += report.force_calls;
             out.tangent_products += report.product_calls;
             out.steps_run += 1;
