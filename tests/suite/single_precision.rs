@@ -10,9 +10,10 @@
 //! that is not the model's. Reference: z recomputed by products with M, C and K at every
 //! accepted state. Bound: the Newton tolerance times the load's amplitude (the scale of the
 //! steps' reference force max(|f|, |z|)): within it, the residual the iteration judged is the
-//! model's to the accuracy the iteration claims. Measured (1 and 2 ranks): 3.5e-13 and
-//! 4.2e-13 with the carried force recomputed at each step's end by one product with J
-//! (`Newmark::exact_linear_force`); 4.2e-7 and 4.6e-7 with the corrections' updates alone.
+//! model's to the accuracy the iteration claims. Measured (1 and 2 ranks): 20 kHz at 1e-8,
+//! z recomputed at every step (`time::newmark` carried.rs), 5.4e-14 to 5.6e-14; 500 Hz at
+//! 1e-6, recomputed 4 times in 200 steps, 5.2e-9 to 5.7e-9; without any recomputation the
+//! first case drifted to 4.2e-7 and 4.6e-7 (the test fails there).
 
 use std::path::{Path, PathBuf};
 
@@ -50,11 +51,49 @@ fn matrix<'p>(petsc: &'p Petsc, terms: &[(&str, f64)]) -> Result<SparseMatrix<'p
         .matrix)
 }
 
-/// 200 steps of 1 us under a load F sin(2 pi 20 kHz t) on every DOF (a step's predictor then
-/// misses the acceleration by ~(omega h) of the load, so every step corrects): at every
-/// accepted state |z_carried - (M a + C v + K q)| <= tolerance x |F| (the load's amplitude:
-/// the steps' reference force max(|f|, |z|) reaches |F| and passes through 0 with the load).
+/// 200 steps of 1 us under a load F sin(2 pi f t) on every DOF: f = 20 kHz at a tolerance of
+/// 1e-8 (a step's predictor then misses the acceleration by ~omega h of the load, and the
+/// solves' errors matter at every step), and 500 Hz at 1e-6 (the 600k job's tolerance; there
+/// they do not: the bound on the drift lets steps pass without recomputing z, which must
+/// happen for this case to test the bound). At every accepted state
+/// |z_carried - (M a + C v + K q)| <= tolerance x |F| (the load's amplitude: the steps'
+/// reference force max(|f|, |z|) reaches |F| and passes through 0 with the load).
 fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
+    let mut skipped_some = false;
+    for (frequency, tolerance) in [(2.0e4, 1e-8), (500.0, 1e-6)] {
+        let run = drift_under_load(petsc, frequency, tolerance)?;
+        say(
+            petsc,
+            &format!(
+                "brake-m0, single-precision factor, 200 steps at {frequency:.0} Hz: {} iterations, {} recomputations of z; carried vs recomputed linear force {:.2e} of the load's amplitude (bound: the tolerance {tolerance:.0e})",
+                run.iterations, run.recomputations, run.worst
+            ),
+        );
+        if run.worst > tolerance {
+            return Err(format!(
+                "{frequency} Hz: the carried linear force is {:e} of the load's amplitude off the model's (tolerance {tolerance:e})",
+                run.worst
+            ));
+        }
+        skipped_some |= frequency < 1e3 && run.recomputations < 200;
+    }
+    if !skipped_some {
+        return Err(
+            "every step recomputed z at 500 Hz: the test does not see the drift bound".into(),
+        );
+    }
+    Ok(())
+}
+
+/// What a loaded run did: the largest drift relative to the load, iterations and
+/// recomputations of z (linear force computations beyond the predictors').
+struct LoadedRun {
+    worst: f64,
+    iterations: usize,
+    recomputations: usize,
+}
+
+fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> Result<LoadedRun, String> {
     let e = |e: LaError| e.to_string();
     let omega_disc = 4.0 * std::f64::consts::PI;
     let m = matrix(petsc, &[("M.mtx.gz", 1.0)])?;
@@ -62,7 +101,7 @@ fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
     let c = matrix(petsc, &[("D1.mtx.gz", 1.0), ("DG.mtx.gz", omega_disc)])?;
     let settings = NewmarkSettings {
         step: 1e-6,
-        tolerance: 1e-8,
+        tolerance,
         ..Default::default()
     };
     let j = jacobian(&settings, &m, Damping::Matrix(&c), &k, None).map_err(e)?;
@@ -80,7 +119,6 @@ fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
         *x = (0.37 * i).sin() * (1.0 + 3.0 * (i / 500.0).cos().powi(2));
     }
     let amplitude = load.norm2().map_err(e)?;
-    let frequency = 2.0e4;
     let mut forces = |t: f64, _: &Vector, _: &Vector, f: &mut Vector| -> Result<(), LaError> {
         f.copy_from(&load)?;
         f.scale((2.0 * std::f64::consts::PI * frequency * t).sin())
@@ -96,40 +134,32 @@ fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
     let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "m0_mass_").map_err(e)?;
     initial_acceleration(&m, Damping::Matrix(&c), &k, &mut state, &mut forces, &mass).map_err(e)?;
     let mut integrator = Newmark::new(settings, &m, Damping::Matrix(&c), &k, &factor).map_err(e)?;
-    let (mut z, mut f) = (m.new_vector().map_err(e)?, m.new_vector().map_err(e)?);
-    let (mut worst, mut iterations) = (0.0_f64, 0);
+    let mut z = m.new_vector().map_err(e)?;
+    let mut run = LoadedRun {
+        worst: 0.0,
+        iterations: 0,
+        recomputations: 0,
+    };
     for _ in 0..200 {
-        iterations += integrator
+        let report = integrator
             .step(&mut state, &mut forces)
-            .map_err(|e| e.to_string())?
-            .iterations;
+            .map_err(|e| e.to_string())?;
+        run.iterations += report.iterations;
+        run.recomputations += report.linear_force_calls - 1;
         m.mult(&state.a, &mut z).map_err(e)?;
         c.mult_add(&state.v, &mut z).map_err(e)?;
         k.mult_add(&state.q, &mut z).map_err(e)?;
-        forces(state.time, &state.q, &state.v, &mut f).map_err(e)?;
         let carried = state.linear.as_ref().ok_or("no carried linear force")?;
         z.axpy(-1.0, carried).map_err(e)?;
         // NaN propagates through max as the other operand: kept by a separate check.
         let drift = z.norm2().map_err(e)? / amplitude;
         if !drift.is_finite() {
             return Err(format!(
-                "the carried linear force is not finite at t = {:e}",
+                "{frequency} Hz: the carried linear force is not finite at t = {:e}",
                 state.time
             ));
         }
-        worst = worst.max(drift);
+        run.worst = run.worst.max(drift);
     }
-    say(
-        petsc,
-        &format!(
-            "brake-m0, single-precision factor, 200 steps ({iterations} iterations): carried vs recomputed linear force {worst:.2e} of the load's amplitude (bound: the tolerance 1e-8)"
-        ),
-    );
-    if worst > settings.tolerance {
-        return Err(format!(
-            "the carried linear force is {worst:e} of the load's amplitude off the model's (tolerance {:e})",
-            settings.tolerance
-        ));
-    }
-    Ok(())
+    Ok(run)
 }

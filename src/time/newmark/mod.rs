@@ -23,8 +23,8 @@
 //! the contact observation rows (a few products over contact points), so an iteration costs
 //! one force evaluation, one solve and no product with the model's operators. The identity
 //! holds to the solve's backward error (~1e-16 relative), far below the tolerance; with a
-//! single-precision factor it holds only to ~6e-8, so there the step recomputes z at the
-//! iterate it would accept by one product with J and judges the residual with that z.
+//! single-precision factor it holds only to ~6e-8, so there the step recomputes z by products
+//! before it accepts an iterate wherever that drift could matter (`carried.rs`).
 //!
 //! The step and the carried linear force are here; the step's corrections (modified Newton
 //! with the fixed factor, full Newton) in `correction.rs`, Newton-Krylov with its GMRES and
@@ -182,6 +182,7 @@ pub const LINEAR_FORCE_REFRESH: usize = 1000;
 /// GMRES iterations at most per Newton-Krylov correction.
 pub const KRYLOV_MAX: usize = 60;
 
+mod carried;
 mod correction;
 mod damping;
 mod krylov;
@@ -223,9 +224,12 @@ pub struct Newmark<'a, 'p> {
     /// The full Newton's last J, renewed in place at the next iterate.
     full_newton_spare: Option<RetiredJacobian<'p>>,
     /// The predictor and its linear force, kept when the factor solves only to single
-    /// precision ([`Newmark::exact_linear_force`]).
+    /// precision, what is known of the carried z's drift, and z before a recomputation
+    /// (`carried.rs`).
     q_pred: Vector<'p>,
     z_pred: Vector<'p>,
+    drift: carried::Drift,
+    z_carried: Vector<'p>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -263,6 +267,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             full_newton_spare: None,
             q_pred: q1.duplicate()?,
             z_pred: q1.duplicate()?,
+            drift: carried::Drift::default(),
+            z_carried: q1.duplicate()?,
             q1,
         })
     }
@@ -375,9 +381,15 @@ impl<'a, 'p> Newmark<'a, 'p> {
             Some(z_n) if !state.step.is_multiple_of(LINEAR_FORCE_REFRESH) => {
                 self.predicted_linear_force(state, z_n)?
             }
-            _ => self.linear_force()?,
+            _ => {
+                self.linear_force()?;
+                self.drift.exact();
+            }
         }
         let inexact = self.jacobian.factor.is_single();
+        // A failed attempt leaves the state's z as it was: its solves do not count.
+        let drift_at_start = self.drift;
+        let pred_exact = self.drift.is_exact();
         if inexact {
             self.q_pred.copy_from(&self.q1)?;
             self.z_pred.copy_from(&self.z)?;
@@ -412,9 +424,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
         let mut history = Vec::new();
         loop {
             let mut target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
-            if r <= target && inexact {
+            if r <= target && inexact && self.drift.due(Some(r), target) {
                 // The carried z assumed J dq = R exactly; judge the residual with z itself.
-                self.exact_linear_force(&mut report)?;
+                self.exact_linear_force(pred_exact, &mut report)?;
                 self.r.copy_from(&self.z)?;
                 self.r.axpy(-1.0, &self.f)?;
                 r = self.r.norm2()?;
@@ -424,6 +436,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             report.residual = r;
             report.reference = reference;
             if r <= target {
+                self.drift.accepted();
                 self.accept(state, t1)?;
                 report.factor_solves = self.solves.solves;
                 report.factor_solve_seconds = self.solves.seconds;
@@ -437,6 +450,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             let stalled = k > 8 && r > 0.5 * history[k - 5];
             if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
                 self.failed_iterations = report.iterations;
+                self.drift = drift_at_start;
                 return Err(TimeError::NotConverged {
                     step: state.step + 1,
                     time: t1,
@@ -456,6 +470,10 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 })
             };
             let t = std::time::Instant::now();
+            if inexact && !matches!(correction, Correction::Krylov(_)) {
+                // (Newton-Krylov updates z by products.)
+                self.drift.solved(r);
+            }
             match &mut correction {
                 Correction::Fixed => {
                     self.solves
@@ -497,9 +515,10 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.tmp.axpy(-1.0, &state.q)?;
             let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
             if correction <= self.settings.tolerance * self.tmp.norm2()? + floor {
-                if inexact {
-                    self.exact_linear_force(&mut report)?;
+                if inexact && self.drift.due(None, self.settings.tolerance * reference) {
+                    self.exact_linear_force(pred_exact, &mut report)?;
                 }
+                self.drift.accepted();
                 self.accept(state, t1)?;
                 report.forces_current = line_search;
                 report.factor_solves = self.solves.solves;
@@ -510,36 +529,6 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
             }
         }
-    }
-
-    /// z = M a1 + C v1 + K q1 at the iterate, exactly: z_pred + L (q1 - q_pred) with
-    /// L = J - X by one product with J (z is linear in q1 with the derivative L), or from
-    /// scratch without J's matrix. The corrections update z by -(R - X dq), which is -L dq
-    /// only when J dq = R holds to round-off; a single-precision factor's solve leaves
-    /// J dq - R at ~u |J| |dq| (u = 6e-8), which the carried z would accumulate from step to
-    /// step (measured on the small brake: 2.8e-3 N after 1,000 saturated steps against a
-    /// residual target of 2.2e-4 N).
-    ///
-    /// # Collective
-    fn exact_linear_force(&mut self, report: &mut StepReport) -> Result<(), LaError> {
-        let clock = std::time::Instant::now();
-        match &self.jacobian.matrix {
-            Some(j) => {
-                self.tmp.copy_from(&self.q1)?;
-                self.tmp.axpy(-1.0, &self.q_pred)?;
-                self.z.copy_from(&self.z_pred)?;
-                j.mult_add(&self.tmp, &mut self.z)?;
-                if let Some(extra) = &self.jacobian.extra {
-                    self.dz.set_all(0.0)?;
-                    extra.mult_add(&self.tmp, &mut self.dz)?;
-                    self.z.axpy(-1.0, &self.dz)?;
-                }
-            }
-            None => self.linear_force()?,
-        }
-        report.linear_force_seconds += clock.elapsed().as_secs_f64();
-        report.linear_force_calls += 1;
-        Ok(())
     }
 
     /// Iterations and solves with a factor of the last step attempt that did not converge
