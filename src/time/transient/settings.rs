@@ -71,8 +71,8 @@ pub struct TransientSettings {
     /// all ranks), `"per-rank"` (the whole J on every rank, PETSc's sequential LU: no
     /// communication inside a solve; for a reduced model's small J, solved ~10^5 times) or
     /// `"single"` (MUMPS over all ranks in single precision: half the factor's bytes per solve,
-    /// the residual in double precision, judged with the linear force recomputed by one
-    /// product with J at the iterate a step accepts).
+    /// the residual in double precision, judged with the linear force recomputed by products
+    /// wherever the solves' rounding could matter: `time::newmark`'s carried.rs).
     /// (Not written when "auto": the restart fingerprint of checkpoints written before this
     /// key existed stays the same.)
     #[serde(default, skip_serializing_if = "JacobianFactor::is_auto")]
