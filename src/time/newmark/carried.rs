@@ -93,6 +93,22 @@ impl Drift {
 }
 
 impl<'p> Newmark<'_, 'p> {
+    /// The residual judged with z recomputed (the carried z assumed J dq = R exactly):
+    /// |R| and the reference force max(|f|, |z|), f being current at the iterate.
+    ///
+    /// # Collective
+    pub(super) fn residual_with_exact_z(
+        &mut self,
+        pred_exact: bool,
+        report: &mut StepReport,
+    ) -> Result<(f64, f64), LaError> {
+        self.exact_linear_force(pred_exact, report)?;
+        self.r.copy_from(&self.z)?;
+        self.r.axpy(-1.0, &self.f)?;
+        let reference = self.f.norm2()?.max(self.z.norm2()?);
+        Ok((self.r.norm2()?, reference))
+    }
+
     /// z = M a1 + C v1 + K q1 at the iterate by products: when z was exact at the predictor,
     /// z_pred + (J - X)(q1 - q_pred) by one product with J (z is affine in q1 within a step,
     /// with the derivative J - X); otherwise from scratch. Measures the drift it removes.

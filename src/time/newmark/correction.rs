@@ -79,6 +79,53 @@ impl SolveCount {
 }
 
 impl<'p> Newmark<'_, 'p> {
+    /// dq for the current iterate by `correction`, and the linear force's change dz with it;
+    /// `at`: the iterate's time and step number (a Jacobian or tangent built there).
+    ///
+    /// # Collective
+    pub(super) fn correction(
+        &mut self,
+        correction: &mut Correction<'_, '_, 'p>,
+        at: (f64, usize),
+        target: f64,
+        report: &mut StepReport,
+    ) -> Result<(), LaError> {
+        let iterate = |s: &Self| -> Result<State<'p>, LaError> {
+            Ok(State {
+                time: at.0,
+                step: at.1,
+                q: s.q1.try_clone()?,
+                v: s.v1.try_clone()?,
+                a: s.a1.try_clone()?,
+                linear: None,
+            })
+        };
+        match correction {
+            Correction::Fixed => {
+                self.solves
+                    .solve(&self.jacobian.factor, &self.r, &mut self.dq)?;
+                self.linear_change(self.jacobian, report)
+            }
+            Correction::Updated(linearize) => {
+                let tangent = linearize(&self.settings, &iterate(self)?)?;
+                self.updated_correction(tangent.as_ref(), report)
+            }
+            Correction::Full(build) => {
+                let retired = self.full_newton_spare.take();
+                let fresh = build(&self.settings, Some(&iterate(self)?), retired)?;
+                self.solves.solve(&fresh.factor, &self.r, &mut self.dq)?;
+                self.linear_change(&fresh, report)?;
+                self.full_newton_spare = fresh.retire();
+                Ok(())
+            }
+            Correction::Krylov(linearize) => {
+                let tangent = linearize(&self.settings, &iterate(self)?)?;
+                report.krylov_iterations += self.krylov_solve(tangent.as_ref(), 0.1 * target)?;
+                self.linear_change_from_matrix()
+            }
+        }
+    }
+
     /// dq = P^-1 R with P the factor updated by `tangent`'s dominant part (U D U^T), and
     /// dz = -(J - X) dq = -(P dq - U D U^T dq - X dq) = -R + U D U^T dq + X dq.
     ///

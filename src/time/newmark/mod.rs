@@ -425,22 +425,13 @@ impl<'a, 'p> Newmark<'a, 'p> {
         loop {
             let mut target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
             if r <= target && inexact && self.drift.due(Some(r), target) {
-                // The carried z assumed J dq = R exactly; judge the residual with z itself.
-                self.exact_linear_force(pred_exact, &mut report)?;
-                self.r.copy_from(&self.z)?;
-                self.r.axpy(-1.0, &self.f)?;
-                r = self.r.norm2()?;
-                reference = self.f.norm2()?.max(self.z.norm2()?);
+                (r, reference) = self.residual_with_exact_z(pred_exact, &mut report)?;
                 target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
             }
             report.residual = r;
             report.reference = reference;
             if r <= target {
-                self.drift.accepted();
-                self.accept(state, t1)?;
-                report.factor_solves = self.solves.solves;
-                report.factor_solve_seconds = self.solves.seconds;
-                return Ok(report);
+                return self.finish(state, t1, report);
             }
             history.push(r);
             // Stalled: less than a halving over the last four iterations after eight; at that
@@ -459,45 +450,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     target,
                 });
             }
-            let iterate = |s: &Self| -> Result<State<'p>, LaError> {
-                Ok(State {
-                    time: t1,
-                    step: state.step + 1,
-                    q: s.q1.try_clone()?,
-                    v: s.v1.try_clone()?,
-                    a: s.a1.try_clone()?,
-                    linear: None,
-                })
-            };
             let t = std::time::Instant::now();
             if inexact && !matches!(correction, Correction::Krylov(_)) {
                 // (Newton-Krylov updates z by products.)
                 self.drift.solved(r);
             }
-            match &mut correction {
-                Correction::Fixed => {
-                    self.solves
-                        .solve(&self.jacobian.factor, &self.r, &mut self.dq)?;
-                    self.linear_change(self.jacobian, &mut report)?;
-                }
-                Correction::Updated(linearize) => {
-                    let tangent = linearize(&self.settings, &iterate(self)?)?;
-                    self.updated_correction(tangent.as_ref(), &mut report)?;
-                }
-                Correction::Full(build) => {
-                    let retired = self.full_newton_spare.take();
-                    let fresh = build(&self.settings, Some(&iterate(self)?), retired)?;
-                    self.solves.solve(&fresh.factor, &self.r, &mut self.dq)?;
-                    self.linear_change(&fresh, &mut report)?;
-                    self.full_newton_spare = fresh.retire();
-                }
-                Correction::Krylov(linearize) => {
-                    let tangent = linearize(&self.settings, &iterate(self)?)?;
-                    report.krylov_iterations +=
-                        self.krylov_solve(tangent.as_ref(), 0.1 * target)?;
-                    self.linear_change_from_matrix()?;
-                }
-            }
+            self.correction(&mut correction, (t1, state.step + 1), target, &mut report)?;
             report.solve_seconds += t.elapsed().as_secs_f64();
             report.iterations += 1;
             let alpha = if line_search {
@@ -518,12 +476,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 if inexact && self.drift.due(None, self.settings.tolerance * reference) {
                     self.exact_linear_force(pred_exact, &mut report)?;
                 }
-                self.drift.accepted();
-                self.accept(state, t1)?;
                 report.forces_current = line_search;
-                report.factor_solves = self.solves.solves;
-                report.factor_solve_seconds = self.solves.seconds;
-                return Ok(report);
+                return self.finish(state, t1, report);
             }
             if !line_search {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
@@ -535,6 +489,20 @@ impl<'a, 'p> Newmark<'a, 'p> {
     /// (what a retry cost beyond the accepted attempt's report).
     pub fn failed_attempt(&self) -> (usize, usize) {
         (self.failed_iterations, self.solves.solves)
+    }
+
+    /// Accepts the iterate and completes the step's report.
+    fn finish(
+        &mut self,
+        state: &mut State<'p>,
+        t1: f64,
+        mut report: StepReport,
+    ) -> Result<StepReport, TimeError> {
+        self.drift.accepted();
+        self.accept(state, t1)?;
+        report.factor_solves = self.solves.solves;
+        report.factor_solve_seconds = self.solves.seconds;
+        Ok(report)
     }
 
     /// The state becomes (q1, v1, a1) at t1.
