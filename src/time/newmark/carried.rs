@@ -72,7 +72,8 @@ impl Drift {
         self.residuals += r;
     }
 
-    /// A step was accepted without recomputing z.
+    /// A step was accepted (counted towards the next forced recomputation; a no-op in
+    /// effect for a double-precision factor, which never asks `due`).
     pub(super) fn accepted(&mut self) {
         self.steps += 1;
     }
