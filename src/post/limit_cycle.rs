@@ -67,6 +67,12 @@ pub struct LimitCycle {
     pub saturation_time: Option<f64>,
     /// The saturated amplitude (half peak-to-peak, median over the last fifth of the run).
     pub saturated_amplitude: f64,
+    /// Root mean square of the signal about its envelope's centre line from the saturation
+    /// time to the end (a sine of amplitude A: A / sqrt 2). Over a saturated vibration that is
+    /// not one repeating cycle, the windows' half peak-to-peak scatter by tens of percent
+    /// from window to window, while the RMS averages over every cycle since saturation: the
+    /// figure to compare two runs by.
+    pub saturated_rms: Option<f64>,
     /// Peak of the spectrum of the last part of the run (Hz).
     pub dominant_frequency: f64,
     /// Period by autocorrelation over the cycles after saturation (s).
@@ -157,15 +163,13 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
             return out;
         }
     }
-    out.saturation_time = env
-        .iter()
-        .skip(k_min)
-        .find(|e| e.1 >= 0.9 * a_sat)
-        .map(|e| e.0);
-    let Some(t_sat) = out.saturation_time else {
+    let Some(k_sat) = (k_min..env.len()).find(|&k| env[k].1 >= 0.9 * a_sat) else {
         out.verdict = "no saturation time found".into();
         return out;
     };
+    let t_sat = env[k_sat].0;
+    out.saturation_time = Some(t_sat);
+    out.saturated_rms = Some(rms_about_centre(&u, w, &out.envelope_centre, k_sat));
     let first = (((t_sat - t0) / dt).ceil() as usize).min(n - 1);
     let cycle = &u[first..];
     let mean = cycle.iter().sum::<f64>() / cycle.len() as f64;
@@ -365,6 +369,19 @@ fn envelope(u: &[f64], w: usize, time: impl Fn(f64) -> f64) -> (Vec<(f64, f64)>,
         .unzip()
 }
 
+/// RMS of `u` about the centre of each window of `w` samples (`envelope`'s windows), over the
+/// windows from `first` on.
+fn rms_about_centre(u: &[f64], w: usize, centre: &[f64], first: usize) -> f64 {
+    let (sum, count) = u.chunks_exact(w).zip(centre).skip(first).fold(
+        (0.0, 0usize),
+        |(sum, count), (chunk, c)| {
+            let s: f64 = chunk.iter().map(|v| (v - c).powi(2)).sum();
+            (sum + s, count + chunk.len())
+        },
+    );
+    (sum / count.max(1) as f64).sqrt()
+}
+
 /// Least-squares slope of (x, y).
 pub fn slope(p: &[(f64, f64)]) -> f64 {
     let n = p.len() as f64;
@@ -416,6 +433,13 @@ mod tests {
         );
         assert!(lc.reached, "{}", lc.verdict);
         assert!(lc.variation.unwrap() < 0.01);
+        // From the saturation time (envelope >= 0.9 A, reached within ~1.5 ms of the 70 ms
+        // after it) the RMS is A / sqrt 2 to well below 1 %.
+        let rms = lc.saturated_rms.expect("an RMS");
+        assert!(
+            (rms * std::f64::consts::SQRT_2 / big - 1.0).abs() < 0.01,
+            "rms {rms}"
+        );
     }
 
     /// The envelope is centred on each window's range, not on the run's mean: a torque at
@@ -488,6 +512,11 @@ mod tests {
             "{}",
             modulated.verdict
         );
+        // Two components of amplitudes 1 and 0.5: RMS sqrt((1 + 0.25) / 2) = 0.791 over whole
+        // beats; ~9 beats of 3.3 ms after saturation, the last one partial (<= 1/9 of the span
+        // off the mean square by up to its own deviation): 5 %.
+        let rms = modulated.saturated_rms.expect("an RMS");
+        assert!((rms / 0.625f64.sqrt() - 1.0).abs() < 0.05, "rms {rms}");
         let mut bad = wave(&|_| 1.0);
         bad[100] = f64::NAN;
         assert!(!characterize(&t, &bad, dt, &s).reached);

@@ -77,8 +77,11 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
                 (Some(g), None) => format!("; it grew at {g:.0} 1/s{at}"),
                 _ => String::new(),
             };
+            let rms = c.saturated_rms.map_or(String::new(), |r| {
+                format!(", RMS {r:.3e} N m since saturation")
+            });
             lines.push(format!(
-                "transient: {state}; at its end {:.1} Hz, braking-torque amplitude {:.3e} N m (half peak-to-peak){growth}",
+                "transient: {state}; at its end {:.1} Hz, braking-torque amplitude {:.3e} N m (half peak-to-peak){rms}{growth}",
                 c.dominant_frequency, c.saturated_amplitude
             ));
         }

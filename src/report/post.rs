@@ -30,6 +30,7 @@ pub fn write_limit_cycle(
         ("growth_window_end_s", c.growth_window.map_or(nan, |w| w.1)),
         ("saturation_time_s", c.saturation_time.unwrap_or(nan)),
         ("saturated_amplitude_nm", c.saturated_amplitude),
+        ("saturated_rms_nm", c.saturated_rms.unwrap_or(nan)),
         ("dominant_frequency_hz", c.dominant_frequency),
         ("period_s", c.period.unwrap_or(nan)),
         ("amplitude_variation", c.variation.unwrap_or(nan)),
