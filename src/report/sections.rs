@@ -152,8 +152,19 @@ impl RunSummary {
 
     pub(super) fn fmt_transient(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(t) = &self.transient {
+            // A run resumed at its last step (--restart with no steps left) solved nothing.
+            let solve = if t.factor_solves > 0 {
+                format!(
+                    "one solve with the factor {:.3} ms ({} solves; ratio {:.2})",
+                    1e3 * t.seconds_per_solve,
+                    t.factor_solves,
+                    t.seconds_per_iteration / t.seconds_per_solve
+                )
+            } else {
+                "no solve with the factor in this process (resumed at the run's end)".to_string()
+            };
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs one solve with the factor {:.3} ms ({} solves; ratio {:.2}); per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs {}; per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -173,9 +184,7 @@ impl RunSummary {
                 t.seconds_factorizing,
                 t.seconds_assembling_jacobians,
                 1e3 * t.seconds_per_iteration,
-                1e3 * t.seconds_per_solve,
-                t.factor_solves,
-                t.seconds_per_iteration / t.seconds_per_solve.max(1e-300),
+                solve,
                 1e3 * t.seconds_forces_per_step,
                 1e3 * t.seconds_products_per_step
             )?;

@@ -912,7 +912,8 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
 /// on the residual; the shapes to that over the relative gap of close modes): the two runs
 /// agree to that level (measured: torque 9e-12 of its value, states 1.4e-11 of the largest
 /// (static) value, asserted 1e-9; the pad velocity, which has no static part, 2.2e-7 of its
-/// largest value, asserted 1e-5).
+/// largest value, asserted 1e-5). Then resumed with `steps = 100`: it ends at once, its
+/// stream as it was.
 fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
     let scene = |steps: usize| {
         small_brake_scene(
@@ -1011,6 +1012,19 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "wall_seconds after the restart: {} rows, not a non-decreasing series from 0",
             wall.len()
+        ));
+    }
+    // Resumed again asking for fewer steps than it has (100 of 120, as a user ending a long
+    // run at its last checkpoint to get its [post] analyses): no step is taken and nothing
+    // written is lost.
+    let before = read(&resumed, "braking_torque")?;
+    go(&scene(100), "restart-resumed", true)?;
+    let after = read(&resumed, "braking_torque")?;
+    if after.len() != before.len() || after.iter().zip(&before).any(|(a, b)| a != b) {
+        failures.push(format!(
+            "resumed with fewer steps than run: {} torque rows before, {} after, or changed",
+            before.len(),
+            after.len()
         ));
     }
     say(
