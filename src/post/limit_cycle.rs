@@ -67,11 +67,12 @@ pub struct LimitCycle {
     pub saturation_time: Option<f64>,
     /// The saturated amplitude (half peak-to-peak, median over the last fifth of the run).
     pub saturated_amplitude: f64,
-    /// Root mean square of the signal about its envelope's centre line from the saturation
-    /// time to the end (a sine of amplitude A: A / sqrt 2). Over a saturated vibration that is
-    /// not one repeating cycle, the windows' half peak-to-peak scatter by tens of percent
-    /// from window to window, while the RMS averages over every cycle since saturation: the
-    /// figure to compare two runs by.
+    /// Root mean square of the signal about its envelope's centre line over the last fifth of
+    /// the run, the span of `saturated_amplitude` (a sine of amplitude A: A / sqrt 2). Over a
+    /// saturated vibration that is not one repeating cycle, the windows' half peak-to-peak
+    /// scatter by tens of percent from window to window, while the RMS averages over every
+    /// cycle of the span: the figure to compare two runs by. Given whenever the envelope is,
+    /// whatever the verdict (a modulated vibration can look like growth over one fifth).
     pub saturated_rms: Option<f64>,
     /// Peak of the spectrum of the last part of the run (Hz).
     pub dominant_frequency: f64,
@@ -123,6 +124,12 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
         .map(|e| e.1)
         .collect();
     out.saturated_amplitude = median(&tail);
+    out.saturated_rms = Some(rms_about_centre(
+        &u,
+        w,
+        &out.envelope_centre,
+        env.len() - tail.len(),
+    ));
     let a_sat = out.saturated_amplitude;
     let (k_min, a_min) = env
         .iter()
@@ -169,7 +176,6 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     };
     let t_sat = env[k_sat].0;
     out.saturation_time = Some(t_sat);
-    out.saturated_rms = Some(rms_about_centre(&u, w, &out.envelope_centre, k_sat));
     let first = (((t_sat - t0) / dt).ceil() as usize).min(n - 1);
     let cycle = &u[first..];
     let mean = cycle.iter().sum::<f64>() / cycle.len() as f64;
@@ -433,8 +439,8 @@ mod tests {
         );
         assert!(lc.reached, "{}", lc.verdict);
         assert!(lc.variation.unwrap() < 0.01);
-        // From the saturation time (envelope >= 0.9 A, reached within ~1.5 ms of the 70 ms
-        // after it) the RMS is A / sqrt 2 to well below 1 %.
+        // Over the last fifth (saturated: the envelope within 1e-6 of A there) the RMS is
+        // A / sqrt 2 to the resampling's and the windows' centring error, far below 1 %.
         let rms = lc.saturated_rms.expect("an RMS");
         assert!(
             (rms * std::f64::consts::SQRT_2 / big - 1.0).abs() < 0.01,
@@ -512,9 +518,10 @@ mod tests {
             "{}",
             modulated.verdict
         );
-        // Two components of amplitudes 1 and 0.5: RMS sqrt((1 + 0.25) / 2) = 0.791 over whole
-        // beats; ~9 beats of 3.3 ms after saturation, the last one partial (<= 1/9 of the span
-        // off the mean square by up to its own deviation): 5 %.
+        // Two components of amplitudes 1 and 0.5: mean square (1 + 0.25) / 2 = 0.625 over
+        // whole beats; over the last fifth (T = 8 ms, 2.4 beats of 3.3 ms) the beat term
+        // 0.5 cos(dw t) averages to at most 0.5 / (dw T) = 0.033, 5.3 % of the mean square,
+        // 2.7 % of the RMS: 5 %.
         let rms = modulated.saturated_rms.expect("an RMS");
         assert!((rms / 0.625f64.sqrt() - 1.0).abs() < 0.05, "rms {rms}");
         let mut bad = wave(&|_| 1.0);

@@ -78,7 +78,7 @@ pub fn answer_lines(s: &RunSummary) -> Vec<String> {
                 _ => String::new(),
             };
             let rms = c.saturated_rms.map_or(String::new(), |r| {
-                format!(", RMS {r:.3e} N m since saturation")
+                format!(", RMS {r:.3e} N m over the last fifth")
             });
             lines.push(format!(
                 "transient: {state}; at its end {:.1} Hz, braking-torque amplitude {:.3e} N m (half peak-to-peak){rms}{growth}",
