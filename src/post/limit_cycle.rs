@@ -97,7 +97,7 @@ pub struct LimitCycle {
 
 /// Characterizes signal `y` sampled at times `t` (resampled on the grid `dt` first).
 ///
-/// About 140 lines, on purpose: resampling, dominant frequency, envelope, saturation, growth
+/// About 150 lines, on purpose: resampling, dominant frequency, envelope, saturation, growth
 /// fit, cycles and verdict in order, each able to end early with its verdict in the one
 /// `LimitCycle` it fills; apart they would pass that half-filled record along.
 pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings) -> LimitCycle {
