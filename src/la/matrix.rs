@@ -418,6 +418,74 @@ impl<'p> SparseMatrix<'p> {
         })
     }
 
+    /// The block of rows and columns `indices` (ascending global indices, the same on every
+    /// rank) as a dense row-major |indices| x |indices| matrix on every rank: a small
+    /// subproblem's operator. AIJ only (a blocked format would need block-aligned indices).
+    ///
+    /// # Collective
+    pub fn dense_block(&self, indices: &[usize]) -> Result<Vec<f64>> {
+        if self.format != MatrixFormat::Aij {
+            return Err(LaError::Invalid(
+                "dense_block: the matrix must be AIJ".into(),
+            ));
+        }
+        let n = indices.len();
+        let idx: Vec<ffi::PetscInt> = indices.iter().map(|&i| i as ffi::PetscInt).collect();
+        let mut is = std::ptr::null_mut();
+        // SAFETY: MPI_COMM_SELF is a valid communicator for the whole run.
+        let comm_self = unsafe { ffi::mpi_sys::RSMPI_COMM_SELF };
+        call!(ISCreateGeneral(
+            comm_self,
+            n as ffi::PetscInt,
+            idx.as_ptr(),
+            ffi::PETSC_COPY_VALUES,
+            &mut is
+        ))?;
+        let mut subs: *mut ffi::Mat = std::ptr::null_mut();
+        let made = call!(MatCreateSubMatrices(
+            self.raw,
+            1,
+            &is,
+            &is,
+            ffi::MAT_INITIAL_MATRIX,
+            &mut subs
+        ));
+        report_destroy(call!(ISDestroy(&mut is)));
+        made?;
+        // SAFETY: MatCreateSubMatrices returned an array of one matrix.
+        let sub = unsafe { *subs };
+        let mut dense = vec![0.0; n * n];
+        let mut result = Ok(());
+        for row in 0..n {
+            let mut ncols = 0;
+            let mut cols = std::ptr::null();
+            let mut vals = std::ptr::null();
+            let r = row as ffi::PetscInt;
+            if let Err(e) = call!(MatGetRow(sub, r, &mut ncols, &mut cols, &mut vals)) {
+                result = Err(e);
+                break;
+            }
+            if ncols > 0 {
+                // SAFETY: PETSc returns `ncols` valid entries until MatRestoreRow.
+                let (c, v) = unsafe {
+                    (
+                        std::slice::from_raw_parts(cols, ncols as usize),
+                        std::slice::from_raw_parts(vals, ncols as usize),
+                    )
+                };
+                for (&col, &value) in c.iter().zip(v) {
+                    dense[row * n + col as usize] = value;
+                }
+            }
+            if let Err(e) = call!(MatRestoreRow(sub, r, &mut ncols, &mut cols, &mut vals)) {
+                result = Err(e);
+                break;
+            }
+        }
+        report_destroy(call!(MatDestroySubMatrices(1, &mut subs)));
+        result.map(|_| dense)
+    }
+
     /// An identity of this matrix while it lives (two live matrices never share one): to
     /// recognize a matrix handed back as the one built earlier.
     pub fn identity(&self) -> usize {

@@ -14,6 +14,8 @@
 //! - values copied and added between matrices whose patterns nest (the static tangent's K0)
 //!   land exactly where they belong, across the ranks' column split, and a factorization
 //!   renewed afterwards factors the new values.
+//! - the dense block of chosen rows and columns (a nonlinear elimination's operator) holds
+//!   exactly the matrix's entries there, rows of other ranks included, on every rank.
 //! - dense blocks added through a plan of their entries' places (the contact tangent's
 //!   route) land exactly where MatSetValues would put them, rows of other ranks included.
 
@@ -172,6 +174,10 @@ pub fn tests() -> Vec<super::NamedTest> {
         (
             "planned_block_addition_lands_exactly_where_matsetvalues_would",
             planned_block_addition_lands_exactly_where_matsetvalues_would,
+        ),
+        (
+            "dense_block_holds_the_entries_of_its_rows_and_columns",
+            dense_block_holds_the_entries_of_its_rows_and_columns,
         ),
     ]
 }
@@ -806,4 +812,37 @@ fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_the
         true => Ok(()),
         false => Err("a wider pattern was copied into a narrower one without an error".into()),
     }
+}
+
+/// The dense block of a pentadiagonal matrix at indices spread over the ranks' rows (9, 10, 11:
+/// entries off the diagonal inside the block; 19, 20, 22: across the two-rank split at 20)
+/// equals its entries exactly, zero outside the band, and is the same on every rank.
+fn dense_block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> Result<(), String> {
+    let n = 40;
+    let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
+    let local = rank * n / size..(rank + 1) * n / size;
+    let value = |i: usize, j: usize| 1.0 + i as f64 + 0.01 * j as f64;
+    let a = banded(petsc, n, local, 2, value)?;
+    let indices = [0, 9, 10, 11, 19, 20, 22, 39];
+    let block = a.dense_block(&indices).map_err(|e| e.to_string())?;
+    let mut worst = 0.0f64;
+    for (r, &i) in indices.iter().enumerate() {
+        for (c, &j) in indices.iter().enumerate() {
+            let expected = if i.abs_diff(j) <= 2 { value(i, j) } else { 0.0 };
+            worst = nan_max(worst, (block[r * indices.len() + c] - expected).abs());
+        }
+    }
+    let mut sums = vec![0.0; size];
+    sums[rank] = block.iter().sum();
+    squeal::parallel::sum_in_place(petsc.world(), &mut sums);
+    let same = sums.iter().all(|&s| s == sums[0]);
+    say(
+        petsc,
+        &format!("dense block: max entry error {worst:.1e}, the same on every rank: {same}"),
+    );
+    check_le("dense block entry error", worst, 0.0)?;
+    if !same {
+        return Err("the dense block differs between ranks".into());
+    }
+    Ok(())
 }
