@@ -206,6 +206,8 @@ impl Scene {
             t.max_cuts = defaults.max_cuts;
             t.refresh = defaults.refresh;
             t.update_factor = defaults.update_factor;
+            t.eliminate_points = defaults.eliminate_points;
+            t.anderson = defaults.anderson;
             t.jacobian_factor = defaults.jacobian_factor;
             t.tolerance = defaults.tolerance;
             t.max_iterations = defaults.max_iterations;

@@ -6,6 +6,7 @@
 pub mod kernel;
 pub mod law;
 pub mod linearize;
+mod local;
 mod model;
 pub mod pairing;
 mod settings;
@@ -13,6 +14,7 @@ mod state;
 mod summary;
 pub mod surface;
 
+pub use local::PointEvaluation;
 pub use model::{point_rows, ContactModel};
 pub use settings::{ContactSettings, InterfaceLaws, ResolvedInterface};
 pub use state::ContactState;

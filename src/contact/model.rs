@@ -217,7 +217,7 @@ impl<'p> ContactModel<'p> {
     }
 
     /// Omega r at a point (zero on interfaces that do not slide).
-    fn rigid_speed(&self, id: usize) -> f64 {
+    pub(super) fn rigid_speed(&self, id: usize) -> f64 {
         let p = &self.points[id];
         if self.interfaces[p.interface].friction.is_sliding() {
             self.disc_speed * p.radius

@@ -188,6 +188,20 @@ impl RunSummary {
                 1e3 * t.seconds_forces_per_step,
                 1e3 * t.seconds_products_per_step
             )?;
+            let e = &t.eliminations;
+            if e.eliminations > 0 {
+                let per = |x: usize| x as f64 / e.eliminations as f64;
+                writeln!(
+                    f,
+                    "    {} nonlinear eliminations of contact points (the updated-factor retries above made them in place of the update): {:.1} points and {:.1} unknowns each, {:.2} local Newton iterations each ({} ended unconverged), {:.1} s",
+                    e.eliminations,
+                    per(e.points),
+                    per(e.unknowns),
+                    per(e.local_iterations),
+                    e.unconverged,
+                    e.seconds
+                )?;
+            }
             writeln!(
                 f,
                 "    started from the static state as an equilibrium (its residual {:.2e} N taken off the load)",

@@ -121,6 +121,8 @@ pub struct TransientSummary {
     pub full_newton_retries: usize,
     pub krylov_iterations: usize,
     pub updated_retries: usize,
+    /// The nonlinear eliminations of this process's run.
+    pub eliminations: crate::time::transient::EliminationCounts,
     /// Per step of this process's run, counting the attempts that failed too: iterations
     /// and solves with the factor (GMRES' and the update's column solves included).
     pub all_iterations_per_step: f64,
@@ -405,6 +407,7 @@ impl TransientSummary {
             full_newton_retries: t.full_newton_retries,
             krylov_iterations: t.krylov_iterations,
             updated_retries: t.updated_retries,
+            eliminations: t.eliminations,
             all_iterations_per_step: (t.iterations_run + t.failed_iterations) as f64 / steps_run,
             all_solves_per_step: (t.factor_solves + t.failed_solves) as f64 / steps_run,
             factorizations: t.factorizations,

@@ -28,6 +28,17 @@ pub fn write_transient(
         ("krylov_iterations", tr.krylov_iterations as f64),
         ("full_newton_retries", tr.full_newton_retries as f64),
         ("updated_factor_retries", tr.updated_retries as f64),
+        (
+            "nonlinear_eliminations",
+            tr.eliminations.eliminations as f64,
+        ),
+        ("eliminated_points", tr.eliminations.points as f64),
+        ("eliminated_unknowns", tr.eliminations.unknowns as f64),
+        (
+            "elimination_local_iterations",
+            tr.eliminations.local_iterations as f64,
+        ),
+        ("seconds_eliminating", tr.eliminations.seconds),
         ("failed_attempt_iterations", tr.failed_iterations as f64),
         ("failed_attempt_factor_solves", tr.failed_solves as f64),
         ("factorizations", tr.factorizations as f64),

@@ -4,8 +4,8 @@
 //! line search) before it is cut, and the step control a checkpoint carries.
 
 use super::newmark::{
-    Correction, Damping, Factorize, Forces, Linearize, Newmark, NewmarkSettings, State, StepReport,
-    TimeError,
+    Correction, Damping, Eliminate, Factorize, Forces, Linearize, Newmark, NewmarkSettings, State,
+    StepReport, TimeError,
 };
 use crate::la::SparseMatrix;
 
@@ -119,11 +119,12 @@ fn next_attempt(control: &StepControl, o: Options) -> Option<Next> {
 }
 
 /// The correction of the attempt that just failed, for the log.
-fn attempt_name(control: &StepControl, full_newton: bool) -> &'static str {
+fn attempt_name(control: &StepControl, full_newton: bool, eliminating: bool) -> &'static str {
     match control.fallback {
         _ if full_newton => "the full Newton",
         FULL => "the full Newton",
         KRYLOV => "Newton-Krylov",
+        UPDATED if eliminating => "the nonlinear elimination",
         UPDATED => "the updated factor",
         _ if control.fresh => "the refreshed Jacobian",
         _ => "the fixed Jacobian",
@@ -149,7 +150,7 @@ pub enum Flow {
 /// fails too is the error returned. `control` starts at its default, or where a checkpoint
 /// left it.
 ///
-/// About 175 lines, on purpose: the factor's loop and the step's loop share the integrator
+/// About 185 lines, on purpose: the factor's loop and the step's loop share the integrator
 /// (which borrows the factor) and the control; what to do after a failure is decided in
 /// [`next_attempt`], what stays here is each outcome's bookkeeping and its log line.
 ///
@@ -162,6 +163,7 @@ pub fn integrate_adaptive<'p>(
     k: &SparseMatrix<'p>,
     factorize: &mut Factorize<'_, 'p>,
     mut linearize: Option<&mut Linearize<'_, 'p>>,
+    mut eliminate: Option<&mut Eliminate<'_, 'p>>,
     state: &mut State<'p>,
     forces: &mut Forces<'_, 'p>,
     end_time: f64,
@@ -202,6 +204,10 @@ pub fn integrate_adaptive<'p>(
                 }
                 (_, KRYLOV, Some(l)) if factor.matrix.is_some() => {
                     integrator.step_with(state, forces, Correction::Krylov(&mut **l), true)
+                }
+                (_, UPDATED, Some(_)) if eliminate.is_some() && factor.matrix.is_some() => {
+                    let e = eliminate.as_mut().expect("checked");
+                    integrator.step_with(state, forces, Correction::Eliminated(&mut **e), true)
                 }
                 (_, UPDATED, Some(l)) => {
                     integrator.step_with(state, forces, Correction::Updated(&mut **l), true)
@@ -253,7 +259,7 @@ pub fn integrate_adaptive<'p>(
                     let (iterations, solves) = integrator.failed_attempt();
                     control.failed_iterations += iterations;
                     control.failed_solves += solves;
-                    let failed = attempt_name(control, full_newton);
+                    let failed = attempt_name(control, full_newton, eliminate.is_some());
                     let next = next_attempt(
                         control,
                         Options {
@@ -290,6 +296,10 @@ pub fn integrate_adaptive<'p>(
                             control.fallback = fallback;
                             control.good = 0;
                             let how = match fallback {
+                                UPDATED if eliminate.is_some() => {
+                                    control.updated_retries += 1;
+                                    "a nonlinear elimination of the contact points whose tangent changed most before each fixed-factor correction"
+                                }
                                 UPDATED => {
                                     control.updated_retries += 1;
                                     "the factor updated at the contact points whose tangent changed most"

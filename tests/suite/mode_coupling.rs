@@ -438,6 +438,7 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
         &k,
         &mut factorize,
         Some(&mut linearize),
+        None,
         &mut state,
         &mut forces,
         end,

@@ -199,6 +199,7 @@ fn run(
         &k,
         &mut factorize,
         Some(&mut linearize),
+        None,
         &mut state,
         &mut forces,
         5.2 * period,

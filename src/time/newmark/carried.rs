@@ -72,6 +72,12 @@ impl Drift {
         self.residuals += r;
     }
 
+    /// The carried z became a combination of earlier ones with coefficients of absolute sum
+    /// `sum` (Anderson's step): their errors add up to at most that multiple.
+    pub(super) fn mixed(&mut self, sum: f64) {
+        self.residuals *= sum.max(1.0);
+    }
+
     /// A step was accepted (counted towards the next forced recomputation; a no-op in
     /// effect for a double-precision factor, which never asks `due`).
     pub(super) fn accepted(&mut self) {

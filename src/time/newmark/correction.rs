@@ -24,6 +24,12 @@ pub type Factorize<'f, 'p> = dyn FnMut(
 pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<Box<dyn TangentChange<'p> + 'f>, LaError>
     + 'f;
 
+/// A nonlinear elimination at an iterate (the iterate, its residual R, the residual target):
+/// the increment of the unknowns coupled to the contact points whose tangent changed most
+/// that zeroes R's rows there with the other unknowns held (None: no such point).
+pub type Eliminate<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>, &Vector<'p>, f64) -> Result<Option<Vector<'p>>, LaError>
+    + 'f;
+
 /// How a step's corrections are computed.
 pub enum Correction<'r, 'f, 'p> {
     /// With the factor of the step's fixed J (modified Newton).
@@ -39,6 +45,9 @@ pub enum Correction<'r, 'f, 'p> {
     Krylov(&'r mut Linearize<'f, 'p>),
     /// A full Newton: J rebuilt and factorized at every iterate.
     Full(&'r mut Factorize<'f, 'p>),
+    /// The fixed factor's correction after a nonlinear elimination of the contact points
+    /// whose tangent changed most (`Eliminate`; needs J's matrix).
+    Eliminated(&'r mut Eliminate<'f, 'p>),
 }
 
 /// Counts and times solves with a factor.
@@ -90,18 +99,9 @@ impl<'p> Newmark<'_, 'p> {
         target: f64,
         report: &mut StepReport,
     ) -> Result<(), LaError> {
-        let iterate = |s: &Self| -> Result<State<'p>, LaError> {
-            Ok(State {
-                time: at.0,
-                step: at.1,
-                q: s.q1.try_clone()?,
-                v: s.v1.try_clone()?,
-                a: s.a1.try_clone()?,
-                linear: None,
-            })
-        };
+        let iterate = |s: &Self| s.iterate(at);
         match correction {
-            Correction::Fixed => {
+            Correction::Fixed | Correction::Eliminated(_) => {
                 self.solves
                     .solve(&self.jacobian.factor, &self.r, &mut self.dq)?;
                 self.linear_change(self.jacobian, report)
@@ -144,6 +144,50 @@ impl<'p> Newmark<'_, 'p> {
             .precondition(&self.low_rank, &self.jacobian.factor, &self.r, &mut self.dq)?;
         self.linear_change(self.jacobian, report)?;
         self.low_rank.mult_add_update(&self.dq, &mut self.dz)
+    }
+
+    /// The current iterate as a state at `at` (time, step number), for a builder or a tangent.
+    fn iterate(&self, at: (f64, usize)) -> Result<State<'p>, LaError> {
+        Ok(State {
+            time: at.0,
+            step: at.1,
+            q: self.q1.try_clone()?,
+            v: self.v1.try_clone()?,
+            a: self.a1.try_clone()?,
+            linear: None,
+        })
+    }
+
+    /// Moves the iterate by the nonlinear elimination's increment (if it found points):
+    /// dq = -delta, z by -(J - X) dq through products (exact, no solve).
+    ///
+    /// # Collective
+    pub(super) fn eliminate(
+        &mut self,
+        eliminate: &mut Eliminate<'_, 'p>,
+        at: (f64, usize),
+        target: f64,
+        report: &mut StepReport,
+    ) -> Result<bool, LaError> {
+        let iterate = self.iterate(at)?;
+        let Some(delta) = eliminate(&self.settings, &iterate, &self.r, target)? else {
+            return Ok(false);
+        };
+        let j = self.jacobian.matrix.as_ref().ok_or_else(|| {
+            LaError::Invalid("a nonlinear elimination needs the Jacobian's matrix".into())
+        })?;
+        let clock = std::time::Instant::now();
+        self.dq.copy_from(&delta)?;
+        self.dq.scale(-1.0)?;
+        j.mult(&self.dq, &mut self.dz)?;
+        self.dz.scale(-1.0)?;
+        if let Some(extra) = &self.jacobian.extra {
+            extra.mult_add(&self.dq, &mut self.dz)?;
+        }
+        report.product_seconds += clock.elapsed().as_secs_f64();
+        report.product_calls += 2;
+        self.correct(1.0)?;
+        Ok(true)
     }
 
     /// dz = -(J - X) dq for the correction just solved with `jacobian` (whose J dq = R holds to

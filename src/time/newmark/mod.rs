@@ -44,6 +44,9 @@ pub struct NewmarkSettings {
     /// Relative residual tolerance of the modified Newton iterations.
     pub tolerance: f64,
     pub max_iterations: usize,
+    /// Earlier iterates the eliminated iteration (`Correction::Eliminated`) combines
+    /// (`anderson.rs`; 0: the plain modified Newton).
+    pub anderson: usize,
 }
 
 impl Default for NewmarkSettings {
@@ -54,6 +57,7 @@ impl Default for NewmarkSettings {
             step: 1e-6,
             tolerance: 1e-8,
             max_iterations: 30,
+            anderson: 0,
         }
     }
 }
@@ -182,6 +186,7 @@ pub const LINEAR_FORCE_REFRESH: usize = 1000;
 /// GMRES iterations at most per Newton-Krylov correction.
 pub const KRYLOV_MAX: usize = 60;
 
+mod anderson;
 mod carried;
 mod correction;
 mod damping;
@@ -189,7 +194,7 @@ mod krylov;
 mod line_search;
 
 use correction::SolveCount;
-pub use correction::{Correction, Factorize, Linearize};
+pub use correction::{Correction, Eliminate, Factorize, Linearize};
 pub use damping::{Damping, ModalDamping};
 
 /// A Newmark integrator over fixed operators M, C, K and a factor of J.
@@ -230,6 +235,11 @@ pub struct Newmark<'a, 'p> {
     z_pred: Vector<'p>,
     drift: carried::Drift,
     z_carried: Vector<'p>,
+    /// The accelerated iteration's stored iterates, and the plain update's target and its
+    /// linear force.
+    anderson: anderson::Anderson<'p>,
+    target_q: Vector<'p>,
+    target_z: Vector<'p>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -269,6 +279,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
             z_pred: q1.duplicate()?,
             drift: carried::Drift::default(),
             z_carried: q1.duplicate()?,
+            anderson: anderson::Anderson::new(settings.anderson),
+            target_q: q1.duplicate()?,
+            target_z: q1.duplicate()?,
             q1,
         })
     }
@@ -369,8 +382,13 @@ impl<'a, 'p> Newmark<'a, 'p> {
     ) -> Result<StepReport, TimeError> {
         let h = self.settings.step;
         let t1 = state.time + h;
+        // Anderson's combination redirects the fixed factor's corrections after an
+        // elimination (alone, it did not pay: `anderson.rs`).
+        let accelerate =
+            self.anderson.depth() > 0 && matches!(correction, Correction::Eliminated(_));
         self.krylov_exhausted = false;
         self.solves = SolveCount::default();
+        self.anderson.clear();
         // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
         self.q1.copy_from(&state.q)?;
         self.q1.axpy(h, &state.v)?;
@@ -450,6 +468,17 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     target,
                 });
             }
+            if let Correction::Eliminated(eliminate) = &mut correction {
+                let at = (t1, state.step + 1);
+                if self.eliminate(&mut **eliminate, at, target, &mut report)? {
+                    (r, reference) = self.residual(t1, forces, &mut report)?;
+                    let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
+                    if r <= target {
+                        // Accepted at the loop's head (where the carried z is judged).
+                        continue;
+                    }
+                }
+            }
             let t = std::time::Instant::now();
             if inexact && !matches!(correction, Correction::Krylov(_)) {
                 // (Newton-Krylov updates z by products.)
@@ -458,6 +487,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.correction(&mut correction, (t1, state.step + 1), target, &mut report)?;
             report.solve_seconds += t.elapsed().as_secs_f64();
             report.iterations += 1;
+            if accelerate {
+                self.accelerate(inexact)?;
+            }
             let alpha = if line_search {
                 let (alpha, evaluated) = self.backtrack(t1, r, forces, &mut report)?;
                 (r, reference) = evaluated;
@@ -466,9 +498,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 self.correct(1.0)?;
                 1.0
             };
+            let correction = alpha * self.dq.norm2()?;
             // Converged in q1 (the residual's round-off floor reached): accept.
             // (q1 itself is known to its own round-off at best: 10 eps |q1|.)
-            let correction = alpha * self.dq.norm2()?;
             self.tmp.copy_from(&self.q1)?;
             self.tmp.axpy(-1.0, &state.q)?;
             let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
@@ -483,6 +515,29 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
             }
         }
+    }
+
+    /// Turns the correction (dq, dz) into the move to Anderson's combination of the
+    /// plain-update targets (`anderson.rs`): the line search, where there is one, then
+    /// backtracks along it.
+    ///
+    /// # Collective
+    fn accelerate(&mut self, inexact: bool) -> Result<(), LaError> {
+        self.target_q.copy_from(&self.q1)?;
+        self.target_q.axpy(-1.0, &self.dq)?;
+        self.target_z.copy_from(&self.z)?;
+        self.target_z.axpy(1.0, &self.dz)?;
+        let mixed = self
+            .anderson
+            .mix(&self.r, &mut self.target_q, &mut self.target_z)?;
+        if inexact {
+            self.drift.mixed(mixed.coefficient_sum);
+        }
+        // q1 - dq and z + dz are the combination.
+        self.dq.copy_from(&self.q1)?;
+        self.dq.axpy(-1.0, &self.target_q)?;
+        self.dz.copy_from(&self.target_z)?;
+        self.dz.axpy(-1.0, &self.z)
     }
 
     /// Iterations and solves with a factor of the last step attempt that did not converge

@@ -7,6 +7,8 @@
 //! `recorder` (signals, states, the stream), `checkpoint` (restart).
 
 mod checkpoint;
+mod eliminate;
+pub use eliminate::EliminationCounts;
 mod jacobian;
 mod recorder;
 mod settings;
@@ -25,7 +27,7 @@ use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vecto
 use crate::time::store::Storage;
 use checkpoint::Checkpoint;
 use jacobian::JacobianBuilder;
-use recorder::Recorder;
+use recorder::{Recorder, StepLog};
 pub use settings::{
     random_coefficients, Impulse, Newton, Start, TransientSettings, SATURATION_CHECK_EVERY,
 };
@@ -82,6 +84,8 @@ pub struct Transient {
     pub failed_solves: usize,
     /// GMRES iterations of the Newton-Krylov retries.
     pub krylov_iterations: usize,
+    /// The nonlinear eliminations of this process's run (`transient.eliminate_points`).
+    pub eliminations: EliminationCounts,
     pub factorizations: usize,
     pub factor_entries: f64,
     /// Where J was factorized (MUMPS over all ranks, or LU on every rank).
@@ -213,6 +217,7 @@ impl Transient {
             failed_iterations: 0,
             failed_solves: 0,
             krylov_iterations: 0,
+            eliminations: EliminationCounts::default(),
             factorizations: 0,
             factor_entries: 0.0,
             jacobian_solver: "",
@@ -258,59 +263,6 @@ pub struct TransientFiles<'s> {
     pub storage: &'s dyn Storage,
 }
 
-/// The step control's log (rank 0): every change in `transient.log` beside the stream (a
-/// restart appends to it), the first few also on stdout, then one line saying where the rest
-/// goes: a saturated run changes its step control hundreds of times; the summary counts them.
-struct StepLog {
-    rank0: bool,
-    file: Option<std::fs::File>,
-    path: PathBuf,
-    written: usize,
-}
-
-impl StepLog {
-    /// Lines of the log shown on stdout.
-    const SHOWN: usize = 3;
-
-    fn new(rank0: bool, path: PathBuf, append: bool) -> Self {
-        let open = || {
-            std::fs::OpenOptions::new()
-                .create(true)
-                .write(true)
-                .append(append)
-                .truncate(!append)
-                .open(&path)
-                .ok()
-        };
-        StepLog {
-            rank0,
-            file: if rank0 { open() } else { None },
-            path,
-            written: 0,
-        }
-    }
-
-    fn write(&mut self, line: &str) {
-        use std::io::Write as _;
-        if !self.rank0 {
-            return;
-        }
-        let in_file = self
-            .file
-            .as_mut()
-            .is_some_and(|f| writeln!(f, "{line}").is_ok());
-        if self.written < Self::SHOWN || !in_file {
-            println!("  transient: {line}");
-        } else if self.written == Self::SHOWN {
-            println!(
-                "  transient: further changes of the step control in {} (counted in the summary)",
-                self.path.display()
-            );
-        }
-        self.written += 1;
-    }
-}
-
 impl<'s> TransientFiles<'s> {
     pub fn in_directory(storage: &'s dyn Storage, dir: &Path, restart: bool) -> Self {
         TransientFiles {
@@ -332,7 +284,7 @@ impl<'s> TransientFiles<'s> {
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
 /// step come back with the error, so the caller can write them before reporting it.
 ///
-/// Long (~190 lines): the step callback, the log and the factorization closures share the
+/// Long (~210 lines): the step callback, the log and the factorization closures share the
 /// recorder, the Jacobian builder and the last contact state of this one run; apart, they
 /// would need a struct of RefCells to say the same.
 ///
@@ -347,6 +299,7 @@ pub fn run<'p>(
         step: settings.step,
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
+        anderson: settings.anderson,
         ..Default::default()
     };
     let contact = input.contact;
@@ -393,6 +346,21 @@ pub fn run<'p>(
     let mut linearize = |ns: &NewmarkSettings, at: &State<'p>| {
         let op = builder.borrow().linearize(ns, at)?;
         Ok(Box::new(op) as Box<dyn crate::la::TangentChange<'p> + '_>)
+    };
+
+    let eliminator = match settings.eliminate_points {
+        0 => None,
+        points => Some(RefCell::new(eliminate::Eliminator::new(
+            petsc, contact, &k0, input.m, input.c, points,
+        )?)),
+    };
+    let mut eliminate = |ns: &NewmarkSettings, at: &State<'p>, r: &Vector<'p>, target: f64| {
+        let tangent = builder.borrow().linearize(ns, at)?;
+        let mut e = eliminator
+            .as_ref()
+            .expect("only with an eliminator")
+            .borrow_mut();
+        e.solve(ns, at, r, &tangent, target)
     };
 
     let mut bar = crate::progress::Progress::new("transient", settings.steps, petsc.rank());
@@ -481,6 +449,9 @@ pub fn run<'p>(
         &k0,
         &mut factorize,
         Some(&mut linearize),
+        eliminator
+            .is_some()
+            .then_some(&mut eliminate as &mut crate::time::newmark::Eliminate<'_, 'p>),
         &mut state,
         forces,
         end_time,
@@ -496,6 +467,9 @@ pub fn run<'p>(
         &mut log,
     );
     bar.finish();
+    if let Some(e) = &eliminator {
+        recorder.out.eliminations = e.borrow().counts;
+    }
     // Whatever happened, the signals recorded so far go to the file, and a failed run leaves
     // a checkpoint at its last converged step (to restart with other settings).
     recorder.flush()?;

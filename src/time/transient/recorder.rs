@@ -9,6 +9,7 @@ use crate::la::{LaError, Petsc, Vector};
 use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{State, TimeError};
 use crate::time::store::Series;
+use std::path::PathBuf;
 
 /// Signal rows buffered before they are appended to the file.
 const FLUSH_ROWS: usize = 1000;
@@ -366,5 +367,58 @@ file: files.stream.clone(),
             self.flush()?;
         }
         Ok(())
+    }
+}
+
+/// The step control's log (rank 0): every change in `transient.log` beside the stream (a
+/// restart appends to it), the first few also on stdout, then one line saying where the rest
+/// goes: a saturated run changes its step control hundreds of times; the summary counts them.
+pub(super) struct StepLog {
+    rank0: bool,
+    file: Option<std::fs::File>,
+    path: PathBuf,
+    written: usize,
+}
+
+impl StepLog {
+    /// Lines of the log shown on stdout.
+    const SHOWN: usize = 3;
+
+    pub(super) fn new(rank0: bool, path: PathBuf, append: bool) -> Self {
+        let open = || {
+            std::fs::OpenOptions::new()
+                .create(true)
+                .write(true)
+                .append(append)
+                .truncate(!append)
+                .open(&path)
+                .ok()
+        };
+        StepLog {
+            rank0,
+            file: if rank0 { open() } else { None },
+            path,
+            written: 0,
+        }
+    }
+
+    pub(super) fn write(&mut self, line: &str) {
+        use std::io::Write as _;
+        if !self.rank0 {
+            return;
+        }
+        let in_file = self
+            .file
+            .as_mut()
+            .is_some_and(|f| writeln!(f, "{line}").is_ok());
+        if self.written < Self::SHOWN || !in_file {
+            println!("  transient: {line}");
+        } else if self.written == Self::SHOWN {
+            println!(
+                "  transient: further changes of the step control in {} (counted in the summary)",
+                self.path.display()
+            );
+        }
+        self.written += 1;
     }
 }

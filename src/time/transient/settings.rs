@@ -17,6 +17,11 @@ pub struct TransientSettings {
     pub tolerance: f64,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
+    /// Earlier iterates the eliminated iteration (`eliminate_points`) combines by Anderson
+    /// acceleration (the slow directions the fixed factor leaves after the elimination, no
+    /// solve: `time::newmark::anderson`); 0: none. No effect without `eliminate_points`.
+    #[serde(default = "default_anderson", skip_serializing_if = "is_zero")]
+    pub anderson: usize,
     /// The perturbation of the static state the run starts from (see [`Start`]).
     #[serde(default)]
     pub start: Start,
@@ -45,6 +50,12 @@ pub struct TransientSettings {
     /// factor, then a refreshed one (the behaviour before this key, for comparison).
     #[serde(default = "default_refresh")]
     pub update_factor: bool,
+    /// Where the fixed Jacobian's iterations stall, eliminate the contact points whose tangent
+    /// changed most, at most this many, at every iterate (a small nonlinear system over their
+    /// unknowns, solved by Newton on every rank: `eliminate.rs`) before the fixed factor's
+    /// correction, instead of updating the factor there; 0 (default): no elimination.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub eliminate_points: usize,
     /// `"modified"` (default): the fixed Jacobian; `"full"`: J rebuilt with the contact tangent
     /// at every iterate (the reference the fixed-Jacobian iterations are checked against).
     #[serde(default)]
@@ -205,6 +216,17 @@ fn default_tolerance() -> f64 {
 fn default_max_iterations() -> usize {
     30
 }
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+fn default_anderson() -> usize {
+    0
+}
+/// More earlier iterates than this cost more in dot products than a step could gain.
+pub const MAX_ANDERSON: usize = 20;
+/// The elimination's subproblem is solved dense (~8 unknowns per point): beyond this many
+/// points its LU costs more than the factor's solves it saves.
+pub const MAX_ELIMINATED_POINTS: usize = 512;
 fn default_mode() -> usize {
     1
 }
@@ -240,6 +262,24 @@ impl TransientSettings {
             return Err(InvalidSetting::new(
                 "transient.tolerance",
                 format!(" = {}: must be in (0, 0.01)", self.tolerance),
+            ));
+        }
+        if self.anderson > MAX_ANDERSON {
+            return Err(InvalidSetting::new(
+                "transient.anderson",
+                format!(
+                    " = {}: at most {MAX_ANDERSON} earlier iterates (0: no acceleration)",
+                    self.anderson
+                ),
+            ));
+        }
+        if self.eliminate_points > MAX_ELIMINATED_POINTS {
+            return Err(InvalidSetting::new(
+                "transient.eliminate_points",
+                format!(
+                    " = {}: at most {MAX_ELIMINATED_POINTS} points (0: no elimination)",
+                    self.eliminate_points
+                ),
             ));
         }
         if self.mode == 0 {
@@ -310,6 +350,29 @@ mod tests {
         // Unset, it is not written: the restart fingerprints of older scenes stay the same.
         let text = toml::to_string(&settings("steps = 10")).unwrap();
         assert!(!text.contains("stop_after_saturation"), "{text}");
+    }
+
+    #[test]
+    fn elimination_and_anderson_are_bounded_and_left_out_when_unset() {
+        for (text, key) in [
+            (
+                "steps = 10\neliminate_points = 513",
+                "transient.eliminate_points",
+            ),
+            ("steps = 10\nanderson = 21", "transient.anderson"),
+        ] {
+            let err = settings(text).validate().unwrap_err();
+            assert_eq!(err.key, key, "{err}");
+        }
+        assert!(settings("steps = 10\neliminate_points = 64\nanderson = 5")
+            .validate()
+            .is_ok());
+        // Unset, they are not written: the restart fingerprints of older scenes stay the same.
+        let text = toml::to_string(&settings("steps = 10")).unwrap();
+        assert!(
+            !text.contains("eliminate") && !text.contains("anderson"),
+            "{text}"
+        );
     }
 
     #[test]

@@ -1,0 +1,317 @@
+//! Nonlinear elimination of the contact points whose tangent changed most (Lanzkron, Rose &
+//! Wilkes, SIAM J. Sci. Comput. 17 (1996) 1139; Cai & Li, SIAM J. Sci. Comput. 33 (2011)
+//! 746): at an iterate, the unknowns b those points couple are moved so that the residual's
+//! rows b vanish with the other unknowns held, solving the small nonlinear system
+//! R_b(q + delta) = 0 by Newton with its exact tangent, dense, redundantly on every rank. The
+//! fixed factor's correction then acts on a residual whose stiff, switching local laws (the
+//! friction band's mu p / slip_speed through gamma / (beta h), the exponential contact of a
+//! point that opens or closes) are already satisfied: the kinks at which the fixed J's
+//! iterations stall in the saturated regime (benches/transient-results.md). What the
+//! elimination leaves is smooth but can be slow along a few global directions (the
+//! consistent tangent far softer than J there): Anderson acceleration of the fixed factor's
+//! corrections (`transient.anderson`) removes those; alone, the elimination stalled there.
+//!
+//! R_b(q + delta) = R_b(q) + L_bb delta - (f_b(q + delta, v + c1 delta) - f_b(q, v)), with
+//! L = M / (beta h^2) + c1 C + K (the linear part of R, c1 = gamma / (beta h)) and f the
+//! contact force of the points that couple some unknown of b (the modal damping force, a few
+//! modes' low-rank term, is left to the global iteration).
+
+use crate::contact::kernel::PointRows;
+use crate::contact::ContactModel;
+use crate::la::lapack::RealLu;
+use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange, Vector};
+use crate::time::newmark::{Damping, NewmarkSettings, State};
+
+/// Local Newton iterations at most per elimination.
+const MAX_LOCAL_ITERATIONS: usize = 25;
+
+/// What the eliminations of a run did.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EliminationCounts {
+    pub eliminations: usize,
+    pub points: usize,
+    pub unknowns: usize,
+    pub local_iterations: usize,
+    pub unconverged: usize,
+    pub seconds: f64,
+}
+
+/// The operators and the points' rows an elimination needs, gathered once.
+pub(super) struct Eliminator<'a, 'p> {
+    contact: &'a ContactModel<'p>,
+    rows: Vec<PointRows>,
+    /// For every unknown, the points whose rows couple it.
+    points_of: Vec<Vec<u32>>,
+    /// K, M and C (a damping matrix) in AIJ, for their dense blocks.
+    k: SparseMatrix<'p>,
+    m: SparseMatrix<'p>,
+    c: Option<SparseMatrix<'p>>,
+    rayleigh: (f64, f64),
+    max_points: usize,
+    pub counts: EliminationCounts,
+}
+
+impl<'a, 'p> Eliminator<'a, 'p> {
+    /// # Collective
+    pub fn new(
+        petsc: &'p Petsc,
+        contact: &'a ContactModel<'p>,
+        k: &SparseMatrix<'p>,
+        m: &SparseMatrix<'p>,
+        c: Damping<'_, 'p>,
+        max_points: usize,
+    ) -> Result<Self, LaError> {
+        let rows = contact.all_point_rows(petsc)?;
+        let mut points_of = vec![Vec::new(); k.global_rows()];
+        for (id, r) in rows.iter().enumerate() {
+            for &d in r.dofs.iter().filter(|&&d| d >= 0) {
+                points_of[d as usize].push(id as u32);
+            }
+        }
+        for p in &mut points_of {
+            p.sort_unstable();
+            p.dedup();
+        }
+        let aij = |a: &SparseMatrix<'p>| match a.format() {
+            MatrixFormat::Aij => a.try_clone(),
+            _ => a.convert(MatrixFormat::Aij),
+        };
+        let (c, rayleigh) = match c {
+            Damping::None => (None, (0.0, 0.0)),
+            Damping::Rayleigh { alpha, beta } => (None, (alpha, beta)),
+            Damping::Matrix(c) => (Some(aij(c)?), (0.0, 0.0)),
+        };
+        Ok(Eliminator {
+            contact,
+            rows,
+            points_of,
+            k: aij(k)?,
+            m: aij(m)?,
+            c,
+            rayleigh,
+            max_points,
+            counts: EliminationCounts::default(),
+        })
+    }
+
+    /// The increment delta (zero off b) that zeroes the residual's rows b at the iterate
+    /// `at` with residual `r`, b being the unknowns of the points where `tangent` (the
+    /// consistent tangent's change from the factored J's) is largest; None: no such point.
+    ///
+    /// # Collective
+    pub fn solve(
+        &mut self,
+        ns: &NewmarkSettings,
+        at: &State<'p>,
+        r: &Vector<'p>,
+        tangent: &dyn TangentChange<'p>,
+        target: f64,
+    ) -> Result<Option<Vector<'p>>, LaError> {
+        let clock = std::time::Instant::now();
+        // The `max_points` largest changes, however small the rest: a point left out with a
+        // tangent far from J's stalls the global iteration (measured: keeping 99.99 % of the
+        // change's norm instead, ~30 points on the small brake, refreshed J 6x as often).
+        let Some(dominant) = tangent.dominant(self.max_points, 1.0)? else {
+            return Ok(None);
+        };
+        let row_ids = self.contact.row_ids();
+        let mut chosen: Vec<usize> = dominant.keys.iter().map(|k| row_ids[k.0]).collect();
+        chosen.dedup();
+        let mut b: Vec<usize> = chosen
+            .iter()
+            .flat_map(|&id| self.rows[id].dofs.iter())
+            .filter(|&&d| d >= 0)
+            .map(|&d| d as usize)
+            .collect();
+        b.sort_unstable();
+        b.dedup();
+        if b.is_empty() {
+            return Ok(None);
+        }
+        let mut touching: Vec<usize> = b
+            .iter()
+            .flat_map(|&d| self.points_of[d].iter().map(|&p| p as usize))
+            .collect();
+        touching.sort_unstable();
+        touching.dedup();
+        let (q, v, residual) = (at.q.gather_all()?, at.v.gather_all()?, r.gather_all()?);
+        let linear = self.linear_block(ns, &b)?;
+        let problem = Local {
+            contact: self.contact,
+            rows: &self.rows,
+            b: &b,
+            points: &touching,
+            q: &q,
+            v: &v,
+            c1: ns.gamma / (ns.beta * ns.step),
+        };
+        let rb: Vec<f64> = b.iter().map(|&i| residual[i]).collect();
+        let (delta, iterations, converged) = problem.newton(&linear, &rb, 0.1 * target)?;
+        let c = &mut self.counts;
+        c.eliminations += 1;
+        c.points += chosen.len();
+        c.unknowns += b.len();
+        c.local_iterations += iterations;
+        c.unconverged += usize::from(!converged);
+        let mut out = r.duplicate()?;
+        out.set_all(0.0)?;
+        let own = out.ownership();
+        {
+            let mut local = out.local_mut()?;
+            for (&i, &d) in b.iter().zip(&delta) {
+                if own.contains(&i) {
+                    local[i - own.start] = d;
+                }
+            }
+        }
+        c.seconds += clock.elapsed().as_secs_f64();
+        Ok(Some(out))
+    }
+
+    /// L_bb = M_bb / (beta h^2) + c1 C_bb + K_bb, dense row-major.
+    ///
+    /// # Collective
+    fn linear_block(&self, ns: &NewmarkSettings, b: &[usize]) -> Result<Vec<f64>, LaError> {
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        let (alpha, beta) = self.rayleigh;
+        let k = self.k.dense_block(b)?;
+        let m = self.m.dense_block(b)?;
+        let mass = 1.0 / (ns.beta * ns.step * ns.step) + c1 * alpha;
+        let stiffness = 1.0 + c1 * beta;
+        let mut l: Vec<f64> = k
+            .iter()
+            .zip(&m)
+            .map(|(k, m)| stiffness * k + mass * m)
+            .collect();
+        if let Some(c) = &self.c {
+            for (l, c) in l.iter_mut().zip(c.dense_block(b)?) {
+                *l += c1 * c;
+            }
+        }
+        Ok(l)
+    }
+}
+
+/// One elimination's subproblem, the same on every rank.
+struct Local<'s, 'p> {
+    contact: &'s ContactModel<'p>,
+    rows: &'s [PointRows],
+    /// The eliminated unknowns (ascending) and the points that couple any of them.
+    b: &'s [usize],
+    points: &'s [usize],
+    /// The iterate's displacement and velocity, whole.
+    q: &'s [f64],
+    v: &'s [f64],
+    c1: f64,
+}
+
+impl Local<'_, '_> {
+    /// Position in b of a DOF (None: held).
+    fn position(&self, dof: i32) -> Option<usize> {
+        (dof >= 0)
+            .then(|| self.b.binary_search(&(dof as usize)).ok())
+            .flatten()
+    }
+
+    /// The points' force on b at q + delta (and, with `tangent`, its consistent tangent
+    /// L-free part -df_b/d delta, row-major n x n, added into it).
+    fn force(&self, delta: &[f64], mut tangent: Option<&mut [f64]>) -> Vec<f64> {
+        let n = self.b.len();
+        let mut f = vec![0.0; n];
+        for &id in self.points {
+            let rows = &self.rows[id];
+            let at: Vec<Option<usize>> = rows.dofs.iter().map(|&d| self.position(d)).collect();
+            let value = |x: &[f64], scale: f64| -> Vec<f64> {
+                rows.dofs
+                    .iter()
+                    .zip(&at)
+                    .map(|(&d, p)| {
+                        let base = if d >= 0 { x[d as usize] } else { 0.0 };
+                        base + p.map_or(0.0, |p| scale * delta[p])
+                    })
+                    .collect()
+            };
+            let (u, w) = (value(self.q, 1.0), value(self.v, self.c1));
+            let e = self.contact.evaluate_point(id, rows, &u, &w);
+            for (i, p) in at.iter().enumerate() {
+                if let Some(p) = p {
+                    f[*p] += e.force[i];
+                }
+            }
+            if let Some(t) = tangent.as_deref_mut() {
+                let k = rows.dofs.len();
+                let mut block = vec![0.0; k * k];
+                self.contact
+                    .add_point_tangent(id, rows, &e.response, self.c1, &mut block);
+                for (i, pi) in at.iter().enumerate() {
+                    let Some(pi) = pi else { continue };
+                    for (j, pj) in at.iter().enumerate() {
+                        if let Some(pj) = pj {
+                            t[pi * n + pj] += block[i * k + j];
+                        }
+                    }
+                }
+            }
+        }
+        f
+    }
+
+    /// Newton with backtracking on |R_b| from delta = 0: (delta, iterations, converged).
+    fn newton(
+        &self,
+        linear: &[f64],
+        rb: &[f64],
+        tolerance: f64,
+    ) -> Result<(Vec<f64>, usize, bool), LaError> {
+        let n = self.b.len();
+        let f0 = self.force(&vec![0.0; n], None);
+        let residual = |delta: &[f64]| -> (Vec<f64>, f64) {
+            let f = self.force(delta, None);
+            let mut r = rb.to_vec();
+            for i in 0..n {
+                let row = &linear[i * n..(i + 1) * n];
+                r[i] += row.iter().zip(delta).map(|(a, x)| a * x).sum::<f64>() - (f[i] - f0[i]);
+            }
+            let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+            (r, norm)
+        };
+        let mut delta = vec![0.0; n];
+        let (mut r, mut norm) = residual(&delta);
+        for iteration in 0..MAX_LOCAL_ITERATIONS {
+            if norm <= tolerance {
+                return Ok((delta, iteration, true));
+            }
+            // Column-major J = L_bb + T_bb(delta) for LAPACK.
+            let mut tangent = linear.to_vec();
+            self.force(&delta, Some(&mut tangent));
+            let mut columns = vec![0.0; n * n];
+            for i in 0..n {
+                for j in 0..n {
+                    columns[j * n + i] = tangent[i * n + j];
+                }
+            }
+            let lu = RealLu::new(n, columns)?;
+            let mut step: Vec<f64> = r.iter().map(|x| -x).collect();
+            lu.solve(&mut step)?;
+            let mut alpha = 1.0;
+            loop {
+                let trial: Vec<f64> = delta
+                    .iter()
+                    .zip(&step)
+                    .map(|(d, s)| d + alpha * s)
+                    .collect();
+                let (rt, nt) = residual(&trial);
+                if nt.is_finite() && (nt <= (1.0 - 1e-4 * alpha) * norm || alpha < 1.0 / 64.0) {
+                    if nt < norm {
+                        (delta, r, norm) = (trial, rt, nt);
+                    } else {
+                        return Ok((delta, iteration + 1, false));
+                    }
+                    break;
+                }
+                alpha *= 0.5;
+            }
+        }
+        Ok((delta, MAX_LOCAL_ITERATIONS, norm <= tolerance))
+    }
+}
