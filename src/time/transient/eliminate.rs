@@ -43,9 +43,9 @@ pub(super) struct Eliminator<'a, 'p> {
     /// For every unknown, the points whose rows couple it.
     points_of: Vec<Vec<u32>>,
     /// K, M and C (a damping matrix) in AIJ, for their dense blocks.
-    k: SparseMatrix<'p>,
-    m: SparseMatrix<'p>,
-    c: Option<SparseMatrix<'p>>,
+    k: Aij<'a, 'p>,
+    m: Aij<'a, 'p>,
+    c: Option<Aij<'a, 'p>>,
     rayleigh: (f64, f64),
     max_points: usize,
     pub counts: EliminationCounts,
@@ -56,9 +56,9 @@ impl<'a, 'p> Eliminator<'a, 'p> {
     pub fn new(
         petsc: &'p Petsc,
         contact: &'a ContactModel<'p>,
-        k: &SparseMatrix<'p>,
-        m: &SparseMatrix<'p>,
-        c: Damping<'_, 'p>,
+        k: &'a SparseMatrix<'p>,
+        m: &'a SparseMatrix<'p>,
+        c: Damping<'a, 'p>,
         max_points: usize,
     ) -> Result<Self, LaError> {
         let rows = contact.all_point_rows(petsc)?;
@@ -72,9 +72,11 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             p.sort_unstable();
             p.dedup();
         }
-        let aij = |a: &SparseMatrix<'p>| match a.format() {
-            MatrixFormat::Aij => a.try_clone(),
-            _ => a.convert(MatrixFormat::Aij),
+        let aij = |a: &'a SparseMatrix<'p>| -> Result<Aij<'a, 'p>, LaError> {
+            Ok(match a.format() {
+                MatrixFormat::Aij => Aij::Borrowed(a),
+                _ => Aij::Converted(a.convert(MatrixFormat::Aij)?),
+            })
         };
         let (c, rayleigh) = match c {
             Damping::None => (None, (0.0, 0.0)),
@@ -174,8 +176,8 @@ impl<'a, 'p> Eliminator<'a, 'p> {
     fn linear_block(&self, ns: &NewmarkSettings, b: &[usize]) -> Result<Vec<f64>, LaError> {
         let c1 = ns.gamma / (ns.beta * ns.step);
         let (alpha, beta) = self.rayleigh;
-        let k = self.k.dense_block(b)?;
-        let m = self.m.dense_block(b)?;
+        let k = self.k.get().dense_block(b)?;
+        let m = self.m.get().dense_block(b)?;
         let mass = 1.0 / (ns.beta * ns.step * ns.step) + c1 * alpha;
         let stiffness = 1.0 + c1 * beta;
         let mut l: Vec<f64> = k
@@ -184,11 +186,27 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             .map(|(k, m)| stiffness * k + mass * m)
             .collect();
         if let Some(c) = &self.c {
-            for (l, c) in l.iter_mut().zip(c.dense_block(b)?) {
+            for (l, c) in l.iter_mut().zip(c.get().dense_block(b)?) {
                 *l += c1 * c;
             }
         }
         Ok(l)
+    }
+}
+
+/// A matrix in AIJ: the operator itself, or a copy converted from a blocked format (a full
+/// model's K), for `dense_block` (the reduced operators are AIJ: no copy of them).
+enum Aij<'a, 'p> {
+    Borrowed(&'a SparseMatrix<'p>),
+    Converted(SparseMatrix<'p>),
+}
+
+impl<'p> Aij<'_, 'p> {
+    fn get(&self) -> &SparseMatrix<'p> {
+        match self {
+            Aij::Borrowed(a) => a,
+            Aij::Converted(a) => a,
+        }
     }
 }
 
