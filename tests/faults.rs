@@ -1,7 +1,8 @@
 //! Failures on one rank end every rank, quickly, with the error and a non-zero exit; what was
 //! written before stays readable (DESIGN.md §4). Faults are provoked with SQUEAL_FAULT
 //! (src/fault.rs) in every stage of a scene that runs them all on the small brake, and a NaN
-//! in the transient's start; a restart extends a run and refuses another scene.
+//! in the transient's start; a restart extends a run and refuses another scene (before
+//! anything is computed or written).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -196,8 +197,17 @@ fn a_restart_extends_the_run_and_refuses_another_scene() {
         SCENE.replace("count = 10", "count = 12"),
     )
     .unwrap();
+    let results = dir.join("results").join("results.h5");
+    let written = std::fs::metadata(&results)
+        .and_then(|m| m.modified())
+        .unwrap();
     let other = run(&["run", "scene.toml", "--restart"]);
     assert_ends_with(&other, "another scene", "the scene's [real_modes] differs");
+    // Refused before the stages ahead of the transient: the first run's results stay.
+    let kept = std::fs::metadata(&results)
+        .and_then(|m| m.modified())
+        .unwrap();
+    assert_eq!(written, kept, "a refused restart rewrote results.h5");
     // More steps and another Newton variant: the same run, extended.
     let longer = SCENE.replace("steps = 20", "steps = 30\nnewton = \"full\"");
     std::fs::write(dir.join("scene.toml"), longer).unwrap();

@@ -86,6 +86,16 @@ pub fn run_with(
         return Err(RunError::scene("matrix", message));
     }
     checked(matrix::check_journal(scene, output, options))?;
+    // A restart the checkpoint refuses is refused now, not after the stages before it.
+    if let (true, Some(settings)) = (options.restart, &scene.transient) {
+        let storage = Hdf5Storage {
+            comm: petsc.world(),
+        };
+        let files = TransientFiles::in_directory(&storage, output, true)
+            .with_scene(scene.restart_fingerprint());
+        let resumable = crate::time::transient::check_resumable(petsc, &files, settings, None);
+        checked(resumable.map_err(RunError::from))?;
+    }
     if petsc.rank() == 0 {
         checked(
             std::fs::create_dir_all(output).map_err(|source| RunError::Io {

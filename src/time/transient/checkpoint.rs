@@ -34,6 +34,69 @@ fn hash_number(h: u64) -> f64 {
     (h >> 12) as f64
 }
 
+/// Whether a `--restart` can resume from the checkpoint: both files there, written by a
+/// squeal that records its scene, for a scene with the same restart fingerprint, on as many
+/// ranks, with the same nominal step (and, once the model is built, as many unknowns). Run
+/// before the stages ahead of the transient too, so a refusal costs seconds and not the
+/// front (12.5 min at 600k).
+///
+/// # Collective
+pub fn check_resumable(
+    petsc: &Petsc,
+    files: &TransientFiles,
+    settings: &TransientSettings,
+    unknowns: Option<usize>,
+) -> Result<(), TimeError> {
+    let path = &files.checkpoint;
+    let refuse = |reason: String| TimeError::Restart {
+        file: path.to_path_buf(),
+        reason,
+    };
+    if !path.exists() || !files.stream.exists() {
+        return Err(refuse(format!(
+            "--restart: {} or {} is missing; run without --restart to start from the static state",
+            path.display(),
+            files.stream.display()
+        )));
+    }
+    let f = files.storage.open(path)?;
+    let expect = |name: &str, value: f64, what: &str| -> Result<(), TimeError> {
+        let stored = f.number(name)?;
+        if stored != value {
+            return Err(refuse(format!(
+                "--restart: {} was written with {what} = {stored}, this run has {value}; \
+                 restart with the same {what}",
+                path.display()
+            )));
+        }
+        Ok(())
+    };
+    if f.number("operators_k").is_err() {
+        return Err(refuse(format!(
+            "--restart: {} was written by an older squeal (it does not say which scene \
+             and model it belongs to); run without --restart",
+            path.display()
+        )));
+    }
+    for (table, hash) in &files.scene {
+        if f.number(&format!("scene_{table}"))? != hash_number(*hash) {
+            return Err(refuse(format!(
+                "--restart: the scene's [{table}] differs from the one that wrote {}; \
+                 restart with that scene (only the number of steps, the solver's \
+                 controls, outputs, sensors and [post] may change) or run without \
+                 --restart",
+                path.display()
+            )));
+        }
+    }
+    expect("ranks", petsc.size() as f64, "number of MPI ranks")?;
+    expect("nominal_step", settings.step, "key 'transient.step'")?;
+    if let Some(n) = unknowns {
+        expect("unknowns", n as f64, "model (unknowns)")?;
+    }
+    Ok(())
+}
+
 /// A resumable point of the run: the state, the step control, the state J was built at, and
 /// how many rows the stream held.
 pub(super) struct Checkpoint<'p> {
@@ -153,60 +216,10 @@ impl<'p> Checkpoint<'p> {
         input: &TransientInputs<'_, 'p>,
         like: &State<'p>,
     ) -> Result<Self, TimeError> {
+        check_resumable(petsc, files, settings, Some(like.q.global_len()))?;
         let path = &files.checkpoint;
-        if !path.exists() || !files.stream.exists() {
-            return Err(TimeError::Restart {
-file: path.to_path_buf(),
- reason: format!(
-                "--restart: {} or {} is missing; run without --restart to start from the static state",
-                path.display(),
-                files.stream.display()
-            ),
-});
-        }
         let f = files.storage.open(path)?;
         let number = |name: &str| f.number(name);
-        let expect = |name: &str, value: f64, what: &str| -> Result<(), TimeError> {
-            let stored = number(name)?;
-            if stored != value {
-                return Err(TimeError::Restart {
-file: path.to_path_buf(),
- reason: format!(
-                    "--restart: {} was written with {what} = {stored}, this run has {value}; restart with the same {what}",
-                    path.display()
-                ),
-});
-            }
-            Ok(())
-        };
-        if f.number("operators_k").is_err() {
-            return Err(TimeError::Restart {
-                file: path.to_path_buf(),
-                reason: format!(
-                    "--restart: {} was written by an older squeal (it does not say which scene \
-                 and model it belongs to); run without --restart",
-                    path.display()
-                ),
-            });
-        }
-        for (table, hash) in &files.scene {
-            let stored = number(&format!("scene_{table}"))?;
-            if stored != hash_number(*hash) {
-                return Err(TimeError::Restart {
-                    file: path.to_path_buf(),
-                    reason: format!(
-                        "--restart: the scene's [{table}] differs from the one that wrote {}; \
-                     restart with that scene (only the number of steps, the solver's \
-                     controls, outputs, sensors and [post] may change) or run without \
-                     --restart",
-                        path.display()
-                    ),
-                });
-            }
-        }
-        expect("ranks", petsc.size() as f64, "number of MPI ranks")?;
-        expect("unknowns", like.q.global_len() as f64, "model (unknowns)")?;
-        expect("nominal_step", settings.step, "key 'transient.step'")?;
         let range = like.q.ownership();
         let vector = |name: &str| -> Result<Vector<'p>, TimeError> {
             let mut x = like.q.duplicate()?;

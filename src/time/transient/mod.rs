@@ -8,6 +8,7 @@
 
 mod checkpoint;
 mod eliminate;
+pub use checkpoint::check_resumable;
 pub use eliminate::EliminationCounts;
 mod jacobian;
 mod recorder;
