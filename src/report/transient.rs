@@ -39,6 +39,7 @@ pub fn write_transient(
             tr.eliminations.local_iterations as f64,
         ),
         ("seconds_eliminating", tr.eliminations.seconds),
+        ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),
         ("failed_attempt_factor_solves", tr.failed_solves as f64),
         ("factorizations", tr.factorizations as f64),

@@ -71,6 +71,10 @@ pub fn tests() -> Vec<super::NamedTest> {
             updated_factor_follows_full_newton,
         ),
         (
+            "brake_transient_nonlinear_elimination_follows_full_newton_where_contact_opens",
+            eliminated_iteration_follows_full_newton,
+        ),
+        (
             "brake_transient_random_start_agrees_on_one_and_two_ranks",
             random_start_agrees_across_ranks,
         ),
@@ -1164,6 +1168,55 @@ fn updated_factor_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "expected updated-factor retries and fewer factorizations than the full Newton: {} retries, {} vs {} factorizations",
             updated.updated_retries, updated.factorizations, full.factorizations
+        ));
+    }
+    Ok(())
+}
+
+/// The same comparison with the stalled steps retried by the nonlinear elimination of the 64
+/// points whose tangent changed most and Anderson(5) on the fixed factor's corrections
+/// (`[transient] eliminate_points`, `anderson`): the same trajectory as the full Newton to the
+/// same bound, with at least one step retried that way, every local elimination converged
+/// and fewer factorizations than iterations of the full Newton. Beyond the updated factor's
+/// test, that the local residual (assembled from the points' own forces and tangents and the
+/// operators' dense blocks) is the global residual's rows: after every elimination the
+/// global |R_i| on the moved unknowns is at most the local Newton's tolerance, 0.1 of the
+/// step's target, plus the rounding between the two assemblies (eps |f| against a target of
+/// 1e-10 |f|: 2e-6 of it); asserted 0.1 + 1e-3. (The trajectory alone cannot tell: the global
+/// iteration converges on the global residual whatever the elimination moved.)
+fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
+    let keys = "max_iterations = 4\neliminate_points = 64\nanderson = 5\n";
+    let (eliminated, full) = against_full_newton(petsc, 5.0e-5, keys, "eliminated")?;
+    let counts = &eliminated.eliminations;
+    say(
+        petsc,
+        &format!(
+            "{} nonlinear eliminations, {:.1} unknowns and {:.2} local iterations each, {} unconverged; the global residual on the moved unknowns after them at most {:.2e} of the target",
+            counts.eliminations,
+            counts.unknowns as f64 / counts.eliminations.max(1) as f64,
+            counts.local_iterations as f64 / counts.eliminations.max(1) as f64,
+            counts.unconverged,
+            counts.worst_mismatch
+        ),
+    );
+    if exceeds(counts.worst_mismatch, 0.1 + 1e-3) {
+        return Err(format!(
+            "after an elimination the global residual on its unknowns is {:e} of the target, above the local tolerance 0.1: the local residual is not the global one's rows",
+            counts.worst_mismatch
+        ));
+    }
+    if eliminated.updated_retries == 0
+        || counts.eliminations == 0
+        || counts.unconverged > 0
+        || eliminated.factorizations >= full.factorizations
+    {
+        return Err(format!(
+            "expected eliminated retries, all converged, and fewer factorizations than the full Newton: {} retries, {} eliminations ({} unconverged), {} vs {} factorizations",
+            eliminated.updated_retries,
+            counts.eliminations,
+            counts.unconverged,
+            eliminated.factorizations,
+            full.factorizations
         ));
     }
     Ok(())

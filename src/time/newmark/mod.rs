@@ -33,6 +33,7 @@
 //! of one `Newmark`. The adaptive control around the step is in `super::adaptive`.
 
 use crate::la::{DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, Vector};
+use crate::measure::nan_max;
 
 /// Newmark parameters and the Newton tolerance.
 #[derive(Debug, Clone, Copy)]
@@ -94,6 +95,10 @@ pub struct StepReport {
     /// one more per Newton-Krylov correction), and the time inside them alone.
     pub factor_solves: usize,
     pub factor_solve_seconds: f64,
+    /// The largest |R_i| over the unknowns a nonlinear elimination moved, after its move,
+    /// over the step's residual target (its local Newton zeroes those rows to 0.1 of it: more
+    /// means the local residual is not the global one's rows); 0 without an elimination.
+    pub elimination_mismatch: f64,
 }
 
 /// A factorized J and X = J - L, the part beyond the linear operators (the contact stiffness
@@ -427,6 +432,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             krylov_iterations: 0,
             factor_solves: 0,
             factor_solve_seconds: 0.0,
+            elimination_mismatch: 0.0,
         };
         // R = z - f at the predictor; later iterates come evaluated from the correction.
         let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
@@ -472,6 +478,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 let at = (t1, state.step + 1);
                 if self.eliminate(&mut **eliminate, at, target, &mut report)? {
                     (r, reference) = self.residual(t1, forces, &mut report)?;
+                    let mismatch = self.residual_where_moved()? / target;
+                    report.elimination_mismatch = nan_max(report.elimination_mismatch, mismatch);
                     let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
                     if r <= target {
                         // Accepted at the loop's head (where the carried z is judged).
@@ -515,6 +523,20 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
             }
         }
+    }
+
+    /// max |R_i| over the unknowns the last move changed (dq_i != 0).
+    ///
+    /// # Collective
+    fn residual_where_moved(&mut self) -> Result<f64, LaError> {
+        {
+            let (dq, r) = (self.dq.local()?, self.r.local()?);
+            let mut masked = self.tmp.local_mut()?;
+            for ((m, &d), &r) in masked.iter_mut().zip(dq.iter()).zip(r.iter()) {
+                *m = if d != 0.0 { r } else { 0.0 };
+            }
+        }
+        self.tmp.norm_inf()
     }
 
     /// Turns the correction (dq, dz) into the move to Anderson's combination of the

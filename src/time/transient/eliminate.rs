@@ -34,6 +34,9 @@ pub struct EliminationCounts {
     pub local_iterations: usize,
     pub unconverged: usize,
     pub seconds: f64,
+    /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
+    /// residual is the global residual's rows and every local Newton converged).
+    pub worst_mismatch: f64,
 }
 
 /// The operators and the points' rows an elimination needs, gathered once.

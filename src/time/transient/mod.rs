@@ -25,6 +25,7 @@ use super::newmark::{
 };
 use crate::contact::{ContactModel, ContactState};
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
+use crate::measure::nan_max;
 use crate::time::store::Storage;
 use checkpoint::Checkpoint;
 use jacobian::JacobianBuilder;
@@ -389,6 +390,10 @@ pub fn run<'p>(
             out.krylov_iterations += report.krylov_iterations;
             out.factor_solves += report.factor_solves;
             out.seconds_in_factor_solves += report.factor_solve_seconds;
+            if let Some(e) = &eliminator {
+                let counts = &mut e.borrow_mut().counts;
+                counts.worst_mismatch = nan_max(counts.worst_mismatch, report.elimination_mismatch);
+            }
             let evaluated = last_contact.borrow();
             let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
             let wall = wall_before + t.elapsed().as_secs_f64();
