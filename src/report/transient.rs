@@ -38,6 +38,10 @@ pub fn write_transient(
             "elimination_local_iterations",
             tr.eliminations.local_iterations as f64,
         ),
+        (
+            "elimination_local_factorizations",
+            tr.eliminations.local_factorizations as f64,
+        ),
         ("seconds_eliminating", tr.eliminations.seconds),
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),

@@ -1191,10 +1191,11 @@ fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String>
     say(
         petsc,
         &format!(
-            "{} nonlinear eliminations, {:.1} unknowns and {:.2} local iterations each, {} unconverged; the global residual on the moved unknowns after them at most {:.2e} of the target",
+            "{} nonlinear eliminations, {:.1} unknowns, {:.2} local iterations and {:.2} LU factorizations each, {} unconverged; the global residual on the moved unknowns after them at most {:.2e} of the target",
             counts.eliminations,
             counts.unknowns as f64 / counts.eliminations.max(1) as f64,
             counts.local_iterations as f64 / counts.eliminations.max(1) as f64,
+            counts.local_factorizations as f64 / counts.eliminations.max(1) as f64,
             counts.unconverged,
             counts.worst_mismatch
         ),

@@ -32,6 +32,10 @@ pub struct EliminationCounts {
     pub points: usize,
     pub unknowns: usize,
     pub local_iterations: usize,
+    /// LU factorizations of the local Jacobian (a factor is kept while it contracts the
+    /// local residual tenfold per iteration, across the eliminations of a step when their
+    /// unknowns are the same).
+    pub local_factorizations: usize,
     pub unconverged: usize,
     pub seconds: f64,
     /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
@@ -51,7 +55,18 @@ pub(super) struct Eliminator<'a, 'p> {
     c: Option<Aij<'a, 'p>>,
     rayleigh: (f64, f64),
     max_points: usize,
+    /// The last elimination's unknowns, L_bb for them (and the c1 it was built with) and its
+    /// last local factor, reused while the unknowns stay the same.
+    kept: Option<Kept>,
     pub counts: EliminationCounts,
+}
+
+/// What an elimination leaves for the next one on the same unknowns.
+struct Kept {
+    b: Vec<usize>,
+    c1: f64,
+    linear: Vec<f64>,
+    factor: RealLu,
 }
 
 impl<'a, 'p> Eliminator<'a, 'p> {
@@ -95,6 +110,7 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             c,
             rayleigh,
             max_points,
+            kept: None,
             counts: EliminationCounts::default(),
         })
     }
@@ -140,7 +156,12 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         touching.sort_unstable();
         touching.dedup();
         let (q, v, residual) = (at.q.gather_all()?, at.v.gather_all()?, r.gather_all()?);
-        let linear = self.linear_block(ns, &b)?;
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        // (Every rank holds the same b: the same branch everywhere, collective or not.)
+        let (linear, factor) = match self.kept.take() {
+            Some(k) if k.b == b && k.c1 == c1 => (k.linear, Some(k.factor)),
+            _ => (self.linear_block(ns, &b)?, None),
+        };
         let problem = Local {
             contact: self.contact,
             rows: &self.rows,
@@ -148,16 +169,26 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             points: &touching,
             q: &q,
             v: &v,
-            c1: ns.gamma / (ns.beta * ns.step),
+            c1,
         };
         let rb: Vec<f64> = b.iter().map(|&i| residual[i]).collect();
-        let (delta, iterations, converged) = problem.newton(&linear, &rb, 0.1 * target)?;
+        let solved = problem.newton(&linear, &rb, 0.1 * target, factor)?;
         let c = &mut self.counts;
         c.eliminations += 1;
         c.points += chosen.len();
         c.unknowns += b.len();
-        c.local_iterations += iterations;
-        c.unconverged += usize::from(!converged);
+        c.local_iterations += solved.iterations;
+        c.local_factorizations += solved.factorizations;
+        c.unconverged += usize::from(!solved.converged);
+        let delta = solved.delta;
+        if let Some(factor) = solved.factor {
+            self.kept = Some(Kept {
+                b: b.clone(),
+                c1,
+                linear,
+                factor,
+            });
+        }
         let mut out = r.duplicate()?;
         out.set_all(0.0)?;
         let own = out.ownership();
@@ -277,13 +308,17 @@ impl Local<'_, '_> {
         f
     }
 
-    /// Newton with backtracking on |R_b| from delta = 0: (delta, iterations, converged).
+    /// Newton with backtracking on |R_b| from delta = 0, its LU kept while it contracts the
+    /// residual tenfold per iteration (a chord: the local tangent changes at few points
+    /// between iterates, and one LU of ~460 unknowns costs ~10 local residuals), starting
+    /// from `factor` (the previous elimination's, on the same unknowns) when given.
     fn newton(
         &self,
         linear: &[f64],
         rb: &[f64],
         tolerance: f64,
-    ) -> Result<(Vec<f64>, usize, bool), LaError> {
+        mut factor: Option<RealLu>,
+    ) -> Result<LocalSolution, LaError> {
         let n = self.b.len();
         let f0 = self.force(&vec![0.0; n], None);
         let residual = |delta: &[f64]| -> (Vec<f64>, f64) {
@@ -296,43 +331,78 @@ impl Local<'_, '_> {
             let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
             (r, norm)
         };
-        let mut delta = vec![0.0; n];
-        let (mut r, mut norm) = residual(&delta);
-        for iteration in 0..MAX_LOCAL_ITERATIONS {
+        let mut out = LocalSolution {
+            delta: vec![0.0; n],
+            iterations: 0,
+            factorizations: 0,
+            converged: false,
+            factor: None,
+        };
+        let (mut r, mut norm) = residual(&out.delta);
+        let mut previous = f64::INFINITY;
+        while out.iterations < MAX_LOCAL_ITERATIONS {
             if norm <= tolerance {
-                return Ok((delta, iteration, true));
+                out.converged = true;
+                break;
             }
-            // Column-major J = L_bb + T_bb(delta) for LAPACK.
-            let mut tangent = linear.to_vec();
-            self.force(&delta, Some(&mut tangent));
-            let mut columns = vec![0.0; n * n];
-            for i in 0..n {
-                for j in 0..n {
-                    columns[j * n + i] = tangent[i * n + j];
-                }
+            let fresh = factor.is_none() || norm > 0.1 * previous;
+            if fresh {
+                factor = Some(self.factor(linear, &out.delta)?);
+                out.factorizations += 1;
             }
-            let lu = RealLu::new(n, columns)?;
+            let lu = factor.as_ref().expect("factored above");
             let mut step: Vec<f64> = r.iter().map(|x| -x).collect();
             lu.solve(&mut step)?;
+            out.iterations += 1;
             let mut alpha = 1.0;
             loop {
-                let trial: Vec<f64> = delta
-                    .iter()
-                    .zip(&step)
+                let trial: Vec<f64> = (out.delta.iter().zip(&step))
                     .map(|(d, s)| d + alpha * s)
                     .collect();
                 let (rt, nt) = residual(&trial);
                 if nt.is_finite() && (nt <= (1.0 - 1e-4 * alpha) * norm || alpha < 1.0 / 64.0) {
                     if nt < norm {
-                        (delta, r, norm) = (trial, rt, nt);
+                        previous = norm;
+                        (out.delta, r, norm) = (trial, rt, nt);
+                    } else if fresh {
+                        // No descent along the exact tangent's direction: give up here.
+                        out.factor = factor;
+                        return Ok(out);
                     } else {
-                        return Ok((delta, iteration + 1, false));
+                        // A kept factor's direction: refactor at this iterate and retry.
+                        previous = 0.0;
                     }
                     break;
                 }
                 alpha *= 0.5;
             }
         }
-        Ok((delta, MAX_LOCAL_ITERATIONS, norm <= tolerance))
+        out.converged = norm <= tolerance;
+        out.factor = factor;
+        Ok(out)
     }
+
+    /// LU of the local Jacobian L_bb + T_bb(delta) (column-major for LAPACK).
+    fn factor(&self, linear: &[f64], delta: &[f64]) -> Result<RealLu, LaError> {
+        let n = self.b.len();
+        let mut tangent = linear.to_vec();
+        self.force(delta, Some(&mut tangent));
+        let mut columns = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                columns[j * n + i] = tangent[i * n + j];
+            }
+        }
+        Ok(RealLu::new(n, columns)?)
+    }
+}
+
+/// A local Newton's outcome.
+struct LocalSolution {
+    delta: Vec<f64>,
+    iterations: usize,
+    factorizations: usize,
+    converged: bool,
+    /// The last factor used (for the next elimination on the same unknowns).
+    factor: Option<RealLu>,
 }
