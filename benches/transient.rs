@@ -18,6 +18,9 @@
 //!    and of the braking torque fluctuation, with the cost of each run.
 //!
 //!   mpirun -n 2 target/release/deps/transient-* --dofs 600000 --modes 200 --steps 500
+//!
+//! `--gemm-forwarding on,off` runs each factor with MUMPS' one-column GEMMs sent to GEMV and
+//! with the library's GEMM (la::one_column_gemm), the bandwidth measured once for both.
 
 use squeal::measure::nan_max;
 use std::time::Instant;
@@ -40,6 +43,10 @@ struct Args {
     /// The transient's `jacobian_factor` values to run (one pipeline run each).
     #[arg(long, value_delimiter = ',', default_value = "distributed,single")]
     factors: Vec<String>,
+    /// MUMPS' one-column GEMMs sent to GEMV (`on`, the default) or to the library's GEMM
+    /// (`off`): one pipeline run per value and factor (la::one_column_gemm).
+    #[arg(long, value_delimiter = ',', default_value = "on")]
+    gemm_forwarding: Vec<String>,
     /// Target size of the step-size study (DOF); 0 skips part 3.
     #[arg(long, default_value_t = 12_000)]
     study_dofs: usize,
@@ -250,9 +257,26 @@ fn main() {
         bw.triad_all / 1e9
     ));
 
-    for factor in args.factors.iter().filter(|_| args.dofs > 0) {
+    let runs = args.factors.iter().flat_map(|factor| {
+        args.gemm_forwarding
+            .iter()
+            .map(move |forwarding| (factor, forwarding))
+    });
+    for (factor, forwarding) in runs.filter(|_| args.dofs > 0) {
+        let forward = match forwarding.as_str() {
+            "on" => true,
+            "off" => false,
+            other => panic!("--gemm-forwarding takes on or off, not {other}"),
+        };
+        squeal::la::one_column_gemm::set_forwarding(forward);
         let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9, factor);
-        let s = run(&petsc, &text, &format!("transient-{}-{factor}", args.dofs));
+        let calls_before = squeal::la::one_column_gemm::calls();
+        let s = run(
+            &petsc,
+            &text,
+            &format!("transient-{}-{factor}-gemm-{forwarding}", args.dofs),
+        );
+        let calls_after = squeal::la::one_column_gemm::calls();
         let r = s.reduction.as_ref().expect("reduction ran");
         let t = s.transient.as_ref().expect("transient ran");
         let stage = |name: &str| {
@@ -291,6 +315,11 @@ fn main() {
             t.seconds_factorizing,
             1e3 * t.seconds_per_iteration,
             1e3 * t.seconds_per_solve,
+        ));
+        say(&format!(
+            "one-column GEMMs {forwarding}: rank 0 sent {} GEMMs to GEMV and {} to the library's GEMM over the whole run",
+            calls_after.0 - calls_before.0,
+            calls_after.1 - calls_before.1
         ));
         cost_table(&say, t, bw, petsc.size() as usize);
         say(&format!(

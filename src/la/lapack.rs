@@ -5,6 +5,7 @@
 //! real system (dgetrf, dgetrs: the transient's low-rank update). Column-major storage
 //! throughout.
 
+use crate::la::one_column_gemm::dgemm_;
 use crate::la::DenseError;
 use std::os::raw::{c_char, c_int};
 
@@ -35,21 +36,6 @@ extern "C" {
         work: *mut f64,
         lwork: *const c_int,
         info: *mut c_int,
-    );
-    fn dgemm_(
-        transa: *const c_char,
-        transb: *const c_char,
-        m: *const c_int,
-        n: *const c_int,
-        k: *const c_int,
-        alpha: *const f64,
-        a: *const f64,
-        lda: *const c_int,
-        b: *const f64,
-        ldb: *const c_int,
-        beta: *const f64,
-        c: *mut f64,
-        ldc: *const c_int,
     );
     fn dgetrf_(
         m: *const c_int,
@@ -449,6 +435,8 @@ fn gemm(ta: bool, tb: bool, m: usize, k: usize, n: usize, a: &[f64], b: &[f64]) 
             &beta,
             c.as_mut_ptr(),
             &mi,
+            1,
+            1,
         );
     }
     c

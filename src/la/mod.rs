@@ -17,6 +17,7 @@ pub mod lapack_complex;
 pub mod low_rank;
 pub mod matrix;
 pub mod observation;
+pub mod one_column_gemm;
 pub mod quadratic;
 pub mod single_lu;
 
