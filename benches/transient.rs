@@ -19,8 +19,9 @@
 //!
 //!   mpirun -n 2 target/release/deps/transient-* --dofs 600000 --modes 200 --steps 500
 //!
-//! `--gemm-forwarding on,off` runs each factor with MUMPS' one-column GEMMs sent to GEMV and
-//! with the library's GEMM (la::one_column_gemm), the bandwidth measured once for both.
+//! `--gemm-forwarding on,gemm,off` runs each factor with MUMPS' one-column GEMMs and TRSMs
+//! sent to GEMV and TRSV, only its GEMMs, and none (la::one_column_gemm), the bandwidth
+//! measured once for all.
 
 use squeal::measure::nan_max;
 use std::time::Instant;
@@ -43,8 +44,9 @@ struct Args {
     /// The transient's `jacobian_factor` values to run (one pipeline run each).
     #[arg(long, value_delimiter = ',', default_value = "distributed,single")]
     factors: Vec<String>,
-    /// MUMPS' one-column GEMMs sent to GEMV (`on`, the default) or to the library's GEMM
-    /// (`off`): one pipeline run per value and factor (la::one_column_gemm).
+    /// MUMPS' one-column GEMMs and TRSMs sent to GEMV and TRSV (`on`, the default), only the
+    /// GEMMs (`gemm`), or none (`off`): one pipeline run per value and factor
+    /// (la::one_column_gemm).
     #[arg(long, value_delimiter = ',', default_value = "on")]
     gemm_forwarding: Vec<String>,
     /// Target size of the step-size study (DOF); 0 skips part 3.
@@ -263,12 +265,13 @@ fn main() {
             .map(move |forwarding| (factor, forwarding))
     });
     for (factor, forwarding) in runs.filter(|_| args.dofs > 0) {
-        let forward = match forwarding.as_str() {
-            "on" => true,
-            "off" => false,
-            other => panic!("--gemm-forwarding takes on or off, not {other}"),
+        let (gemm, trsm) = match forwarding.as_str() {
+            "on" => (true, true),
+            "gemm" => (true, false),
+            "off" => (false, false),
+            other => panic!("--gemm-forwarding takes on, gemm or off, not {other}"),
         };
-        squeal::la::one_column_gemm::set_forwarding(forward);
+        squeal::la::one_column_gemm::set_forwarding_of(gemm, trsm);
         let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9, factor);
         let calls_before = squeal::la::one_column_gemm::calls();
         let s = run(
@@ -317,7 +320,7 @@ fn main() {
             1e3 * t.seconds_per_solve,
         ));
         say(&format!(
-            "one-column GEMMs {forwarding}: rank 0 sent {} GEMMs to GEMV and {} to the library's GEMM over the whole run",
+            "one-column GEMM/TRSM forwarding {forwarding}: rank 0 sent {} calls to GEMV/TRSV and {} to the library's GEMM/TRSM over the whole run",
             calls_after.0 - calls_before.0,
             calls_after.1 - calls_before.1
         ));

@@ -1,15 +1,16 @@
-//! Matrix products with one column sent to the matrix-vector product: `sgemm_` and `dgemm_`
-//! defined here, ahead of the BLAS library in the process's symbol lookup (the executable
-//! exports them: build.rs), so MUMPS' calls reach them.
+//! Products and triangular solves with one column sent to the matrix-vector routines: `sgemm_`,
+//! `dgemm_`, `strsm_` and `dtrsm_` defined here, ahead of the BLAS library in the process's
+//! symbol lookup (the executable exports them: build.rs), so MUMPS' calls reach them.
 //!
 //! Why: MUMPS' forward and backward solves multiply each front's factor panel by the
-//! right-hand sides with GEMM; with one right-hand side (every solve of the transient's Newton
-//! iteration) that is a GEMM with n = 1. OpenBLAS before 0.3.28 (Debian ships 0.3.21) packs the
-//! panel into a buffer before it multiplies, so the factor is read, written and read again
-//! instead of streamed once: on the 600k brake's growth step its packing routines took 26 % of
-//! the samples (benches/transient-results.md, eighteenth session). GEMV streams the panel once.
+//! right-hand sides with GEMM, and solve with its diagonal block with TRSM; with one
+//! right-hand side (every solve of the transient's Newton iteration) those are calls with
+//! n = 1. OpenBLAS before 0.3.28 (Debian ships 0.3.21) packs the panel into a buffer before it
+//! multiplies, so the factor is read, written and read again instead of streamed once: on the
+//! 600k brake's growth step its packing routines took 26 % of the samples, TRSM's another 3 %
+//! (benches/transient-results.md, eighteenth session). GEMV and TRSV stream the panel once.
 //!
-//! Every other call goes on to the library's own GEMM (the next definition of the symbol:
+//! Every other call goes on to the library's own routine (the next definition of the symbol:
 //! `dlsym(RTLD_NEXT)`). The forwarding can be switched off (`set_forwarding`) to measure it.
 
 use std::ffi::CStr;
@@ -38,7 +39,51 @@ type Gemm<T> = unsafe extern "C" fn(
     FortranLen,
 );
 
+type Trsm<T> = unsafe extern "C" fn(
+    *const c_char,
+    *const c_char,
+    *const c_char,
+    *const c_char,
+    *const c_int,
+    *const c_int,
+    *const T,
+    *const T,
+    *const c_int,
+    *mut T,
+    *const c_int,
+    FortranLen,
+    FortranLen,
+    FortranLen,
+    FortranLen,
+);
+
 extern "C" {
+    fn strsv_(
+        uplo: *const c_char,
+        trans: *const c_char,
+        diag: *const c_char,
+        n: *const c_int,
+        a: *const f32,
+        lda: *const c_int,
+        x: *mut f32,
+        incx: *const c_int,
+        uplo_len: FortranLen,
+        trans_len: FortranLen,
+        diag_len: FortranLen,
+    );
+    fn dtrsv_(
+        uplo: *const c_char,
+        trans: *const c_char,
+        diag: *const c_char,
+        n: *const c_int,
+        a: *const f64,
+        lda: *const c_int,
+        x: *mut f64,
+        incx: *const c_int,
+        uplo_len: FortranLen,
+        trans_len: FortranLen,
+        diag_len: FortranLen,
+    );
     fn sgemv_(
         trans: *const c_char,
         m: *const c_int,
@@ -69,18 +114,25 @@ extern "C" {
     );
 }
 
-static FORWARDING: AtomicBool = AtomicBool::new(true);
+static FORWARDING_GEMM: AtomicBool = AtomicBool::new(true);
+static FORWARDING_TRSM: AtomicBool = AtomicBool::new(true);
 static FORWARDED: AtomicU64 = AtomicU64::new(0);
 static PASSED_ON: AtomicU64 = AtomicU64::new(0);
 
-/// Sends GEMMs with one column (or one row) of the result to GEMV (`true`, the default), or
-/// every GEMM to the library (`false`).
+/// Sends GEMMs and TRSMs with one column (or one row) of the result to GEMV and TRSV (`true`,
+/// the default), or every call to the library (`false`).
 pub fn set_forwarding(on: bool) {
-    FORWARDING.store(on, Ordering::Relaxed);
+    set_forwarding_of(on, on);
 }
 
-/// Calls of `sgemm_`/`dgemm_` this process has sent to GEMV, and passed on to the library's
-/// GEMM, since it started. Zero forwarded calls after a MUMPS solve means the symbols were not
+/// The forwarding of GEMM and of TRSM, separately (to measure each).
+pub fn set_forwarding_of(gemm: bool, trsm: bool) {
+    FORWARDING_GEMM.store(gemm, Ordering::Relaxed);
+    FORWARDING_TRSM.store(trsm, Ordering::Relaxed);
+}
+
+/// Calls of the four routines this process has sent to GEMV or TRSV, and passed on to the
+/// library's own, since it started. Zero forwarded calls after a MUMPS solve means the symbols were not
 /// interposed (the executable does not export them).
 pub fn calls() -> (u64, u64) {
     (
@@ -105,19 +157,22 @@ fn next_definition(name: &CStr) -> *mut c_void {
     f
 }
 
-fn library_sgemm() -> Gemm<f32> {
-    static F: OnceLock<usize> = OnceLock::new();
-    let f = *F.get_or_init(|| next_definition(c"sgemm_") as usize);
-    // SAFETY: the address of the library's sgemm_, whose signature is Gemm<f32>.
-    unsafe { std::mem::transmute::<usize, Gemm<f32>>(f) }
+macro_rules! library {
+    ($fn_name:ident, $symbol:literal, $signature:ty) => {
+        fn $fn_name() -> $signature {
+            static F: OnceLock<usize> = OnceLock::new();
+            let f = *F.get_or_init(|| next_definition($symbol) as usize);
+            // SAFETY: the address of the library's definition of the symbol, whose signature
+            // is BLAS' (the type named here).
+            unsafe { std::mem::transmute::<usize, $signature>(f) }
+        }
+    };
 }
 
-fn library_dgemm() -> Gemm<f64> {
-    static F: OnceLock<usize> = OnceLock::new();
-    let f = *F.get_or_init(|| next_definition(c"dgemm_") as usize);
-    // SAFETY: the address of the library's dgemm_, whose signature is Gemm<f64>.
-    unsafe { std::mem::transmute::<usize, Gemm<f64>>(f) }
-}
+library!(library_sgemm, c"sgemm_", Gemm<f32>);
+library!(library_dgemm, c"dgemm_", Gemm<f64>);
+library!(library_strsm, c"strsm_", Trsm<f32>);
+library!(library_dtrsm, c"dtrsm_", Trsm<f64>);
 
 /// The GEMV that computes C = alpha op(A) op(B) + beta C when C has one column or one row.
 struct AsGemv {
@@ -209,7 +264,7 @@ macro_rules! one_column_gemm {
         ) {
             // SAFETY: the caller's (BLAS' contract); GEMV reads the same operands.
             unsafe {
-                let plan = if FORWARDING.load(Ordering::Relaxed) {
+                let plan = if FORWARDING_GEMM.load(Ordering::Relaxed) {
                     as_gemv(
                         (*transa as u8, *transb as u8),
                         [*m, *n, *k],
@@ -247,6 +302,99 @@ macro_rules! one_column_gemm {
 
 one_column_gemm!(sgemm_, f32, sgemv_, library_sgemm);
 one_column_gemm!(dgemm_, f64, dgemv_, library_dgemm);
+
+/// The TRSV that solves op(A) X = alpha B (side L) or X op(A) = alpha B (side R) when X has one
+/// column (L) or one row (R): B scaled by alpha in place first.
+struct AsTrsv {
+    trans: u8,
+    order: c_int,
+    incx: c_int,
+}
+
+/// How TRSM maps onto one TRSV, if it does. alpha = 0 stays a TRSM (it only zeroes B).
+fn as_trsv(side: u8, trans: u8, [m, n]: [c_int; 2], ldb: c_int) -> Option<AsTrsv> {
+    if m <= 0 || n <= 0 {
+        return None;
+    }
+    let left = matches!(side, b'L' | b'l');
+    if left && n == 1 {
+        let trans = if transposed(trans) { b'T' } else { b'N' };
+        return Some(AsTrsv {
+            trans,
+            order: m,
+            incx: 1,
+        });
+    }
+    if !left && m == 1 {
+        // x^T op(A) = alpha b^T is op(A)^T x = alpha b, x stored along B's row.
+        let trans = if transposed(trans) { b'N' } else { b'T' };
+        return Some(AsTrsv {
+            trans,
+            order: n,
+            incx: ldb,
+        });
+    }
+    None
+}
+
+macro_rules! one_column_trsm {
+    ($name:ident, $t:ty, $trsv:ident, $library:ident) => {
+        /// TRSM, with one column or one row of unknowns sent to TRSV (module doc).
+        ///
+        /// # Safety
+        /// BLAS' contract: valid pointers to the operands their dimensions describe.
+        #[no_mangle]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            side: *const c_char,
+            uplo: *const c_char,
+            transa: *const c_char,
+            diag: *const c_char,
+            m: *const c_int,
+            n: *const c_int,
+            alpha: *const $t,
+            a: *const $t,
+            lda: *const c_int,
+            b: *mut $t,
+            ldb: *const c_int,
+            side_len: FortranLen,
+            uplo_len: FortranLen,
+            transa_len: FortranLen,
+            diag_len: FortranLen,
+        ) {
+            // SAFETY: the caller's (BLAS' contract); TRSV reads and writes the same operands.
+            unsafe {
+                let plan = if FORWARDING_TRSM.load(Ordering::Relaxed) && *alpha != 0.0 {
+                    as_trsv(*side as u8, *transa as u8, [*m, *n], *ldb)
+                } else {
+                    None
+                };
+                match plan {
+                    Some(t) => {
+                        FORWARDED.fetch_add(1, Ordering::Relaxed);
+                        if *alpha != 1.0 {
+                            for i in 0..t.order as usize {
+                                *b.add(i * t.incx as usize) *= *alpha;
+                            }
+                        }
+                        let trans = t.trans as c_char;
+                        $trsv(uplo, &trans, diag, &t.order, a, lda, b, &t.incx, 1, 1, 1);
+                    }
+                    None => {
+                        PASSED_ON.fetch_add(1, Ordering::Relaxed);
+                        $library()(
+                            side, uplo, transa, diag, m, n, alpha, a, lda, b, ldb, side_len,
+                            uplo_len, transa_len, diag_len,
+                        );
+                    }
+                }
+            }
+        }
+    };
+}
+
+one_column_trsm!(strsm_, f32, strsv_, library_strsm);
+one_column_trsm!(dtrsm_, f64, dtrsv_, library_dtrsm);
 
 #[cfg(test)]
 mod tests {
@@ -451,5 +599,150 @@ mod tests {
         for (g, w) in got.iter().zip(&want) {
             assert!((g - w).abs() <= 8.0 * f64::EPSILON, "{g} vs {w}");
         }
+    }
+
+    /// Triangular solves with one column (side L) or one row (side R) of unknowns, every
+    /// uplo/trans/diag, alpha 1 and 0.5, leading dimensions larger than the order, in both
+    /// precisions: B built from a known X by the product written out in f64, the solve must
+    /// return X within the forward error bound of a triangular solve, c n u cond (A is
+    /// diagonally dominant: diagonal in [1.5, 2.5], off-diagonal entries below 0.5 / n, so
+    /// cond <= 3; c = 4). A unit diagonal is stored as 100 so that reading it would show.
+    #[test]
+    fn one_column_and_one_row_triangular_solves_return_the_known_solution() {
+        set_forwarding(true);
+        let before = calls().0;
+        let order = 23usize;
+        let mut cases = 0u64;
+        for &side in b"LR" {
+            for &uplo in b"UL" {
+                for &trans in b"NT" {
+                    for &diag in b"NU" {
+                        for &alpha in &[1.0, 0.5] {
+                            let lda = order + 2;
+                            let noise = filled(lda * order, 11 + cases);
+                            let a: Vec<f64> = (0..lda * order)
+                                .map(|idx| {
+                                    let (i, j) = (idx % lda, idx / lda);
+                                    let inside =
+                                        i < order && if uplo == b'U' { i <= j } else { i >= j };
+                                    match (inside, i == j) {
+                                        (false, _) => 1e30,
+                                        (true, true) if diag == b'U' => 100.0,
+                                        (true, true) => 2.0 + noise[idx],
+                                        (true, false) => noise[idx] / order as f64,
+                                    }
+                                })
+                                .collect();
+                            let op = |i: usize, j: usize| {
+                                let (r, c) = if trans == b'T' { (j, i) } else { (i, j) };
+                                let inside = if uplo == b'U' { r <= c } else { r >= c };
+                                match (inside, r == c) {
+                                    (false, _) => 0.0,
+                                    (true, true) if diag == b'U' => 1.0,
+                                    (true, _) => a[r + c * lda],
+                                }
+                            };
+                            let x = filled(order, 40 + cases);
+                            // b = op(A) x / alpha (side L) or b^T = x^T op(A) / alpha (side R).
+                            let b: Vec<f64> = (0..order)
+                                .map(|i| {
+                                    (0..order)
+                                        .map(|l| {
+                                            if side == b'L' {
+                                                op(i, l) * x[l]
+                                            } else {
+                                                x[l] * op(l, i)
+                                            }
+                                        })
+                                        .sum::<f64>()
+                                        / alpha
+                                })
+                                .collect();
+                            // B stored as a column (L, ldb = order + 1) or a row (R, ldb = 3).
+                            let (m, n, ldb, stride) = if side == b'L' {
+                                (order, 1, order + 1, 1)
+                            } else {
+                                (1, order, 3, 3)
+                            };
+                            let mut b64 = vec![7.0; ldb * n.max(1) + stride * order];
+                            for i in 0..order {
+                                b64[i * stride] = b[i];
+                            }
+                            let mut b32: Vec<f32> = b64.iter().map(|&v| v as f32).collect();
+                            let a32: Vec<f32> = a.iter().map(|&v| v as f32).collect();
+                            let flags = [side, uplo, trans, diag].map(|f| f as c_char);
+                            let (mi, ni, ldai, ldbi) =
+                                (m as c_int, n as c_int, lda as c_int, ldb as c_int);
+                            let alpha32 = alpha as f32;
+                            // SAFETY: operands sized by their dimensions and leading dimensions.
+                            unsafe {
+                                dtrsm_(
+                                    &flags[0],
+                                    &flags[1],
+                                    &flags[2],
+                                    &flags[3],
+                                    &mi,
+                                    &ni,
+                                    &alpha,
+                                    a.as_ptr(),
+                                    &ldai,
+                                    b64.as_mut_ptr(),
+                                    &ldbi,
+                                    1,
+                                    1,
+                                    1,
+                                    1,
+                                );
+                                strsm_(
+                                    &flags[0],
+                                    &flags[1],
+                                    &flags[2],
+                                    &flags[3],
+                                    &mi,
+                                    &ni,
+                                    &alpha32,
+                                    a32.as_ptr(),
+                                    &ldai,
+                                    b32.as_mut_ptr(),
+                                    &ldbi,
+                                    1,
+                                    1,
+                                    1,
+                                    1,
+                                );
+                            }
+                            let x_max = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                            for i in 0..order {
+                                let bound = |u: f64| 4.0 * order as f64 * u * 3.0 * x_max;
+                                let (e64, e32) = (
+                                    (b64[i * stride] - x[i]).abs(),
+                                    (b32[i * stride] as f64 - x[i]).abs(),
+                                );
+                                let case = format!(
+                                    "{} {} {} {} alpha {alpha}, x[{i}] = {}",
+                                    side as char, uplo as char, trans as char, diag as char, x[i]
+                                );
+                                assert!(
+                                    e64 <= bound(f64::EPSILON),
+                                    "dtrsm {case}: {}",
+                                    b64[i * stride]
+                                );
+                                assert!(
+                                    e32 <= bound(f32::EPSILON as f64),
+                                    "strsm {case}: {}",
+                                    b32[i * stride]
+                                );
+                            }
+                            cases += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert_eq!(cases, 32);
+        assert!(
+            calls().0 >= before + 2 * cases,
+            "the solves were not sent to TRSV"
+        );
     }
 }
