@@ -207,6 +207,21 @@ fn cost_table(say: &dyn Fn(&str), t: &TransientSummary, bw: Bandwidth, ranks: us
         solve_bandwidth,
         c.seconds_per_solve,
     );
+    if !per_rank && c.bytes_per_solve_largest_rank > 0.0 {
+        // MUMPS splits the factor by its own mapping: the rank holding most streams its share
+        // at that rank's part of the common bandwidth.
+        row(
+            "solve, as MUMPS split",
+            c.solves_per_step,
+            c.bytes_per_solve_largest_rank,
+            bw.read_all / ranks as f64,
+            c.seconds_per_solve,
+        );
+        say(&format!(
+            "    (the largest rank holds {:.0} % of the factor)",
+            100.0 * c.bytes_per_solve_largest_rank / c.bytes_per_solve
+        ));
+    }
     row(
         "linear force (K x)",
         c.linear_forces_per_step,

@@ -8,7 +8,7 @@
 use petsc_sys as ffi;
 use std::ffi::CStr;
 
-use super::error::{call, Result};
+use super::error::{call, LaError, Result};
 use super::matrix::SparseMatrix;
 
 /// One sequential block of a rank's rows: the matrix itself on one rank, or the diagonal
@@ -199,6 +199,30 @@ fn move_values(d: &Block, s: &Block, alpha: f64, overwrite: bool) -> Result<()> 
     }
     call!(MatSeqAIJRestoreArrayRead(s.mat, &mut sv))?;
     call!(MatSeqAIJRestoreArray(d.mat, &mut dv))
+}
+
+/// The largest `x` over the ranks of `m`'s communicator.
+pub(super) fn max_over_ranks(m: ffi::Mat, x: f64) -> Result<f64> {
+    let mut comm = ffi::mpi_sys::MPI_Comm(std::ptr::null_mut());
+    call!(PetscObjectGetComm(m as ffi::PetscObject, &mut comm))?;
+    let mut largest = f64::NAN;
+    // SAFETY: one f64 each way on the matrix' communicator, which every rank calls with.
+    let code = unsafe {
+        ffi::mpi_sys::MPI_Allreduce(
+            (&x as *const f64).cast(),
+            (&mut largest as *mut f64).cast(),
+            1,
+            ffi::mpi_sys::RSMPI_DOUBLE,
+            ffi::mpi_sys::RSMPI_MAX,
+            comm,
+        )
+    };
+    if code != 0 {
+        return Err(LaError::Invalid(format!(
+            "MPI_Allreduce of a factor's size failed with code {code}"
+        )));
+    }
+    Ok(largest)
 }
 
 /// Whether `ok` holds on every rank of `m`'s communicator.

@@ -13,9 +13,10 @@ use std::marker::PhantomData;
 
 use petsc_sys as ffi;
 
+use super::csr::max_over_ranks;
 use super::error::{call, LaError, Result};
 use super::matrix::SparseMatrix;
-use super::solver::FactorizationReport;
+use super::solver::{mumps_count, FactorizationReport};
 use super::vector::Vector;
 use super::Petsc;
 
@@ -115,7 +116,7 @@ impl<'p> SingleLu<'p> {
         id.jcn_loc = solver._cols.as_mut_ptr();
         id.a_loc = solver._values.as_mut_ptr();
         solver.call(JOB_ANALYSE_FACTORIZE, "factorization")?;
-        solver.report = solver.read_report();
+        solver.report = solver.read_report()?;
         let layout = a.new_vector()?;
         call!(VecScatterCreateToZero(
             layout.raw,
@@ -128,21 +129,19 @@ impl<'p> SingleLu<'p> {
         Ok(solver)
     }
 
-    fn read_report(&self) -> FactorizationReport {
+    fn read_report(&self) -> Result<FactorizationReport> {
         let infog = |i: usize| self.id.infog[i - 1];
         let entries = infog(29);
-        FactorizationReport {
-            factor_entries: if entries < 0 {
-                -(entries as f64) * 1e6
-            } else {
-                entries as f64
-            },
+        let largest_rank_entries = max_over_ranks(self.matrix, mumps_count(self.id.info[26]))?;
+        Ok(FactorizationReport {
+            factor_entries: mumps_count(entries),
+            factor_entries_largest_rank: largest_rank_entries,
             ordering: infog(7),
             memory_max_mb: infog(21),
             memory_mb: infog(22),
             flops: f64::from(self.id.rinfog[2]),
             negative_pivots: infog(12),
-        }
+        })
     }
 
     pub fn report(&self) -> FactorizationReport {
@@ -189,7 +188,7 @@ impl<'p> SingleLu<'p> {
         }
         self.id.a_loc = self._values.as_mut_ptr();
         self.call(JOB_FACTORIZE, "factorization")?;
-        self.report = self.read_report();
+        self.report = self.read_report()?;
         Ok(())
     }
 

@@ -22,6 +22,10 @@ pub enum Factorization {
 pub struct FactorizationReport {
     /// Entries in the factors (INFOG(29)).
     pub factor_entries: f64,
+    /// Entries in the factors on the rank that holds most (MUMPS' INFO(27), largest over the
+    /// ranks; the whole factor when every rank holds one): a solve streams at least these
+    /// from one rank's memory.
+    pub factor_entries_largest_rank: f64,
     /// Ordering used in the analysis (INFOG(7)): 0 AMD, 2 AMF, 3 SCOTCH, 4 PORD, 5 METIS, 6 QAMD.
     pub ordering: i32,
     /// Memory of the factorization: largest on one rank (INFOG(21)) and total (INFOG(22)), MB.
@@ -38,6 +42,7 @@ impl FactorizationReport {
     pub fn unknown() -> Self {
         FactorizationReport {
             factor_entries: 0.0,
+            factor_entries_largest_rank: 0.0,
             ordering: -1,
             memory_max_mb: 0,
             memory_mb: 0,
@@ -134,6 +139,15 @@ pub(crate) fn mumps_memory_error(factor: ffi::Mat, prefix: &str) -> Option<LaErr
     }
 }
 
+/// A count MUMPS reports in an int: stored as -(count / 1e6) when it overflows.
+pub(crate) fn mumps_count(value: i32) -> f64 {
+    if value < 0 {
+        -(value as f64) * 1e6
+    } else {
+        value as f64
+    }
+}
+
 pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<FactorizationReport> {
     let infog = |i: i32| -> Result<i32> {
         let mut v = 0;
@@ -156,13 +170,12 @@ pub(crate) fn mumps_report(factor: ffi::Mat, prefix: &str) -> Result<Factorizati
     call!(MatMumpsGetRinfog(factor, 3, &mut flops))?;
     let entries = infog(29)?;
     // INFOG(29) is an int; MUMPS stores -(entries/1e6) when it overflows.
-    let factor_entries = if entries < 0 {
-        -(entries as f64) * 1e6
-    } else {
-        entries as f64
-    };
+    let factor_entries = mumps_count(entries);
+    let mut local = 0;
+    call!(MatMumpsGetInfo(factor, 27, &mut local))?;
     Ok(FactorizationReport {
         factor_entries,
+        factor_entries_largest_rank: super::csr::max_over_ranks(factor, mumps_count(local))?,
         ordering: infog(7)?,
         memory_max_mb: infog(21)?,
         memory_mb: infog(22)?,
@@ -488,6 +501,7 @@ fn other_report(pc: ffi::PC) -> Result<FactorizationReport> {
     }
     Ok(FactorizationReport {
         factor_entries: entries,
+        factor_entries_largest_rank: entries,
         ..FactorizationReport::unknown()
     })
 }

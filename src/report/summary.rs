@@ -156,6 +156,8 @@ pub struct StepCost {
     /// LU reads L and U once, LDL^T reads L twice; indices left out), seconds per solve.
     pub solves_per_step: f64,
     pub bytes_per_solve: f64,
+    /// Of them, from the rank that holds most of the factor (each rank streams its own part).
+    pub bytes_per_solve_largest_rank: f64,
     pub seconds_per_solve: f64,
     /// The linear force (the predictor's product with K, with M and C only where the damping
     /// needs them, not counted; with a single-precision factor also the accepted iterate's
@@ -186,6 +188,9 @@ impl StepCost {
             unknowns: t.unknowns,
             solves_per_step: t.factor_solves as f64 / steps,
             bytes_per_solve: t.factor_entries * t.factor_value_bytes * t.factor_passes,
+            bytes_per_solve_largest_rank: t.factor_entries_largest_rank
+                * t.factor_value_bytes
+                * t.factor_passes,
             seconds_per_solve: per(t.seconds_in_factor_solves, t.factor_solves),
             bytes_linear_force: t.operator_entries * entry + 3.0 * 8.0 * t.unknowns as f64,
             linear_forces_per_step: t.linear_force_calls as f64 / steps,

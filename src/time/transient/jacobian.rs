@@ -49,6 +49,8 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     built_contact: Option<ContactState>,
     built_damping: f64,
     pub factor_entries: f64,
+    /// Of them, on the rank that holds most (FactorizationReport::factor_entries_largest_rank).
+    pub factor_entries_largest_rank: f64,
     /// Bytes per factor value and passes over the factor per solve (LU 1, LDL^T 2), of the
     /// last factorization.
     pub factor_streaming: (f64, f64),
@@ -106,6 +108,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             built_contact: None,
             built_damping: 0.0,
             factor_entries: 0.0,
+            factor_entries_largest_rank: 0.0,
             factor_streaming: (8.0, 1.0),
             built: 0,
             seconds_factorizing: 0.0,
@@ -313,6 +316,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         j: SparseMatrix<'p>,
     ) -> Jacobian<'a, 'p> {
         self.factor_entries = factor.report().factor_entries;
+        self.factor_entries_largest_rank = factor.report().factor_entries_largest_rank;
         let value_bytes = if self.factor == JacobianFactor::Single {
             4.0
         } else {

@@ -90,6 +90,8 @@ pub struct Transient {
     pub eliminations: EliminationCounts,
     pub factorizations: usize,
     pub factor_entries: f64,
+    /// Of them, on the rank that holds most.
+    pub factor_entries_largest_rank: f64,
     /// Where J was factorized (MUMPS over all ranks, or LU on every rank).
     pub jacobian_solver: &'static str,
     pub seconds_factorizing: f64,
@@ -187,6 +189,7 @@ impl Transient {
         seconds_start: f64,
     ) {
         self.factor_entries = b.factor_entries;
+        self.factor_entries_largest_rank = b.factor_entries_largest_rank;
         self.jacobian_solver = b.solver_name();
         (self.factor_value_bytes, self.factor_passes) = b.factor_streaming;
         self.seconds_factorizing = seconds_start + b.seconds_factorizing;
@@ -222,6 +225,7 @@ impl Transient {
             eliminations: EliminationCounts::default(),
             factorizations: 0,
             factor_entries: 0.0,
+            factor_entries_largest_rank: 0.0,
             jacobian_solver: "",
             seconds_factorizing: 0.0,
             seconds_stepping: 0.0,
