@@ -1,6 +1,6 @@
 //! Products and triangular solves with one column sent to the matrix-vector routines: `sgemm_`,
 //! `dgemm_`, `strsm_` and `dtrsm_` defined here, ahead of the BLAS library in the process's
-//! symbol lookup (the executable exports them: build.rs), so MUMPS' calls reach them.
+//! symbol lookup (the executable exports them: src/build.rs), so MUMPS' calls reach them.
 //!
 //! Why: MUMPS' forward and backward solves multiply each front's factor panel by the
 //! right-hand sides with GEMM, and solve with its diagonal block with TRSM; with one

@@ -667,7 +667,7 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
     say(
         petsc,
         &format!(
-            "M0 Newmark J in single precision: {:.3e} factor entries ({:.1} MB of values; double: {:.3e} entries), one solve's backward error {first:.2e} with {forwarded} GEMMs sent to GEMV, {first_library:.2e} with the library's GEMM (bound 1.2e-5); {refined:.2e} after {steps} refinement steps in double precision (bound 1e-12 within 3); against MUMPS in double {difference:.2e} (bound 1e-9)",
+            "M0 Newmark J in single precision: {:.3e} factor entries ({:.1} MB of values; double: {:.3e} entries), one solve's backward error {first:.2e} with {forwarded} GEMM/TRSM calls sent to GEMV/TRSV, {first_library:.2e} with the library's routines (bound 1.2e-5); {refined:.2e} after {steps} refinement steps in double precision (bound 1e-12 within 3); against MUMPS in double {difference:.2e} (bound 1e-9)",
             report.factor_entries,
             report.factor_entries * 4.0 / 1e6,
             double.report().factor_entries
@@ -675,7 +675,7 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
     );
     let bad = |x: f64, bound: f64| x.is_nan() || x > bound;
     if forwarded == 0 {
-        return Err("no GEMM of the single-precision solve reached la::one_column_gemm (is sgemm_ exported? build.rs)".into());
+        return Err("no GEMM or TRSM of the single-precision solve reached la::one_column_gemm (are the symbols exported? src/build.rs)".into());
     }
     if bad(first, 1.2e-5)
         || bad(first_library, 1.2e-5)

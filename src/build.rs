@@ -7,5 +7,5 @@ fn main() {
         println!("cargo:rustc-link-arg=-Wl,-u,{symbol}");
         println!("cargo:rustc-link-arg=-Wl,--export-dynamic-symbol={symbol}");
     }
-    println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=src/build.rs");
 }
