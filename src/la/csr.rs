@@ -201,45 +201,47 @@ fn move_values(d: &Block, s: &Block, alpha: f64, overwrite: bool) -> Result<()> 
     call!(MatSeqAIJRestoreArray(d.mat, &mut dv))
 }
 
-/// The largest `x` over the ranks of `m`'s communicator.
-pub(super) fn max_over_ranks(m: ffi::Mat, x: f64) -> Result<f64> {
+/// One value of `T` reduced by `op` over the ranks of `m`'s communicator.
+fn reduce_over_ranks<T: Copy>(
+    m: ffi::Mat,
+    x: T,
+    start: T,
+    datatype: ffi::mpi_sys::MPI_Datatype,
+    op: ffi::mpi_sys::MPI_Op,
+) -> Result<T> {
     let mut comm = ffi::mpi_sys::MPI_Comm(std::ptr::null_mut());
     call!(PetscObjectGetComm(m as ffi::PetscObject, &mut comm))?;
-    let mut largest = f64::NAN;
-    // SAFETY: one f64 each way on the matrix' communicator, which every rank calls with.
+    let mut reduced = start;
+    // SAFETY: one value each way, of the datatype the callers pair with T, on the matrix'
+    // communicator, which every rank calls with.
     let code = unsafe {
         ffi::mpi_sys::MPI_Allreduce(
-            (&x as *const f64).cast(),
-            (&mut largest as *mut f64).cast(),
+            (&x as *const T).cast(),
+            (&mut reduced as *mut T).cast(),
             1,
-            ffi::mpi_sys::RSMPI_DOUBLE,
-            ffi::mpi_sys::RSMPI_MAX,
+            datatype,
+            op,
             comm,
         )
     };
     if code != 0 {
         return Err(LaError::Invalid(format!(
-            "MPI_Allreduce of a factor's size failed with code {code}"
+            "MPI_Allreduce over the ranks of a matrix failed with code {code}"
         )));
     }
-    Ok(largest)
+    Ok(reduced)
+}
+
+/// The largest `x` over the ranks of `m`'s communicator.
+pub(super) fn max_over_ranks(m: ffi::Mat, x: f64) -> Result<f64> {
+    // SAFETY (of the pairing): RSMPI_DOUBLE is f64.
+    let (datatype, op) = unsafe { (ffi::mpi_sys::RSMPI_DOUBLE, ffi::mpi_sys::RSMPI_MAX) };
+    reduce_over_ranks(m, x, f64::NAN, datatype, op)
 }
 
 /// Whether `ok` holds on every rank of `m`'s communicator.
 pub(super) fn all_ranks(m: ffi::Mat, ok: bool) -> Result<bool> {
-    let mut comm = ffi::mpi_sys::MPI_Comm(std::ptr::null_mut());
-    call!(PetscObjectGetComm(m as ffi::PetscObject, &mut comm))?;
-    let (local, mut all) = (i32::from(ok), 0i32);
-    // SAFETY: one i32 each way on the matrix' communicator, which every rank calls with.
-    let code = unsafe {
-        ffi::mpi_sys::MPI_Allreduce(
-            (&local as *const i32).cast(),
-            (&mut all as *mut i32).cast(),
-            1,
-            ffi::mpi_sys::RSMPI_INT32_T,
-            ffi::mpi_sys::RSMPI_MIN,
-            comm,
-        )
-    };
-    Ok(code == 0 && all == 1)
+    // SAFETY (of the pairing): RSMPI_INT32_T is i32.
+    let (datatype, op) = unsafe { (ffi::mpi_sys::RSMPI_INT32_T, ffi::mpi_sys::RSMPI_MIN) };
+    Ok(reduce_over_ranks(m, i32::from(ok), 0, datatype, op).is_ok_and(|all| all == 1))
 }
