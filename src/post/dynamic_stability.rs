@@ -83,6 +83,11 @@ pub struct TrackedMode {
     pub unstable_fraction: f64,
     pub mean_damping_ratio: f64,
     pub torque_correlation: f64,
+    /// Its mean Re(s) over the later points (1/s): the amplitude's growth rate the
+    /// linearizations predict on average, to compare with the run's modal energies.
+    pub mean_re_s: f64,
+    /// The real mode its static-state coordinates weigh most (index into the basis).
+    pub dominant_real_mode: Option<usize>,
     /// Its modal coordinates (on the real modes) where its frequency is highest and lowest
     /// along the run: (point index into `eigenvalue`, coordinates).
     pub extremes: [(usize, Vec<Complex>); 2],
@@ -198,8 +203,20 @@ pub fn tracked_modes(
                 .map_or_else(Vec::new, |(_, y)| y.clone());
             (i, y)
         });
+        let dominant_real_mode = points[0]
+            .iter()
+            .find(|(s, _)| *s == eigenvalue[0])
+            .and_then(|(_, y)| {
+                y.iter()
+                    .map(|&(re, im)| re * re + im * im)
+                    .enumerate()
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(j, _)| j)
+            });
         tracks.push(TrackedMode {
             name: format!("C{}", k + 1),
+            mean_re_s: along.iter().map(|s| s.0).sum::<f64>() / along.len().max(1) as f64,
+            dominant_real_mode,
             mac: t.iter().map(|p| p.map_or(f64::NAN, |p| p.1)).collect(),
             unstable_fraction: along.iter().filter(|&&s| unstable(s)).count() as f64
                 / along.len().max(1) as f64,

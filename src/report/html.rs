@@ -243,7 +243,7 @@ fn time_sections(s: &RunSummary, output: &Path, out: &mut Vec<Section>) -> std::
         let caption = "Frequency and damping of the tracked modes against time, torque below.";
         body += &figure(output, "dynamic_stability_time.png", caption)?;
         if let Some(r) = &s.link.dynamic_stability {
-            body += &dynamic_stability_table(r);
+            body += &dynamic_stability_table(r, s.link.modal_energy.as_ref());
         }
         body += &text(s, Part::DynamicStability);
         add(
@@ -420,11 +420,19 @@ fn run_table(s: &RunSummary) -> String {
     t
 }
 
-/// The headline modes of the dynamic stability: at rest, along the run, how long unstable.
-fn dynamic_stability_table(r: &crate::stages::link::DynamicStabilityReport) -> String {
+/// The headline modes of the dynamic stability: at rest, along the run, how long unstable,
+/// the mean Re(s) and, with the modal energies, how fast the mode's real mode grew in the run.
+fn dynamic_stability_table(
+    r: &crate::stages::link::DynamicStabilityReport,
+    energy: Option<&crate::stages::link::ModalEnergyReport>,
+) -> String {
     use crate::eigen::complex_modes::{damping_ratio, frequency_hz};
-    let mut t = String::from(
-        "<table><tr><th>mode</th><th>at rest (Hz)</th><th>damping ratio at rest</th><th>frequency along the run (Hz)</th><th>damping ratio along the run</th><th>unstable (% of the time)</th><th>mean damping ratio</th></tr>",
+    let growth_header = energy.map_or(String::new(), |e| {
+        let (a, b) = e.energy.growth_window;
+        format!("<th>its real mode's growth in the run, {a:.4} to {b:.4} s (1/s)</th>")
+    });
+    let mut t = format!(
+        "<table><tr><th>mode</th><th>at rest (Hz)</th><th>damping ratio at rest</th><th>frequency along the run (Hz)</th><th>damping ratio along the run</th><th>unstable (% of the time)</th><th>mean damping ratio</th><th>mean Re(s) (1/s)</th>{growth_header}</tr>",
     );
     for m in r.stability.tracks.iter().filter(|m| m.headline(r.margin)) {
         let along = &m.eigenvalue[1..];
@@ -440,15 +448,21 @@ fn dynamic_stability_table(r: &crate::stages::link::DynamicStabilityReport) -> S
         let (f0, f1) = span(&frequency_hz);
         let (z0, z1) = span(&damping_ratio);
         let rest = m.eigenvalue[0];
+        let growth = match (energy, m.dominant_real_mode) {
+            (Some(e), Some(k)) => format!("<td>R{}: {:.0}</td>", k + 1, e.energy.growth[k]),
+            (Some(_), None) => "<td></td>".to_string(),
+            _ => String::new(),
+        };
         let _ = write!(
             t,
-            "<tr{}><td>{}</td><td>{:.1}</td><td>{:.2e}</td><td>{f0:.1} .. {f1:.1}</td><td>{z0:.2e} .. {z1:.2e}</td><td>{:.0}</td><td>{:.2e}</td></tr>",
+            "<tr{}><td>{}</td><td>{:.1}</td><td>{:.2e}</td><td>{f0:.1} .. {f1:.1}</td><td>{z0:.2e} .. {z1:.2e}</td><td>{:.0}</td><td>{:.2e}</td><td>{:.1}</td>{growth}</tr>",
             if m.mean_damping_ratio < -r.margin { " class=\"unstable\"" } else { "" },
             m.name,
             frequency_hz(rest),
             damping_ratio(rest),
             100.0 * m.unstable_fraction,
-            m.mean_damping_ratio
+            m.mean_damping_ratio,
+            m.mean_re_s
         );
     }
     t + "</table>"

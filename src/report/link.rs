@@ -90,6 +90,11 @@ fn write_modal_energy(file: &ResultsFile, r: &ModalEnergyReport) -> Result<(), W
             column(&|m| m.oscillation),
             "half peak-to-peak over the mean, over the window",
         ),
+        (
+            "growth_rate",
+            column(&|m| m.growth_rate),
+            "1/s, the amplitude's, over the growth window",
+        ),
     ];
     for (name, values, units) in ranked {
         file.write_table(&format!("{g}/ranked/{name}"), &values, units)?;
@@ -97,6 +102,13 @@ fn write_modal_energy(file: &ResultsFile, r: &ModalEnergyReport) -> Result<(), W
     file.set_number(g, "ranking_time_s", e.at)?;
     file.set_number(g, "window_start_s", e.window.0)?;
     file.set_number(g, "window_end_s", e.window.1)?;
+    file.write_table(
+        &format!("{g}/growth_rate"),
+        &e.growth,
+        "1/s; per mode, its amplitude's: half the least-squares slope of ln E over the growth window",
+    )?;
+    file.set_number(g, "growth_window_start_s", e.growth_window.0)?;
+    file.set_number(g, "growth_window_end_s", e.growth_window.1)?;
     Ok(())
 }
 
@@ -181,6 +193,10 @@ fn write_dynamic_stability(
         file.set_number(&m, "unstable_fraction", t.unstable_fraction)?;
         file.set_number(&m, "mean_damping_ratio", t.mean_damping_ratio)?;
         file.set_number(&m, "torque_correlation", t.torque_correlation)?;
+        file.set_number(&m, "mean_re_s", t.mean_re_s)?;
+        if let Some(k) = t.dominant_real_mode {
+            file.set_number(&m, "dominant_real_mode", (k + 1) as f64)?;
+        }
     }
     Ok(())
 }

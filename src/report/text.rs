@@ -24,13 +24,16 @@ pub fn fmt_modal_energy(link: &Link, f: &mut std::fmt::Formatter<'_>) -> std::fm
         for m in &e.ranked {
             writeln!(
                 f,
-                "    R{:<4} {:9.1} Hz {:6.1} % of the modal energy, oscillating by {:5.1} % over [{:.4e}, {:.4e}] s",
+                "    R{:<4} {:9.1} Hz {:6.1} % of the modal energy, oscillating by {:5.1} % over [{:.4e}, {:.4e}] s, amplitude growing at {:.0} 1/s over [{:.4e}, {:.4e}] s",
                 m.mode + 1,
                 r.frequencies_hz[m.mode],
                 100.0 * m.share,
                 100.0 * m.oscillation,
                 e.window.0,
-                e.window.1
+                e.window.1,
+                m.growth_rate,
+                e.growth_window.0,
+                e.growth_window.1
             )?;
         }
     }
@@ -125,12 +128,24 @@ pub fn fmt_dynamic_stability(link: &Link, f: &mut std::fmt::Formatter<'_>) -> st
                 0 => String::new(),
                 n => format!("; MAC < 0.5 with the previous state at {n} states"),
             };
+            // What the run did with it: its real mode's growth over the modal energies' span.
+            let in_run = match (&link.modal_energy, t.dominant_real_mode) {
+                (Some(m), Some(k)) => format!(
+                    "; in the run its real mode R{} grows at {:.0} 1/s over [{:.4e}, {:.4e}] s",
+                    k + 1,
+                    m.energy.growth[k],
+                    m.energy.growth_window.0,
+                    m.energy.growth_window.1
+                ),
+                _ => String::new(),
+            };
             writeln!(
                 f,
-                "    {:5} at rest {:.1} Hz, zeta {:.2e} ({rest}); along the run {:.1}..{:.1} Hz, zeta {:.2e}..{:.2e}, unstable {:.0} % of the time, mean zeta {:.2e}, correlation of zeta with the torque {:.2}{jumps}",
+                "    {:5} at rest {:.1} Hz, zeta {:.2e} ({rest}); along the run {:.1}..{:.1} Hz, zeta {:.2e}..{:.2e}, unstable {:.0} % of the time, mean zeta {:.2e}, mean Re(s) {:.1} 1/s, correlation of zeta with the torque {:.2}{jumps}{in_run}",
                 t.name, fr[0], z[0], f0, f1, z0, z1,
                 100.0 * t.unstable_fraction,
                 t.mean_damping_ratio,
+                t.mean_re_s,
                 t.torque_correlation
             )?;
         }
