@@ -243,5 +243,5 @@ pub(super) fn max_over_ranks(m: ffi::Mat, x: f64) -> Result<f64> {
 pub(super) fn all_ranks(m: ffi::Mat, ok: bool) -> Result<bool> {
     // SAFETY (of the pairing): RSMPI_INT32_T is i32.
     let (datatype, op) = unsafe { (ffi::mpi_sys::RSMPI_INT32_T, ffi::mpi_sys::RSMPI_MIN) };
-    Ok(reduce_over_ranks(m, i32::from(ok), 0, datatype, op).is_ok_and(|all| all == 1))
+    Ok(reduce_over_ranks(m, i32::from(ok), 0, datatype, op)? == 1)
 }
