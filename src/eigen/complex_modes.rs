@@ -304,6 +304,15 @@ fn finish(
     (sorted, order)
 }
 
+/// The real mode a complex mode's coordinates `y` (on the real modes) weigh most.
+pub fn dominant_real_mode(y: &[Complex]) -> Option<usize> {
+    y.iter()
+        .map(|&(r, i)| r * r + i * i)
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(k, _)| k)
+}
+
 fn mode(s: (f64, f64), backward_error: f64, dominant: Option<usize>) -> ComplexMode {
     ComplexMode {
         name: String::new(),
@@ -518,13 +527,7 @@ pub fn projected<'p>(
         if settings.f_max_hz.is_some_and(|f| frequency_hz(s) > f) {
             continue;
         }
-        let dominant = y
-            .iter()
-            .map(|&(r, i)| r * r + i * i)
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(&b.1))
-            .map(|(k, _)| k);
-        modes.push(mode(s, f64::NAN, dominant));
+        modes.push(mode(s, f64::NAN, dominant_real_mode(&y)));
         coords.push(y);
     }
     let (mut modes, order) = finish(modes, settings);

@@ -206,13 +206,7 @@ pub fn tracked_modes(
         let dominant_real_mode = points[0]
             .iter()
             .find(|(s, _)| *s == eigenvalue[0])
-            .and_then(|(_, y)| {
-                y.iter()
-                    .map(|&(re, im)| re * re + im * im)
-                    .enumerate()
-                    .max_by(|a, b| a.1.total_cmp(&b.1))
-                    .map(|(j, _)| j)
-            });
+            .and_then(|(_, y)| crate::eigen::complex_modes::dominant_real_mode(y));
         tracks.push(TrackedMode {
             name: format!("C{}", k + 1),
             mean_re_s: along.iter().map(|s| s.0).sum::<f64>() / along.len().max(1) as f64,
