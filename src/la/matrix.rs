@@ -7,6 +7,7 @@ use std::path::Path;
 use petsc_sys as ffi;
 
 use super::error::{call, LaError, Result};
+use super::local_lu::Csr;
 use super::vector::Vector;
 use super::{cconst, cstr, report_destroy, Petsc};
 
@@ -419,15 +420,13 @@ impl<'p> SparseMatrix<'p> {
     }
 
     /// The block of rows and columns `indices` (ascending global indices, the same on every
-    /// rank) as a dense row-major |indices| x |indices| matrix on every rank: a small
-    /// subproblem's operator. AIJ only (a blocked format would need block-aligned indices).
+    /// rank) as a sparse |indices| x |indices| matrix on every rank: a small subproblem's
+    /// operator. AIJ only (a blocked format would need block-aligned indices).
     ///
     /// # Collective
-    pub fn dense_block(&self, indices: &[usize]) -> Result<Vec<f64>> {
+    pub fn block(&self, indices: &[usize]) -> Result<Csr> {
         if self.format != MatrixFormat::Aij {
-            return Err(LaError::Invalid(
-                "dense_block: the matrix must be AIJ".into(),
-            ));
+            return Err(LaError::Invalid("block: the matrix must be AIJ".into()));
         }
         let n = indices.len();
         let idx: Vec<ffi::PetscInt> = indices.iter().map(|&i| i as ffi::PetscInt).collect();
@@ -454,7 +453,12 @@ impl<'p> SparseMatrix<'p> {
         made?;
         // SAFETY: MatCreateSubMatrices returned an array of one matrix.
         let sub = unsafe { *subs };
-        let mut dense = vec![0.0; n * n];
+        let mut block = Csr {
+            n,
+            row_start: vec![0; n + 1],
+            columns: Vec::new(),
+            values: Vec::new(),
+        };
         let mut result = Ok(());
         for row in 0..n {
             let mut ncols = 0;
@@ -473,17 +477,18 @@ impl<'p> SparseMatrix<'p> {
                         std::slice::from_raw_parts(vals, ncols as usize),
                     )
                 };
-                for (&col, &value) in c.iter().zip(v) {
-                    dense[row * n + col as usize] = value;
-                }
+                // (MatGetRow gives a row's columns ascending.)
+                block.columns.extend(c.iter().map(|&col| col as usize));
+                block.values.extend_from_slice(v);
             }
+            block.row_start[row + 1] = block.columns.len();
             if let Err(e) = call!(MatRestoreRow(sub, r, &mut ncols, &mut cols, &mut vals)) {
                 result = Err(e);
                 break;
             }
         }
         report_destroy(call!(MatDestroySubMatrices(1, &mut subs)));
-        result.map(|_| dense)
+        result.map(|_| block)
     }
 
     /// An identity of this matrix while it lives (two live matrices never share one): to

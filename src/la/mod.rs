@@ -14,6 +14,7 @@ pub mod gmres;
 pub mod hessenberg;
 pub mod lapack;
 pub mod lapack_complex;
+pub mod local_lu;
 pub mod low_rank;
 pub mod matrix;
 pub mod observation;

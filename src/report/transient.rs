@@ -42,6 +42,11 @@ pub fn write_transient(
             "elimination_local_factorizations",
             tr.eliminations.local_factorizations as f64,
         ),
+        (
+            "elimination_dense_factorizations",
+            tr.eliminations.dense_factorizations as f64,
+        ),
+        ("elimination_factor_entries", tr.eliminations.factor_entries),
         ("seconds_eliminating", tr.eliminations.seconds),
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),

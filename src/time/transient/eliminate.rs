@@ -2,7 +2,7 @@
 //! Wilkes, SIAM J. Sci. Comput. 17 (1996) 1139; Cai & Li, SIAM J. Sci. Comput. 33 (2011)
 //! 746): at an iterate, the unknowns b those points couple are moved so that the residual's
 //! rows b vanish with the other unknowns held, solving the small nonlinear system
-//! R_b(q + delta) = 0 by Newton with its exact tangent, dense, redundantly on every rank. The
+//! R_b(q + delta) = 0 by Newton with its exact tangent, redundantly on every rank. The
 //! fixed factor's correction then acts on a residual whose stiff, switching local laws (the
 //! friction band's mu p / slip_speed through gamma / (beta h), the exponential contact of a
 //! point that opens or closes) are already satisfied: the kinks at which the fixed J's
@@ -15,10 +15,17 @@
 //! L = M / (beta h^2) + c1 C + K (the linear part of R, c1 = gamma / (beta h)) and f the
 //! contact force of the points that couple some unknown of b (the modal damping force, a few
 //! modes' low-rank term, is left to the global iteration).
+//!
+//! The local Jacobian is sparse (the kept FE DOFs of the contact zone, coupled as its mesh and
+//! the points couple them, ~6 unknowns per point): factored by a sparse LU
+//! ([`crate::la::local_lu`]), whose cost grows far slower with the points than a dense LU's
+//! cube (at 256 points, ~1,500 unknowns, a dense LU is ~2 GFLOP); a dense pivoted LU only
+//! where the sparse one meets a zero pivot.
 
 use crate::contact::kernel::PointRows;
 use crate::contact::ContactModel;
 use crate::la::lapack::RealLu;
+use crate::la::local_lu::{Csr, LocalLu};
 use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange, Vector};
 use crate::time::newmark::{Damping, NewmarkSettings, State};
 
@@ -36,6 +43,10 @@ pub struct EliminationCounts {
     /// local residual tenfold per iteration, across the eliminations of a step when their
     /// unknowns are the same).
     pub local_factorizations: usize,
+    /// Of those, the dense pivoted LUs made where the sparse LU met a zero pivot.
+    pub dense_factorizations: usize,
+    /// The sparse factors' stored entries, summed over the local factorizations.
+    pub factor_entries: f64,
     pub unconverged: usize,
     pub seconds: f64,
     /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
@@ -45,6 +56,7 @@ pub struct EliminationCounts {
 
 /// The operators and the points' rows an elimination needs, gathered once.
 pub(super) struct Eliminator<'a, 'p> {
+    petsc: &'p Petsc<'p>,
     contact: &'a ContactModel<'p>,
     rows: Vec<PointRows>,
     /// For every unknown, the points whose rows couple it.
@@ -57,16 +69,31 @@ pub(super) struct Eliminator<'a, 'p> {
     max_points: usize,
     /// The last elimination's unknowns, L_bb for them (and the c1 it was built with) and its
     /// last local factor, reused while the unknowns stay the same.
-    kept: Option<Kept>,
+    kept: Option<Kept<'p>>,
     pub counts: EliminationCounts,
 }
 
 /// What an elimination leaves for the next one on the same unknowns.
-struct Kept {
+struct Kept<'p> {
     b: Vec<usize>,
     c1: f64,
-    linear: Vec<f64>,
-    factor: RealLu,
+    linear: Csr,
+    factor: LocalFactor<'p>,
+}
+
+/// A local Jacobian's LU: sparse, or dense and pivoted where the sparse one met a zero pivot.
+enum LocalFactor<'p> {
+    Sparse(LocalLu<'p>),
+    Dense(RealLu),
+}
+
+impl LocalFactor<'_> {
+    fn solve(&self, b: &mut [f64]) -> Result<(), LaError> {
+        match self {
+            LocalFactor::Sparse(lu) => lu.solve(b),
+            LocalFactor::Dense(lu) => Ok(lu.solve(b)?),
+        }
+    }
 }
 
 impl<'a, 'p> Eliminator<'a, 'p> {
@@ -102,6 +129,7 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             Damping::Matrix(c) => (Some(aij(c)?), (0.0, 0.0)),
         };
         Ok(Eliminator {
+            petsc,
             contact,
             rows,
             points_of,
@@ -163,6 +191,7 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             _ => (self.linear_block(ns, &b)?, None),
         };
         let problem = Local {
+            petsc: self.petsc,
             contact: self.contact,
             rows: &self.rows,
             b: &b,
@@ -179,6 +208,8 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         c.unknowns += b.len();
         c.local_iterations += solved.iterations;
         c.local_factorizations += solved.factorizations;
+        c.dense_factorizations += solved.dense_factorizations;
+        c.factor_entries += solved.factor_entries;
         c.unconverged += usize::from(!solved.converged);
         let delta = solved.delta;
         if let Some(factor) = solved.factor {
@@ -204,32 +235,26 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         Ok(Some(out))
     }
 
-    /// L_bb = M_bb / (beta h^2) + c1 C_bb + K_bb, dense row-major.
+    /// L_bb = M_bb / (beta h^2) + c1 C_bb + K_bb, sparse.
     ///
     /// # Collective
-    fn linear_block(&self, ns: &NewmarkSettings, b: &[usize]) -> Result<Vec<f64>, LaError> {
+    fn linear_block(&self, ns: &NewmarkSettings, b: &[usize]) -> Result<Csr, LaError> {
         let c1 = ns.gamma / (ns.beta * ns.step);
         let (alpha, beta) = self.rayleigh;
-        let k = self.k.get().dense_block(b)?;
-        let m = self.m.get().dense_block(b)?;
         let mass = 1.0 / (ns.beta * ns.step * ns.step) + c1 * alpha;
         let stiffness = 1.0 + c1 * beta;
-        let mut l: Vec<f64> = k
-            .iter()
-            .zip(&m)
-            .map(|(k, m)| stiffness * k + mass * m)
-            .collect();
+        let mut entries: Vec<(usize, usize, f64)> =
+            self.k.get().block(b)?.triplets(stiffness).collect();
+        entries.extend(self.m.get().block(b)?.triplets(mass));
         if let Some(c) = &self.c {
-            for (l, c) in l.iter_mut().zip(c.get().dense_block(b)?) {
-                *l += c1 * c;
-            }
+            entries.extend(c.get().block(b)?.triplets(c1));
         }
-        Ok(l)
+        Ok(Csr::from_triplets(b.len(), entries))
     }
 }
 
 /// A matrix in AIJ: the operator itself, or a copy converted from a blocked format (a full
-/// model's K), for `dense_block` (the reduced operators are AIJ: no copy of them).
+/// model's K), for `block` (the reduced operators are AIJ: no copy of them).
 enum Aij<'a, 'p> {
     Borrowed(&'a SparseMatrix<'p>),
     Converted(SparseMatrix<'p>),
@@ -246,6 +271,7 @@ impl<'p> Aij<'_, 'p> {
 
 /// One elimination's subproblem, the same on every rank.
 struct Local<'s, 'p> {
+    petsc: &'p Petsc<'p>,
     contact: &'s ContactModel<'p>,
     rows: &'s [PointRows],
     /// The eliminated unknowns (ascending) and the points that couple any of them.
@@ -257,7 +283,7 @@ struct Local<'s, 'p> {
     c1: f64,
 }
 
-impl Local<'_, '_> {
+impl<'p> Local<'_, 'p> {
     /// Position in b of a DOF (None: held).
     fn position(&self, dof: i32) -> Option<usize> {
         (dof >= 0)
@@ -265,9 +291,9 @@ impl Local<'_, '_> {
             .flatten()
     }
 
-    /// The points' force on b at q + delta (and, with `tangent`, its consistent tangent
-    /// L-free part -df_b/d delta, row-major n x n, added into it).
-    fn force(&self, delta: &[f64], mut tangent: Option<&mut [f64]>) -> Vec<f64> {
+    /// The points' force on b at q + delta (and, with `tangent`, its consistent tangent's
+    /// L-free part -df_b/d delta appended as (row, column, value) entries).
+    fn force(&self, delta: &[f64], mut tangent: Option<&mut Vec<(usize, usize, f64)>>) -> Vec<f64> {
         let n = self.b.len();
         let mut f = vec![0.0; n];
         for &id in self.points {
@@ -299,7 +325,7 @@ impl Local<'_, '_> {
                     let Some(pi) = pi else { continue };
                     for (j, pj) in at.iter().enumerate() {
                         if let Some(pj) = pj {
-                            t[pi * n + pj] += block[i * k + j];
+                            t.push((*pi, *pj, block[i * k + j]));
                         }
                     }
                 }
@@ -310,23 +336,23 @@ impl Local<'_, '_> {
 
     /// Newton with backtracking on |R_b| from delta = 0, its LU kept while it contracts the
     /// residual tenfold per iteration (a chord: the local tangent changes at few points
-    /// between iterates, and one LU of ~460 unknowns costs ~10 local residuals), starting
-    /// from `factor` (the previous elimination's, on the same unknowns) when given.
+    /// between iterates), starting from `factor` (the previous elimination's, on the same
+    /// unknowns) when given.
     fn newton(
         &self,
-        linear: &[f64],
+        linear: &Csr,
         rb: &[f64],
         tolerance: f64,
-        mut factor: Option<RealLu>,
-    ) -> Result<LocalSolution, LaError> {
+        mut factor: Option<LocalFactor<'p>>,
+    ) -> Result<LocalSolution<'p>, LaError> {
         let n = self.b.len();
         let f0 = self.force(&vec![0.0; n], None);
         let residual = |delta: &[f64]| -> (Vec<f64>, f64) {
             let f = self.force(delta, None);
             let mut r = rb.to_vec();
+            linear.mult_add(delta, &mut r);
             for i in 0..n {
-                let row = &linear[i * n..(i + 1) * n];
-                r[i] += row.iter().zip(delta).map(|(a, x)| a * x).sum::<f64>() - (f[i] - f0[i]);
+                r[i] -= f[i] - f0[i];
             }
             let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
             (r, norm)
@@ -335,6 +361,8 @@ impl Local<'_, '_> {
             delta: vec![0.0; n],
             iterations: 0,
             factorizations: 0,
+            dense_factorizations: 0,
+            factor_entries: 0.0,
             converged: false,
             factor: None,
         };
@@ -347,8 +375,13 @@ impl Local<'_, '_> {
             }
             let fresh = factor.is_none() || norm > 0.1 * previous;
             if fresh {
-                factor = Some(self.factor(linear, &out.delta)?);
+                let made = self.factor(linear, &out.delta)?;
                 out.factorizations += 1;
+                match &made {
+                    LocalFactor::Sparse(lu) => out.factor_entries += lu.factor_entries(),
+                    LocalFactor::Dense(_) => out.dense_factorizations += 1,
+                }
+                factor = Some(made);
             }
             let lu = factor.as_ref().expect("factored above");
             let mut step: Vec<f64> = r.iter().map(|x| -x).collect();
@@ -382,27 +415,27 @@ impl Local<'_, '_> {
         Ok(out)
     }
 
-    /// LU of the local Jacobian L_bb + T_bb(delta) (column-major for LAPACK).
-    fn factor(&self, linear: &[f64], delta: &[f64]) -> Result<RealLu, LaError> {
+    /// LU of the local Jacobian L_bb + T_bb(delta): sparse, dense where that meets a zero pivot.
+    fn factor(&self, linear: &Csr, delta: &[f64]) -> Result<LocalFactor<'p>, LaError> {
         let n = self.b.len();
-        let mut tangent = linear.to_vec();
-        self.force(delta, Some(&mut tangent));
-        let mut columns = vec![0.0; n * n];
-        for i in 0..n {
-            for j in 0..n {
-                columns[j * n + i] = tangent[i * n + j];
-            }
-        }
-        Ok(RealLu::new(n, columns)?)
+        let mut entries: Vec<(usize, usize, f64)> = linear.triplets(1.0).collect();
+        self.force(delta, Some(&mut entries));
+        let jacobian = Csr::from_triplets(n, entries);
+        Ok(match LocalLu::new(self.petsc, &jacobian)? {
+            Some(lu) => LocalFactor::Sparse(lu),
+            None => LocalFactor::Dense(RealLu::new(n, jacobian.dense_columns())?),
+        })
     }
 }
 
 /// A local Newton's outcome.
-struct LocalSolution {
+struct LocalSolution<'p> {
     delta: Vec<f64>,
     iterations: usize,
     factorizations: usize,
+    dense_factorizations: usize,
+    factor_entries: f64,
     converged: bool,
     /// The last factor used (for the next elimination on the same unknowns).
-    factor: Option<RealLu>,
+    factor: Option<LocalFactor<'p>>,
 }

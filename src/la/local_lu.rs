@@ -1,0 +1,289 @@
+//! A sparse LU of a small matrix this process holds whole: PETSc's sequential AIJ on
+//! MPI_COMM_SELF and PETSc's own LU under a nested-dissection ordering. For a nonlinear
+//! elimination's local Jacobian (`time::transient`'s eliminate.rs): ~6 unknowns per contact
+//! point, coupled as the contact surface's mesh couples them, where a dense LU's cost grows
+//! as the cube of the points (256 points, ~1,500 unknowns: ~2 GFLOP per factorization).
+//!
+//! No pivoting beyond the diagonal (PETSc's LU): for matrices whose diagonal dominates, such
+//! as M / (beta h^2) + c1 C + K plus a contact tangent. A zero pivot is reported
+//! ([`LocalLu::new`] returns `None`), never a silent result: the caller then needs a pivoted
+//! (dense) LU.
+
+use std::marker::PhantomData;
+
+use petsc_sys as ffi;
+
+use super::error::{call, LaError, Result};
+use super::{cconst, report_destroy, Petsc};
+
+/// A square sparse matrix in compressed rows, columns ascending within a row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Csr {
+    pub n: usize,
+    /// Row i's entries are `columns[row_start[i]..row_start[i + 1]]`.
+    pub row_start: Vec<usize>,
+    pub columns: Vec<usize>,
+    pub values: Vec<f64>,
+}
+
+impl Csr {
+    /// From (row, column, value) triplets in any order, duplicates summed.
+    pub fn from_triplets(n: usize, mut triplets: Vec<(usize, usize, f64)>) -> Csr {
+        triplets.sort_unstable_by_key(|&(i, j, _)| (i, j));
+        let mut out = Csr {
+            n,
+            row_start: vec![0; n + 1],
+            columns: Vec::with_capacity(triplets.len()),
+            values: Vec::with_capacity(triplets.len()),
+        };
+        let mut last = None;
+        for (i, j, v) in triplets {
+            if last == Some((i, j)) {
+                *out.values.last_mut().expect("an entry was pushed") += v;
+                continue;
+            }
+            out.row_start[i + 1] += 1;
+            out.columns.push(j);
+            out.values.push(v);
+            last = Some((i, j));
+        }
+        for i in 0..n {
+            out.row_start[i + 1] += out.row_start[i];
+        }
+        out
+    }
+
+    /// The entries as triplets (for a sum of several matrices).
+    pub fn triplets(&self, scale: f64) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        (0..self.n).flat_map(move |i| {
+            (self.row_start[i]..self.row_start[i + 1])
+                .map(move |k| (i, self.columns[k], scale * self.values[k]))
+        })
+    }
+
+    /// y += A x.
+    pub fn mult_add(&self, x: &[f64], y: &mut [f64]) {
+        for (i, y) in y.iter_mut().enumerate().take(self.n) {
+            let range = self.row_start[i]..self.row_start[i + 1];
+            *y += self.columns[range.clone()]
+                .iter()
+                .zip(&self.values[range])
+                .map(|(&j, a)| a * x[j])
+                .sum::<f64>();
+        }
+    }
+
+    /// The matrix dense, column-major (LAPACK's layout).
+    pub fn dense_columns(&self) -> Vec<f64> {
+        let mut a = vec![0.0; self.n * self.n];
+        for (i, j, v) in self.triplets(1.0) {
+            a[j * self.n + i] += v;
+        }
+        a
+    }
+}
+
+/// The LU factors of a [`Csr`] matrix on this process, for solves.
+pub struct LocalLu<'p> {
+    n: usize,
+    matrix: ffi::Mat,
+    factor: ffi::Mat,
+    rhs: ffi::Vec,
+    solution: ffi::Vec,
+    entries: f64,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> LocalLu<'p> {
+    /// Factors `a`; `None` when the LU meets a zero pivot, numerically or for want of a diagonal
+    /// entry in the pattern (the matrix needs pivoting). Errs on
+    /// non-finite entries or a failed PETSc call. Not collective (MPI_COMM_SELF).
+    pub fn new(_petsc: &'p Petsc, a: &Csr) -> Result<Option<Self>> {
+        if a.values.iter().any(|v| !v.is_finite()) {
+            return Err(LaError::Invalid(
+                "local sparse LU: the matrix has NaN or infinite entries".into(),
+            ));
+        }
+        let n = a.n;
+        let has_diagonal = |i: usize| {
+            a.columns[a.row_start[i]..a.row_start[i + 1]]
+                .binary_search(&i)
+                .is_ok()
+        };
+        if !(0..n).all(has_diagonal) {
+            // A structurally zero pivot (PETSc's LU would refuse the pattern).
+            return Ok(None);
+        }
+        let ni = n as ffi::PetscInt;
+        // SAFETY: MPI_COMM_SELF is a valid communicator for the whole run.
+        let comm_self = unsafe { ffi::mpi_sys::RSMPI_COMM_SELF };
+        let mut lu = LocalLu {
+            n,
+            matrix: std::ptr::null_mut(),
+            factor: std::ptr::null_mut(),
+            rhs: std::ptr::null_mut(),
+            solution: std::ptr::null_mut(),
+            entries: 0.0,
+            _petsc: PhantomData,
+        };
+        let per_row: Vec<ffi::PetscInt> = a
+            .row_start
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as ffi::PetscInt)
+            .collect();
+        call!(MatCreateSeqAIJ(
+            comm_self,
+            ni,
+            ni,
+            0,
+            per_row.as_ptr(),
+            &mut lu.matrix
+        ))?;
+        for i in 0..n {
+            let range = a.row_start[i]..a.row_start[i + 1];
+            let columns: Vec<ffi::PetscInt> = a.columns[range.clone()]
+                .iter()
+                .map(|&j| j as ffi::PetscInt)
+                .collect();
+            let row = i as ffi::PetscInt;
+            call!(MatSetValues(
+                lu.matrix,
+                1,
+                &row,
+                columns.len() as ffi::PetscInt,
+                columns.as_ptr(),
+                a.values[range].as_ptr(),
+                ffi::INSERT_VALUES
+            ))?;
+        }
+        call!(MatAssemblyBegin(lu.matrix, ffi::MAT_FINAL_ASSEMBLY))?;
+        call!(MatAssemblyEnd(lu.matrix, ffi::MAT_FINAL_ASSEMBLY))?;
+        call!(VecCreateSeq(comm_self, ni, &mut lu.rhs))?;
+        call!(VecCreateSeq(comm_self, ni, &mut lu.solution))?;
+        if n == 0 {
+            return Ok(Some(lu));
+        }
+        let (mut rows, mut columns) = (std::ptr::null_mut(), std::ptr::null_mut());
+        call!(MatGetOrdering(
+            lu.matrix,
+            cconst(ffi::MATORDERINGND),
+            &mut rows,
+            &mut columns
+        ))?;
+        let factored = lu.factorize(rows, columns);
+        report_destroy(call!(ISDestroy(&mut rows)));
+        report_destroy(call!(ISDestroy(&mut columns)));
+        Ok(factored?.then_some(lu))
+    }
+
+    /// The symbolic and numerical LU under the given ordering; false at a zero pivot.
+    fn factorize(&mut self, rows: ffi::IS, columns: ffi::IS) -> Result<bool> {
+        call!(MatGetFactor(
+            self.matrix,
+            cconst(ffi::MATSOLVERPETSC),
+            ffi::MAT_FACTOR_LU,
+            &mut self.factor
+        ))?;
+        // SAFETY: MatFactorInfo is plain numbers; MatFactorInfoInitialize sets them all.
+        let mut info: ffi::MatFactorInfo = unsafe { std::mem::zeroed() };
+        call!(MatFactorInfoInitialize(&mut info))?;
+        call!(MatLUFactorSymbolic(
+            self.factor,
+            self.matrix,
+            rows,
+            columns,
+            &info
+        ))?;
+        call!(MatLUFactorNumeric(self.factor, self.matrix, &info))?;
+        let mut error: ffi::MatFactorError = ffi::MAT_FACTOR_NOERROR;
+        call!(MatFactorGetError(self.factor, &mut error))?;
+        if error != ffi::MAT_FACTOR_NOERROR {
+            return Ok(false);
+        }
+        // SAFETY: MatInfo is plain numbers (PetscLogDouble); all zeros is a valid value.
+        let mut stored: ffi::MatInfo = unsafe { std::mem::zeroed() };
+        call!(MatGetInfo(self.factor, ffi::MAT_LOCAL, &mut stored))?;
+        self.entries = stored.nz_used;
+        Ok(true)
+    }
+
+    /// The factor's stored entries (L and U).
+    pub fn factor_entries(&self) -> f64 {
+        self.entries
+    }
+
+    /// Solves A x = b in place (b of length n). Not collective.
+    pub fn solve(&self, b: &mut [f64]) -> Result<()> {
+        if b.len() != self.n {
+            return Err(LaError::Invalid(format!(
+                "local sparse LU solve: {} entries for order {}",
+                b.len(),
+                self.n
+            )));
+        }
+        if self.n == 0 {
+            return Ok(());
+        }
+        self.copy(self.rhs, b, true)?;
+        call!(MatSolve(self.factor, self.rhs, self.solution))?;
+        self.copy(self.solution, b, false)
+    }
+
+    /// `values` into the sequential vector `v` (`into`), or out of it.
+    fn copy(&self, v: ffi::Vec, values: &mut [f64], into: bool) -> Result<()> {
+        let mut data = std::ptr::null_mut();
+        call!(VecGetArray(v, &mut data))?;
+        // SAFETY: the sequential vector holds n entries until VecRestoreArray.
+        let whole = unsafe { std::slice::from_raw_parts_mut(data, self.n) };
+        if into {
+            whole.copy_from_slice(values);
+        } else {
+            values.copy_from_slice(whole);
+        }
+        call!(VecRestoreArray(v, &mut data))
+    }
+}
+
+impl Drop for LocalLu<'_> {
+    fn drop(&mut self) {
+        for m in [&mut self.factor, &mut self.matrix] {
+            if !m.is_null() {
+                report_destroy(call!(MatDestroy(m)));
+            }
+        }
+        for v in [&mut self.rhs, &mut self.solution] {
+            if !v.is_null() {
+                report_destroy(call!(VecDestroy(v)));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triplets_are_summed_and_sorted_into_rows() {
+        let a = Csr::from_triplets(
+            3,
+            vec![
+                (2, 0, 1.0),
+                (0, 1, 2.0),
+                (0, 1, 3.0),
+                (1, 1, 4.0),
+                (0, 0, 5.0),
+            ],
+        );
+        assert_eq!(a.row_start, vec![0, 2, 3, 4]);
+        assert_eq!(a.columns, vec![0, 1, 1, 0]);
+        assert_eq!(a.values, vec![5.0, 5.0, 4.0, 1.0]);
+        let mut y = vec![1.0; 3];
+        a.mult_add(&[1.0, 2.0, 3.0], &mut y);
+        assert_eq!(y, vec![16.0, 9.0, 2.0]);
+        assert_eq!(
+            a.dense_columns(),
+            vec![5.0, 0.0, 1.0, 5.0, 4.0, 0.0, 0.0, 0.0, 0.0]
+        );
+    }
+}
