@@ -224,9 +224,9 @@ fn default_anderson() -> usize {
 }
 /// More earlier iterates than this cost more in dot products than a step could gain.
 pub const MAX_ANDERSON: usize = 20;
-/// The elimination's subproblem is solved dense (~8 unknowns per point): beyond this many
-/// points its LU costs more than the factor's solves it saves.
-pub const MAX_ELIMINATED_POINTS: usize = 512;
+/// The elimination's subproblem (~6 unknowns per point) is factored sparse and solved on
+/// every rank: beyond this many points (the 600k brake has ~9,100) it is no longer local.
+pub const MAX_ELIMINATED_POINTS: usize = 4096;
 fn default_mode() -> usize {
     1
 }
@@ -356,7 +356,7 @@ mod tests {
     fn elimination_and_anderson_are_bounded_and_left_out_when_unset() {
         for (text, key) in [
             (
-                "steps = 10\neliminate_points = 513",
+                "steps = 10\neliminate_points = 4097",
                 "transient.eliminate_points",
             ),
             ("steps = 10\nanderson = 21", "transient.anderson"),
