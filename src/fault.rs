@@ -6,7 +6,8 @@
 //! `SQUEAL_FAULT=<stage>@<rank>[:panic|:nan]` makes the stage named `<stage>` (as in the
 //! timings table: `mesh`, `assembly`, `static preload`, `real modes`, `complex modes (full)`,
 //! `reduction`, `transient`, ...) fail on rank `<rank>` before it starts, with an error
-//! (default) or a panic; `:nan` puts a NaN into the stage's input instead (`transient`: its
+//! (default) or a panic (`write results.h5`, `write transient.h5`: a write to that file fails,
+//! as on a full disk); `:nan` puts a NaN into the stage's input instead (`transient`: its
 //! start state). `<rank>` may be `*` for every rank (a collective failure).
 
 use std::cell::RefCell;
@@ -158,6 +159,35 @@ pub fn report_failed_run(message: &str) {
             say(&format!("squeal: error on rank {rank}: {message}"));
         }
     });
+}
+
+/// The value of a write to a file every rank shares (results.h5, transient.h5), or, when it
+/// failed (a full disk, a quota), the end of the run: the message (by [`report_failed_run`],
+/// so a rank that failed alone ends the others) and MPI_Abort with exit code 1 on every rank.
+/// Parallel HDF5 cannot be unwound after such a failure: the ranks' caches differ, and the
+/// collective close that dropping the file makes waits forever (measured: a run whose disk
+/// filled hung in H5Fclose). Files closed before (checkpoint.h5) stay as they were.
+///
+/// # Collective (on failure)
+pub fn end_on_write_failure<T, E: Display>(result: Result<T, E>, file: &str) -> T {
+    // (`SQUEAL_FAULT=write <file>@<rank>` fails it, as a full disk would.)
+    let injected = inject(&format!("write {file}"));
+    match result {
+        Ok(value) if injected.is_ok() => value,
+        failed => {
+            let e = match failed {
+                Err(e) => e.to_string(),
+                Ok(_) => injected.expect_err("the other case").to_string(),
+            };
+            report_failed_run(&format!(
+                "writing {file} failed: {e}. The run ends here (a file shared by the ranks cannot be closed after a failed write); free space or choose another --output, then resume with --restart from the last checkpoint"
+            ));
+            FAILURES.with(|f| match f.borrow().as_ref() {
+                Some(failures) => failures.abort(1),
+                None => std::process::exit(1),
+            })
+        }
+    }
 }
 
 /// Writes `line` and its newline to stderr in one write, so that the lines of ranks failing

@@ -105,6 +105,17 @@ fn a_failure_on_every_rank_is_said_once() {
     );
 }
 
+/// A write that fails on one rank (a full disk or a quota; measured: the run then hung in the
+/// collective close of the HDF5 file) ends every rank with the file named.
+#[test]
+fn a_failed_write_on_one_rank_ends_every_rank() {
+    let dir = scratch("write");
+    for (file, rank) in [("transient.h5", 1), ("results.h5", 0)] {
+        let out = run_with_fault(&dir, &format!("write {file}@{rank}"));
+        assert_ends_with(&out, file, &format!("writing {file} failed"));
+    }
+}
+
 #[test]
 fn results_written_before_a_failure_stay_readable() {
     let dir = scratch("kept");

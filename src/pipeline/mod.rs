@@ -13,7 +13,7 @@ pub mod groups;
 mod matrix;
 pub mod merge;
 
-use crate::fault::checked;
+use crate::fault::{checked, end_on_write_failure};
 use crate::io::results::ResultsFile;
 use crate::io::series::Hdf5Storage;
 use crate::la::Petsc;
@@ -23,6 +23,9 @@ use crate::stages::{self, RunError, Timings};
 use crate::time::store::Storage;
 use crate::time::transient::TransientFiles;
 use after::after_transient;
+
+/// The results file's name in messages.
+const RESULTS: &str = "results.h5";
 
 pub use crate::report::summary::RunSummary;
 pub use crate::stages::model::build_model;
@@ -117,16 +120,15 @@ pub fn run_with(
     let header = (scene_text, petsc_options);
     let write_inp = scene.output.write_inp;
     let maps = MapContext::of(&a);
-    checked(report::write_analyses(
-        petsc, &file, &a, maps, header, write_inp, output,
-    ))?;
+    let written = report::write_analyses(petsc, &file, &a, maps, header, write_inp, output);
+    end_on_write_failure(written, RESULTS);
     let seconds_output = start.elapsed().as_secs_f64();
-    file.flush()?;
+    end_on_write_failure(file.flush(), RESULTS);
     let noise = matrix::noise_matrix(petsc, scene, scene_text, &a, output, options, &mut timings)?;
     let start = Instant::now();
     if let Some(m) = &noise {
-        checked(report::matrix::write_matrix(petsc.rank(), &file, m, output))?;
-        file.flush()?;
+        let written = report::matrix::write_matrix(petsc.rank(), &file, m, output);
+        end_on_write_failure(written.and_then(|_| Ok(file.flush()?)), RESULTS);
     }
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
 
@@ -155,25 +157,27 @@ pub fn run_with(
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
         let signals = &t.signals;
-        checked(report::transient::write_transient(
-            petsc, &file, signals, settings, output,
-        ))?;
+        let written = report::transient::write_transient(petsc, &file, signals, settings, output);
+        end_on_write_failure(written, RESULTS);
         if let Some(lc) = &limit_cycle {
-            checked(report::post::write_limit_cycle(
-                petsc, &file, lc, signals, output,
-            ))?;
+            let written = report::post::write_limit_cycle(petsc, &file, lc, signals, output);
+            end_on_write_failure(written, RESULTS);
         }
         if let Ok(link) = &link {
             let dofs = a.ops.dofs.as_ref();
             let written = report::link::write_link(petsc, &file, link, maps, dofs, output);
-            checked(written)?;
+            end_on_write_failure(written, RESULTS);
         }
     }
     if let Ok(Some(p)) = &pseudo {
-        checked(report::pseudo::write_pseudo(petsc, &file, p, output))?;
+        end_on_write_failure(
+            report::pseudo::write_pseudo(petsc, &file, p, output),
+            RESULTS,
+        );
     }
     if let Ok(Some(l)) = &loudness {
-        checked(report::loudness::write_loudness(petsc, &file, l, output))?;
+        let written = report::loudness::write_loudness(petsc, &file, l, output);
+        end_on_write_failure(written, RESULTS);
     }
     if let (Some(model), 0) = (&a.model, petsc.rank()) {
         let shapes = link
@@ -185,7 +189,7 @@ pub fn run_with(
     }
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
     timings.stages.push(("output".into(), seconds_output));
-    checked(report::write_timings(&file, &timings))?;
+    end_on_write_failure(report::write_timings(&file, &timings), RESULTS);
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.
     let link = link?;

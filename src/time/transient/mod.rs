@@ -24,6 +24,7 @@ use super::newmark::{
     TimeError,
 };
 use crate::contact::{ContactModel, ContactState};
+use crate::fault::end_on_write_failure;
 use crate::la::{DirectSolver, Factorization, LaError, Petsc, SparseMatrix, Vector};
 use crate::measure::nan_max;
 use crate::time::store::Storage;
@@ -401,8 +402,9 @@ pub fn run<'p>(
             let evaluated = last_contact.borrow();
             let evaluated = evaluated.as_ref().filter(|_| report.forces_current);
             let wall = wall_before + t.elapsed().as_secs_f64();
-            recorder.record(s, h, report.iterations, wall, evaluated)?;
-            recorder.sample_state(s, h)?;
+            let recorded = recorder.record(s, h, report.iterations, wall, evaluated);
+            end_on_write_failure(recorded, "transient.h5");
+            end_on_write_failure(recorder.sample_state(s, h), "transient.h5");
             let stop = settings.stop_after_saturation.is_some_and(|cycles| {
                 c.steps.is_multiple_of(SATURATION_CHECK_EVERY)
                     && saturated_for(&recorder.out, settings.step, cycles, world)
@@ -411,11 +413,11 @@ pub fn run<'p>(
                 recorder.out.stopped_at_saturation = Some(s.time);
             }
             let at_end = stop || s.time >= end_time - 0.25 * h;
-            recorder.flush_if_due(at_end)?;
+            end_on_write_failure(recorder.flush_if_due(at_end), "transient.h5");
             if settings.checkpoint_every > 0
                 && (c.steps.is_multiple_of(settings.checkpoint_every) || at_end)
             {
-                recorder.flush()?;
+                end_on_write_failure(recorder.flush(), "transient.h5");
                 // After a step restore J is rebuilt at this state; otherwise it stays the one
                 // built at `built_at`.
                 let b = builder.borrow();
@@ -482,7 +484,7 @@ pub fn run<'p>(
     }
     // Whatever happened, the signals recorded so far go to the file, and a failed run leaves
     // a checkpoint at its last converged step (to restart with other settings).
-    recorder.flush()?;
+    end_on_write_failure(recorder.flush(), "transient.h5");
     if result.is_err() && settings.checkpoint_every > 0 {
         let b = builder.borrow();
         let at = b.built_at.as_ref();
