@@ -48,6 +48,19 @@ pub fn write_transient(
         ),
         ("elimination_factor_entries", tr.eliminations.factor_entries),
         ("seconds_eliminating", tr.eliminations.seconds),
+        (
+            "seconds_eliminating_ranking",
+            tr.eliminations.seconds_ranking,
+        ),
+        ("seconds_eliminating_blocks", tr.eliminations.seconds_blocks),
+        (
+            "seconds_eliminating_local_newton",
+            tr.eliminations.seconds_local_newton,
+        ),
+        (
+            "seconds_eliminating_factorizing",
+            tr.eliminations.seconds_factorizing,
+        ),
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),
         ("failed_attempt_factor_solves", tr.failed_solves as f64),

@@ -49,6 +49,13 @@ pub struct EliminationCounts {
     pub factor_entries: f64,
     pub unconverged: usize,
     pub seconds: f64,
+    /// Of `seconds`: ranking the points by their tangent change, taking L_bb out of the
+    /// operators (when the unknowns changed), the local Newton, and in it the local
+    /// Jacobians' assembly and LU.
+    pub seconds_ranking: f64,
+    pub seconds_blocks: f64,
+    pub seconds_local_newton: f64,
+    pub seconds_factorizing: f64,
     /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
     /// residual is the global residual's rows and every local Newton converged).
     pub worst_mismatch: f64,
@@ -160,7 +167,9 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         // The `max_points` largest changes, however small the rest: a point left out with a
         // tangent far from J's stalls the global iteration (measured: keeping 99.99 % of the
         // change's norm instead, ~30 points on the small brake, refreshed J 6x as often).
-        let Some(dominant) = tangent.dominant(self.max_points, 1.0)? else {
+        let dominant = tangent.dominant(self.max_points, 1.0)?;
+        self.counts.seconds_ranking += clock.elapsed().as_secs_f64();
+        let Some(dominant) = dominant else {
             return Ok(None);
         };
         let row_ids = self.contact.row_ids();
@@ -186,10 +195,12 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         let (q, v, residual) = (at.q.gather_all()?, at.v.gather_all()?, r.gather_all()?);
         let c1 = ns.gamma / (ns.beta * ns.step);
         // (Every rank holds the same b: the same branch everywhere, collective or not.)
+        let blocks = std::time::Instant::now();
         let (linear, factor) = match self.kept.take() {
             Some(k) if k.b == b && k.c1 == c1 => (k.linear, Some(k.factor)),
             _ => (self.linear_block(ns, &b)?, None),
         };
+        self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
         let problem = Local {
             petsc: self.petsc,
             contact: self.contact,
@@ -201,8 +212,11 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             c1,
         };
         let rb: Vec<f64> = b.iter().map(|&i| residual[i]).collect();
+        let newton = std::time::Instant::now();
         let solved = problem.newton(&linear, &rb, 0.1 * target, factor)?;
         let c = &mut self.counts;
+        c.seconds_local_newton += newton.elapsed().as_secs_f64();
+        c.seconds_factorizing += solved.factor_seconds;
         c.eliminations += 1;
         c.points += chosen.len();
         c.unknowns += b.len();
@@ -363,6 +377,7 @@ impl<'p> Local<'_, 'p> {
             factorizations: 0,
             dense_factorizations: 0,
             factor_entries: 0.0,
+            factor_seconds: 0.0,
             converged: false,
             factor: None,
         };
@@ -375,7 +390,9 @@ impl<'p> Local<'_, 'p> {
             }
             let fresh = factor.is_none() || norm > 0.1 * previous;
             if fresh {
+                let clock = std::time::Instant::now();
                 let made = self.factor(linear, &out.delta)?;
+                out.factor_seconds += clock.elapsed().as_secs_f64();
                 out.factorizations += 1;
                 match &made {
                     LocalFactor::Sparse(lu) => out.factor_entries += lu.factor_entries(),
@@ -435,6 +452,7 @@ struct LocalSolution<'p> {
     factorizations: usize,
     dense_factorizations: usize,
     factor_entries: f64,
+    factor_seconds: f64,
     converged: bool,
     /// The last factor used (for the next elimination on the same unknowns).
     factor: Option<LocalFactor<'p>>,
