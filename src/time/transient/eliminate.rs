@@ -17,10 +17,11 @@
 //! modes' low-rank term, is left to the global iteration).
 //!
 //! The local Jacobian is sparse (the kept FE DOFs of the contact zone, coupled as its mesh and
-//! the points couple them, ~6 unknowns per point): factored by a sparse LU
+//! the points couple them, 4-6 unknowns per point): factored by a sparse LU
 //! ([`crate::la::local_lu`]), whose cost grows far slower with the points than a dense LU's
-//! cube (at 256 points, ~1,500 unknowns, a dense LU is ~2 GFLOP); a dense pivoted LU only
-//! where the sparse one meets a zero pivot.
+//! cube (at 256 points of the 600k brake, 1,088 unknowns, a dense LU is 0.86 GFLOP: 80 ms
+//! per elimination, 56 with the sparse one); a dense pivoted LU only where the sparse one
+//! meets a zero pivot.
 
 use crate::contact::kernel::PointRows;
 use crate::contact::ContactModel;

@@ -224,7 +224,7 @@ fn default_anderson() -> usize {
 }
 /// More earlier iterates than this cost more in dot products than a step could gain.
 pub const MAX_ANDERSON: usize = 20;
-/// The elimination's subproblem (~6 unknowns per point) is factored sparse and solved on
+/// The elimination's subproblem (4-6 unknowns per point) is factored sparse and solved on
 /// every rank: beyond this many points (the 600k brake has ~9,100) it is no longer local.
 pub const MAX_ELIMINATED_POINTS: usize = 4096;
 fn default_mode() -> usize {
