@@ -28,28 +28,44 @@ pub struct Csr {
 }
 
 impl Csr {
-    /// From (row, column, value) triplets in any order, duplicates summed.
-    pub fn from_triplets(n: usize, mut triplets: Vec<(usize, usize, f64)>) -> Csr {
-        triplets.sort_unstable_by_key(|&(i, j, _)| (i, j));
+    /// From (row, column, value) triplets in any order, duplicates summed. Bucketed by row
+    /// first, then each row sorted by column: one sort of all the triplets by (row, column)
+    /// took a third of the 600k brake's eliminated iterations (perf; ~150,000 triplets per
+    /// local Jacobian at 256 points).
+    pub fn from_triplets(n: usize, triplets: Vec<(usize, usize, f64)>) -> Csr {
+        let mut start = vec![0usize; n + 1];
+        for &(i, _, _) in &triplets {
+            start[i + 1] += 1;
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut next = start.clone();
+        let mut bucketed = vec![(0usize, 0.0f64); triplets.len()];
+        for (i, j, v) in triplets {
+            bucketed[next[i]] = (j, v);
+            next[i] += 1;
+        }
         let mut out = Csr {
             n,
             row_start: vec![0; n + 1],
-            columns: Vec::with_capacity(triplets.len()),
-            values: Vec::with_capacity(triplets.len()),
+            columns: Vec::with_capacity(bucketed.len()),
+            values: Vec::with_capacity(bucketed.len()),
         };
-        let mut last = None;
-        for (i, j, v) in triplets {
-            if last == Some((i, j)) {
-                *out.values.last_mut().expect("an entry was pushed") += v;
-                continue;
-            }
-            out.row_start[i + 1] += 1;
-            out.columns.push(j);
-            out.values.push(v);
-            last = Some((i, j));
-        }
         for i in 0..n {
-            out.row_start[i + 1] += out.row_start[i];
+            let row = &mut bucketed[start[i]..start[i + 1]];
+            row.sort_unstable_by_key(|&(j, _)| j);
+            let mut last = None;
+            for &(j, v) in row.iter() {
+                if last == Some(j) {
+                    *out.values.last_mut().expect("an entry was pushed") += v;
+                    continue;
+                }
+                out.columns.push(j);
+                out.values.push(v);
+                last = Some(j);
+            }
+            out.row_start[i + 1] = out.columns.len();
         }
         out
     }
