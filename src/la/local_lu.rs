@@ -33,6 +33,16 @@ impl Csr {
     /// took a third of the 600k brake's eliminated iterations (perf; ~150,000 triplets per
     /// local Jacobian at 256 points).
     pub fn from_triplets(n: usize, triplets: Vec<(usize, usize, f64)>) -> Csr {
+        Csr::from_triplets_with_slots(n, triplets).0
+    }
+
+    /// [`Csr::from_triplets`], and for every triplet the position of its entry in `values`:
+    /// triplets of the same (row, column) sequence then assemble by `values[slot] += value`,
+    /// without sorting again.
+    pub fn from_triplets_with_slots(
+        n: usize,
+        triplets: Vec<(usize, usize, f64)>,
+    ) -> (Csr, Vec<usize>) {
         let mut start = vec![0usize; n + 1];
         for &(i, _, _) in &triplets {
             start[i + 1] += 1;
@@ -41,11 +51,12 @@ impl Csr {
             start[i + 1] += start[i];
         }
         let mut next = start.clone();
-        let mut bucketed = vec![(0usize, 0.0f64); triplets.len()];
-        for (i, j, v) in triplets {
-            bucketed[next[i]] = (j, v);
+        let mut bucketed = vec![(0usize, 0.0f64, 0usize); triplets.len()];
+        for (t, (i, j, v)) in triplets.into_iter().enumerate() {
+            bucketed[next[i]] = (j, v, t);
             next[i] += 1;
         }
+        let mut slots = vec![0usize; bucketed.len()];
         let mut out = Csr {
             n,
             row_start: vec![0; n + 1],
@@ -54,20 +65,21 @@ impl Csr {
         };
         for i in 0..n {
             let row = &mut bucketed[start[i]..start[i + 1]];
-            row.sort_unstable_by_key(|&(j, _)| j);
+            row.sort_unstable_by_key(|&(j, _, _)| j);
             let mut last = None;
-            for &(j, v) in row.iter() {
+            for &(j, v, t) in row.iter() {
                 if last == Some(j) {
                     *out.values.last_mut().expect("an entry was pushed") += v;
-                    continue;
+                } else {
+                    out.columns.push(j);
+                    out.values.push(v);
+                    last = Some(j);
                 }
-                out.columns.push(j);
-                out.values.push(v);
-                last = Some(j);
+                slots[t] = out.values.len() - 1;
             }
             out.row_start[i + 1] = out.columns.len();
         }
-        out
+        (out, slots)
     }
 
     /// The entries as triplets (for a sum of several matrices).
@@ -100,7 +112,8 @@ impl Csr {
     }
 }
 
-/// The LU factors of a [`Csr`] matrix on this process, for solves.
+/// The LU factors of a [`Csr`] matrix on this process, for solves; renewed for new values in
+/// the same pattern by the numerical phase alone ([`LocalLu::refactor`]).
 pub struct LocalLu<'p> {
     n: usize,
     matrix: ffi::Mat,
@@ -108,6 +121,11 @@ pub struct LocalLu<'p> {
     rhs: ffi::Vec,
     solution: ffi::Vec,
     entries: f64,
+    /// The matrix's compressed rows, which PETSc uses in place (MatCreateSeqAIJWithArrays)
+    /// until the matrix is destroyed: kept here, never reallocated.
+    _row_start: Vec<ffi::PetscInt>,
+    _columns: Vec<ffi::PetscInt>,
+    values: Vec<f64>,
     _petsc: PhantomData<&'p Petsc<'p>>,
 }
 
@@ -116,11 +134,7 @@ impl<'p> LocalLu<'p> {
     /// entry in the pattern (the matrix needs pivoting). Errs on
     /// non-finite entries or a failed PETSc call. Not collective (MPI_COMM_SELF).
     pub fn new(_petsc: &'p Petsc, a: &Csr) -> Result<Option<Self>> {
-        if a.values.iter().any(|v| !v.is_finite()) {
-            return Err(LaError::Invalid(
-                "local sparse LU: the matrix has NaN or infinite entries".into(),
-            ));
-        }
+        check_finite(&a.values)?;
         let n = a.n;
         let has_diagonal = |i: usize| {
             a.columns[a.row_start[i]..a.row_start[i + 1]]
@@ -141,40 +155,20 @@ impl<'p> LocalLu<'p> {
             rhs: std::ptr::null_mut(),
             solution: std::ptr::null_mut(),
             entries: 0.0,
+            _row_start: a.row_start.iter().map(|&k| k as ffi::PetscInt).collect(),
+            _columns: a.columns.iter().map(|&j| j as ffi::PetscInt).collect(),
+            values: a.values.clone(),
             _petsc: PhantomData,
         };
-        let per_row: Vec<ffi::PetscInt> = a
-            .row_start
-            .windows(2)
-            .map(|w| (w[1] - w[0]) as ffi::PetscInt)
-            .collect();
-        call!(MatCreateSeqAIJ(
+        call!(MatCreateSeqAIJWithArrays(
             comm_self,
             ni,
             ni,
-            0,
-            per_row.as_ptr(),
+            lu._row_start.as_mut_ptr(),
+            lu._columns.as_mut_ptr(),
+            lu.values.as_mut_ptr(),
             &mut lu.matrix
         ))?;
-        for i in 0..n {
-            let range = a.row_start[i]..a.row_start[i + 1];
-            let columns: Vec<ffi::PetscInt> = a.columns[range.clone()]
-                .iter()
-                .map(|&j| j as ffi::PetscInt)
-                .collect();
-            let row = i as ffi::PetscInt;
-            call!(MatSetValues(
-                lu.matrix,
-                1,
-                &row,
-                columns.len() as ffi::PetscInt,
-                columns.as_ptr(),
-                a.values[range].as_ptr(),
-                ffi::INSERT_VALUES
-            ))?;
-        }
-        call!(MatAssemblyBegin(lu.matrix, ffi::MAT_FINAL_ASSEMBLY))?;
-        call!(MatAssemblyEnd(lu.matrix, ffi::MAT_FINAL_ASSEMBLY))?;
         call!(VecCreateSeq(comm_self, ni, &mut lu.rhs))?;
         call!(VecCreateSeq(comm_self, ni, &mut lu.solution))?;
         if n == 0 {
@@ -201,17 +195,23 @@ impl<'p> LocalLu<'p> {
             ffi::MAT_FACTOR_LU,
             &mut self.factor
         ))?;
-        // SAFETY: MatFactorInfo is plain numbers; MatFactorInfoInitialize sets them all.
-        let mut info: ffi::MatFactorInfo = unsafe { std::mem::zeroed() };
-        call!(MatFactorInfoInitialize(&mut info))?;
         call!(MatLUFactorSymbolic(
             self.factor,
             self.matrix,
             rows,
             columns,
-            &info
+            &factor_info()?
         ))?;
-        call!(MatLUFactorNumeric(self.factor, self.matrix, &info))?;
+        self.numeric()
+    }
+
+    /// The numerical LU of the matrix's current values; false at a zero pivot.
+    fn numeric(&mut self) -> Result<bool> {
+        call!(MatLUFactorNumeric(
+            self.factor,
+            self.matrix,
+            &factor_info()?
+        ))?;
         let mut error: ffi::MatFactorError = ffi::MAT_FACTOR_NOERROR;
         call!(MatFactorGetError(self.factor, &mut error))?;
         if error != ffi::MAT_FACTOR_NOERROR {
@@ -222,6 +222,37 @@ impl<'p> LocalLu<'p> {
         call!(MatGetInfo(self.factor, ffi::MAT_LOCAL, &mut stored))?;
         self.entries = stored.nz_used;
         Ok(true)
+    }
+
+    /// The stored entries of the factored matrix (its pattern's length).
+    pub fn pattern_len(&self) -> usize {
+        self.values.len()
+    }
+
+    /// Factors the matrix of the same pattern with new `values` (in the [`Csr`] order of the
+    /// matrix given to [`LocalLu::new`]): the ordering and the symbolic factorization are kept,
+    /// only the numerical phase runs. False at a zero pivot: the factor is then unusable (drop
+    /// it). Errs on non-finite values, a wrong length or a failed PETSc call.
+    pub fn refactor(&mut self, values: &[f64]) -> Result<bool> {
+        if values.len() != self.values.len() {
+            return Err(LaError::Invalid(format!(
+                "local sparse LU refactor: {} values for a pattern of {}",
+                values.len(),
+                self.values.len()
+            )));
+        }
+        check_finite(values)?;
+        if self.n == 0 {
+            return Ok(true);
+        }
+        let mut data = std::ptr::null_mut();
+        // Through Get/RestoreArray, so PETSc knows the values changed.
+        call!(MatSeqAIJGetArray(self.matrix, &mut data))?;
+        // SAFETY: the matrix stores exactly `values.len()` entries (its pattern) until
+        // MatSeqAIJRestoreArray; they are `self.values`' storage.
+        unsafe { std::slice::from_raw_parts_mut(data, values.len()) }.copy_from_slice(values);
+        call!(MatSeqAIJRestoreArray(self.matrix, &mut data))?;
+        self.numeric()
     }
 
     /// The factor's stored entries (L and U).
@@ -259,6 +290,23 @@ impl<'p> LocalLu<'p> {
         }
         call!(VecRestoreArray(v, &mut data))
     }
+}
+
+fn check_finite(values: &[f64]) -> Result<()> {
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(LaError::Invalid(
+            "local sparse LU: the matrix has NaN or infinite entries".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// PETSc's default factorization controls.
+fn factor_info() -> Result<ffi::MatFactorInfo> {
+    // SAFETY: MatFactorInfo is plain numbers; MatFactorInfoInitialize sets them all.
+    let mut info: ffi::MatFactorInfo = unsafe { std::mem::zeroed() };
+    call!(MatFactorInfoInitialize(&mut info))?;
+    Ok(info)
 }
 
 impl Drop for LocalLu<'_> {
@@ -302,5 +350,20 @@ mod tests {
             a.dense_columns(),
             vec![5.0, 0.0, 1.0, 5.0, 4.0, 0.0, 0.0, 0.0, 0.0]
         );
+    }
+
+    #[test]
+    fn slots_assemble_the_same_sequence_without_sorting() {
+        let pattern = [(2, 0), (0, 1), (0, 1), (1, 1), (0, 0)];
+        let first: Vec<_> = pattern.iter().map(|&(i, j)| (i, j, 1.0)).collect();
+        let (a, slots) = Csr::from_triplets_with_slots(3, first);
+        assert_eq!(slots, vec![3, 1, 1, 2, 0]);
+        let values = [1.0, 2.0, 3.0, 4.0, 5.0];
+        let mut assembled = vec![0.0; a.values.len()];
+        for (&slot, &v) in slots.iter().zip(&values) {
+            assembled[slot] += v;
+        }
+        let triplets = pattern.iter().zip(values).map(|(&(i, j), v)| (i, j, v));
+        assert_eq!(assembled, Csr::from_triplets(3, triplets.collect()).values);
     }
 }

@@ -479,6 +479,20 @@ fn type_name(p: *const std::os::raw::c_char) -> String {
         .into_owned()
 }
 
+/// The PC inside a redundant one (PCREDUNDANT: each rank's whole copy), or `pc` itself.
+fn redundant_inner(pc: ffi::PC) -> Result<ffi::PC> {
+    let mut pc_type: ffi::PCType = std::ptr::null();
+    call!(PCGetType(pc, &mut pc_type))?;
+    if pc_type.is_null() || type_name(pc_type) != "redundant" {
+        return Ok(pc);
+    }
+    let mut inner_ksp = std::ptr::null_mut();
+    call!(PCRedundantGetKSP(pc, &mut inner_ksp))?;
+    let mut inner = std::ptr::null_mut();
+    call!(KSPGetPC(inner_ksp, &mut inner))?;
+    Ok(inner)
+}
+
 /// Whether `pc` is a factorization (LU or Cholesky), not a redundant or other wrapper.
 fn is_factor_pc(pc: ffi::PC) -> Result<bool> {
     let mut pc_type: ffi::PCType = std::ptr::null();
@@ -488,8 +502,10 @@ fn is_factor_pc(pc: ffi::PC) -> Result<bool> {
 
 /// A factorization by another solver (PETSc's own LU, or one chosen by options): the
 /// factor's stored entries where PETSc knows them (MatGetInfo, summed over the ranks that
-/// share the factor), the rest unknown.
+/// share the factor), the rest unknown. A redundant PC's factor is its inner (per-rank)
+/// PC's: those entries are one rank's copy.
 fn other_report(pc: ffi::PC) -> Result<FactorizationReport> {
+    let pc = redundant_inner(pc)?;
     let mut entries = 0.0;
     let mut factor = std::ptr::null_mut();
     if is_factor_pc(pc)? && call!(PCFactorGetMatrix(pc, &mut factor)).is_ok() {

@@ -46,6 +46,10 @@ pub fn write_transient(
             "elimination_dense_factorizations",
             tr.eliminations.dense_factorizations as f64,
         ),
+        (
+            "elimination_numeric_refactorizations",
+            tr.eliminations.numeric_refactorizations as f64,
+        ),
         ("elimination_factor_entries", tr.eliminations.factor_entries),
         ("seconds_eliminating", tr.eliminations.seconds),
         (

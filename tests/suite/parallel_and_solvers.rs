@@ -885,8 +885,11 @@ fn block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> Result<(), 
 /// no pivoting) solves it with a normwise backward error below 1e-12 (the argument of
 /// `brake_m0_newmark_jacobian_per_rank_lu_backward_stable`: a mass-dominated diagonal keeps
 /// the growth small; n_row eps ~ 4e-14), as LAPACK's pivoted dense LU does, the two solutions
-/// within cond times that (1e-9). A matrix with a zero diagonal ([[0, 1], [1, 0]]) is reported
-/// as needing pivoting (None), not factored into garbage. Every rank gets the same block.
+/// within cond times that (1e-9). Refactored in place with other values in the same pattern
+/// (the diagonal doubled, the rest halved: the numerical phase alone, as an elimination's
+/// next local Jacobian), it solves that matrix to the same bound. A matrix with a zero
+/// diagonal ([[0, 1], [1, 0]]) is reported as needing pivoting (None), not factored into
+/// garbage, and so is a refactor to it. Every rank gets the same block.
 fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Result<(), String> {
     use squeal::la::lapack::RealLu;
     use squeal::la::local_lu::{Csr, LocalLu};
@@ -914,11 +917,37 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
         block.mult_add(x, &mut r);
         inf(&r) / (inf(&row_sums) * inf(x) + inf(&b))
     };
-    let sparse = LocalLu::new(petsc, &block)
+    let mut sparse = LocalLu::new(petsc, &block)
         .map_err(e)?
         .ok_or("the local sparse LU met a zero pivot on a mass-dominated Jacobian")?;
     let mut x_sparse = b.clone();
     sparse.solve(&mut x_sparse).map_err(e)?;
+    let factor_entries = sparse.factor_entries();
+    let mut other = block.clone();
+    for i in 0..n {
+        for k in other.row_start[i]..other.row_start[i + 1] {
+            other.values[k] *= if other.columns[k] == i { 2.0 } else { 0.5 };
+        }
+    }
+    if !sparse.refactor(&other.values).map_err(e)? {
+        return Err("the refactored LU met a zero pivot on a mass-dominated Jacobian".into());
+    }
+    let mut b_other = vec![0.0; n];
+    other.mult_add(&x_true, &mut b_other);
+    let mut x_other = b_other.clone();
+    sparse.solve(&mut x_other).map_err(e)?;
+    let backward_refactored = {
+        let mut r: Vec<f64> = b_other.iter().map(|v| -v).collect();
+        other.mult_add(&x_other, &mut r);
+        let rows = (0..n).fold(0.0f64, |m, i| {
+            let sum = other.values[other.row_start[i]..other.row_start[i + 1]]
+                .iter()
+                .map(|v| v.abs())
+                .sum::<f64>();
+            nan_max(m, sum)
+        });
+        inf(&r) / (rows * inf(&x_other) + inf(&b_other))
+    };
     let dense = RealLu::new(n, block.dense_columns()).map_err(|e| e.to_string())?;
     let mut x_dense = b.clone();
     dense.solve(&mut x_dense).map_err(|e| e.to_string())?;
@@ -931,6 +960,11 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
     // (Its zero diagonal stored: the numerical pivot test, not the pattern's.)
     let swap = Csr::from_triplets(2, vec![(0, 0, 0.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 0.0)]);
     let zero_pivot_seen = LocalLu::new(petsc, &swap).map_err(e)?.is_none();
+    let regular = Csr::from_triplets(2, vec![(0, 0, 2.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 2.0)]);
+    let mut to_swap = LocalLu::new(petsc, &regular)
+        .map_err(e)?
+        .ok_or("[[2, 1], [1, 2]] met a zero pivot")?;
+    let refactor_zero_pivot_seen = !to_swap.refactor(&swap.values).map_err(e)?;
     let mut sums = vec![0.0; petsc.size() as usize];
     sums[petsc.rank() as usize] = x_sparse.iter().sum();
     squeal::parallel::sum_in_place(petsc.world(), &mut sums);
@@ -938,15 +972,19 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
     say(
         petsc,
         &format!(
-            "M0 Newmark J, block of {n} unknowns ({} entries, sparse factor {:.0}): backward error sparse LU {backward_sparse:.2e}, dense LU {backward_dense:.2e}; solutions differ by {difference:.2e}; zero pivot reported: {zero_pivot_seen}; same on every rank: {same}",
+            "M0 Newmark J, block of {n} unknowns ({} entries, sparse factor {factor_entries:.0}): backward error sparse LU {backward_sparse:.2e}, refactored {backward_refactored:.2e}, dense LU {backward_dense:.2e}; solutions differ by {difference:.2e}; zero pivot reported: {zero_pivot_seen}, at a refactor: {refactor_zero_pivot_seen}; same on every rank: {same}",
             block.values.len(),
-            sparse.factor_entries()
         ),
     );
     check_le("sparse LU backward error", backward_sparse, 1e-12)?;
+    check_le(
+        "refactored sparse LU backward error",
+        backward_refactored,
+        1e-12,
+    )?;
     check_le("dense LU backward error", backward_dense, 1e-12)?;
     check_le("sparse against dense solution", difference, 1e-9)?;
-    if !zero_pivot_seen {
+    if !zero_pivot_seen || !refactor_zero_pivot_seen {
         return Err("a zero diagonal was factored without a report".into());
     }
     if !same {
