@@ -232,16 +232,16 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             _ => (self.linear_block(ns, &b), None),
         };
         self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
-        let problem = Local {
-            petsc: self.petsc,
-            contact: self.contact,
-            rows: &self.rows,
-            b: &b,
-            points: &touching,
-            q: &q,
-            v: &v,
+        let problem = Local::new(
+            self.petsc,
+            self.contact,
+            &self.rows,
+            &b,
+            &touching,
+            &q,
+            &v,
             c1,
-        };
+        );
         let rb: Vec<f64> = b.iter().map(|&i| residual[i]).collect();
         let newton = std::time::Instant::now();
         let solved = problem.newton(&linear, &rb, 0.1 * target, factor)?;
@@ -322,18 +322,46 @@ struct Local<'s, 'p> {
     /// The eliminated unknowns (ascending) and the points that couple any of them.
     b: &'s [usize],
     points: &'s [usize],
+    /// For every point, the position in b of each of its rows' DOFs (None: held).
+    at: Vec<Vec<Option<usize>>>,
     /// The iterate's displacement and velocity, whole.
     q: &'s [f64],
     v: &'s [f64],
     c1: f64,
 }
 
-impl<'p> Local<'_, 'p> {
-    /// Position in b of a DOF (None: held).
-    fn position(&self, dof: i32) -> Option<usize> {
-        (dof >= 0)
-            .then(|| self.b.binary_search(&(dof as usize)).ok())
-            .flatten()
+impl<'s, 'p> Local<'s, 'p> {
+    #[allow(clippy::too_many_arguments)] // the subproblem's parts, each named once here
+    fn new(
+        petsc: &'p Petsc<'p>,
+        contact: &'s ContactModel<'p>,
+        rows: &'s [PointRows],
+        b: &'s [usize],
+        points: &'s [usize],
+        q: &'s [f64],
+        v: &'s [f64],
+        c1: f64,
+    ) -> Self {
+        let position = |dof: i32| -> Option<usize> {
+            (dof >= 0)
+                .then(|| b.binary_search(&(dof as usize)).ok())
+                .flatten()
+        };
+        let at = points
+            .iter()
+            .map(|&id| rows[id].dofs.iter().map(|&d| position(d)).collect())
+            .collect();
+        Local {
+            petsc,
+            contact,
+            rows,
+            b,
+            points,
+            at,
+            q,
+            v,
+            c1,
+        }
     }
 
     /// The points' force on b at q + delta (and, with `tangent`, its consistent tangent's
@@ -341,20 +369,18 @@ impl<'p> Local<'_, 'p> {
     fn force(&self, delta: &[f64], mut tangent: Option<&mut Vec<(usize, usize, f64)>>) -> Vec<f64> {
         let n = self.b.len();
         let mut f = vec![0.0; n];
-        for &id in self.points {
+        let (mut u, mut w, mut block) = (Vec::new(), Vec::new(), Vec::new());
+        for (&id, at) in self.points.iter().zip(&self.at) {
             let rows = &self.rows[id];
-            let at: Vec<Option<usize>> = rows.dofs.iter().map(|&d| self.position(d)).collect();
-            let value = |x: &[f64], scale: f64| -> Vec<f64> {
-                rows.dofs
-                    .iter()
-                    .zip(&at)
-                    .map(|(&d, p)| {
-                        let base = if d >= 0 { x[d as usize] } else { 0.0 };
-                        base + p.map_or(0.0, |p| scale * delta[p])
-                    })
-                    .collect()
+            let value = |x: &[f64], scale: f64, out: &mut Vec<f64>| {
+                out.clear();
+                out.extend(rows.dofs.iter().zip(at).map(|(&d, p)| {
+                    let base = if d >= 0 { x[d as usize] } else { 0.0 };
+                    base + p.map_or(0.0, |p| scale * delta[p])
+                }));
             };
-            let (u, w) = (value(self.q, 1.0), value(self.v, self.c1));
+            value(self.q, 1.0, &mut u);
+            value(self.v, self.c1, &mut w);
             let e = self.contact.evaluate_point(id, rows, &u, &w);
             for (i, p) in at.iter().enumerate() {
                 if let Some(p) = p {
@@ -363,7 +389,8 @@ impl<'p> Local<'_, 'p> {
             }
             if let Some(t) = tangent.as_deref_mut() {
                 let k = rows.dofs.len();
-                let mut block = vec![0.0; k * k];
+                block.clear();
+                block.resize(k * k, 0.0);
                 self.contact
                     .add_point_tangent(id, rows, &e.response, self.c1, &mut block);
                 for (i, pi) in at.iter().enumerate() {
