@@ -479,11 +479,20 @@ fn type_name(p: *const std::os::raw::c_char) -> String {
         .into_owned()
 }
 
-/// The PC inside a redundant one (PCREDUNDANT: each rank's whole copy), or `pc` itself.
-fn redundant_inner(pc: ffi::PC) -> Result<ffi::PC> {
+/// `pc`'s type name ("" when none is set).
+fn pc_type(pc: ffi::PC) -> Result<String> {
     let mut pc_type: ffi::PCType = std::ptr::null();
     call!(PCGetType(pc, &mut pc_type))?;
-    if pc_type.is_null() || type_name(pc_type) != "redundant" {
+    Ok(if pc_type.is_null() {
+        String::new()
+    } else {
+        type_name(pc_type)
+    })
+}
+
+/// The PC inside a redundant one (PCREDUNDANT: each rank's whole copy), or `pc` itself.
+fn redundant_inner(pc: ffi::PC) -> Result<ffi::PC> {
+    if pc_type(pc)? != "redundant" {
         return Ok(pc);
     }
     let mut inner_ksp = std::ptr::null_mut();
@@ -495,9 +504,7 @@ fn redundant_inner(pc: ffi::PC) -> Result<ffi::PC> {
 
 /// Whether `pc` is a factorization (LU or Cholesky), not a redundant or other wrapper.
 fn is_factor_pc(pc: ffi::PC) -> Result<bool> {
-    let mut pc_type: ffi::PCType = std::ptr::null();
-    call!(PCGetType(pc, &mut pc_type))?;
-    Ok(!pc_type.is_null() && matches!(type_name(pc_type).as_str(), "lu" | "cholesky"))
+    Ok(matches!(pc_type(pc)?.as_str(), "lu" | "cholesky"))
 }
 
 /// A factorization by another solver (PETSc's own LU, or one chosen by options): the
