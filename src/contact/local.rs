@@ -3,7 +3,7 @@
 //! whose tangent changed most), where the distributed observation products would cost a
 //! collective per evaluation. The same kernel as [`ContactModel::evaluate`].
 
-use super::kernel::{self, Observed, Part, PointResponse, PointRows};
+use super::kernel::{self, Channel, Observed, Part, PointResponse, PointRows};
 use super::ContactModel;
 use crate::la::{LaError, Petsc};
 
@@ -83,33 +83,33 @@ impl<'p> ContactModel<'p> {
         PointEvaluation { response, force }
     }
 
-    /// Adds point `id`'s consistent tangent -d(force)/du at `response` to a dense row-major
-    /// |dofs| x |dofs| matrix, the velocity's part through `velocity_factor` (dv/du of the
-    /// time integration): the stiffness parts, and the friction damping times that factor.
-    pub fn add_point_tangent(
+    /// Point `id`'s consistent tangent -d(force)/du at `response` as rank-one terms
+    /// `coef c_a c_b^T` over its observation rows, the velocity's part through
+    /// `velocity_factor` (dv/du of the time integration): the stiffness parts, and the
+    /// friction damping times that factor.
+    pub fn point_tangent_terms(
         &self,
         id: usize,
-        rows: &PointRows,
         response: &PointResponse,
         velocity_factor: f64,
-        out: &mut [f64],
-    ) {
+    ) -> Vec<(f64, Channel, Channel)> {
         let weight = self.points[id].weight;
         let omega = self.point_omega(id);
+        let mut terms = Vec::with_capacity(8);
         for part in [
             Part::Normal,
             Part::Stick,
             Part::Friction,
             Part::StickCoupling,
         ] {
-            kernel::add_tangent(rows, weight, omega, response, part, out);
+            terms.extend(kernel::tangent_terms(weight, omega, response, part));
         }
-        let n = rows.dofs.len();
-        let mut damping = vec![0.0; n * n];
-        kernel::add_tangent(rows, weight, omega, response, Part::Damping, &mut damping);
-        for (o, d) in out.iter_mut().zip(&damping) {
-            *o += velocity_factor * d;
-        }
+        terms.extend(
+            kernel::tangent_terms(weight, omega, response, Part::Damping)
+                .into_iter()
+                .map(|(c, a, b)| (velocity_factor * c, a, b)),
+        );
+        terms
     }
 
     /// The disc speed on sliding interfaces (the convection term's factor), else 0.

@@ -42,7 +42,7 @@ pub use matrix::{MatrixFormat, MatrixInfo, Operator, SparseMatrix};
 pub use observation::ObservationMatrix;
 pub use quadratic::{solve_quadratic, QuadraticEigenSolution, QuadraticOptions};
 pub use solver::{DirectSolver, Factorization, FactorizationReport};
-pub use vector::Vector;
+pub use vector::{Selection, Vector};
 
 /// Bytes of one stored sparse entry in PETSc's AIJ format: its value and its column index (what
 /// a product streams per entry).

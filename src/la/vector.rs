@@ -230,6 +230,89 @@ impl<'p> Vector<'p> {
     }
 }
 
+/// A fixed selection of a distributed vector's entries, gathered whole on every rank: the
+/// scatter is built once ([`Vector::gather_all`] builds one per call, and gathers every entry).
+pub struct Selection<'p> {
+    scatter: ffi::VecScatter,
+    seq: ffi::Vec,
+    _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+impl<'p> Selection<'p> {
+    /// The entries `indices` (global, the same on every rank) of vectors laid out as
+    /// `template`.
+    ///
+    /// # Collective
+    pub fn new(template: &Vector<'p>, indices: &[usize]) -> Result<Self> {
+        let idx: Vec<ffi::PetscInt> = indices.iter().map(|&i| i as ffi::PetscInt).collect();
+        // SAFETY: MPI_COMM_SELF is a valid communicator for the whole run.
+        let comm_self = unsafe { ffi::mpi_sys::RSMPI_COMM_SELF };
+        let mut out = Selection {
+            scatter: std::ptr::null_mut(),
+            seq: std::ptr::null_mut(),
+            _petsc: PhantomData,
+        };
+        call!(VecCreateSeq(
+            comm_self,
+            idx.len() as ffi::PetscInt,
+            &mut out.seq
+        ))?;
+        let mut is = std::ptr::null_mut();
+        call!(ISCreateGeneral(
+            comm_self,
+            idx.len() as ffi::PetscInt,
+            idx.as_ptr(),
+            ffi::PETSC_COPY_VALUES,
+            &mut is
+        ))?;
+        let made = call!(VecScatterCreate(
+            template.raw,
+            is,
+            out.seq,
+            std::ptr::null_mut(),
+            &mut out.scatter
+        ));
+        report_destroy(call!(ISDestroy(&mut is)));
+        made?;
+        Ok(out)
+    }
+
+    /// The selected entries of `x`, in the order of the indices given to [`Selection::new`].
+    ///
+    /// # Collective
+    pub fn gather(&self, x: &Vector<'p>) -> Result<Vec<f64>> {
+        call!(VecScatterBegin(
+            self.scatter,
+            x.raw,
+            self.seq,
+            ffi::INSERT_VALUES,
+            ffi::SCATTER_FORWARD
+        ))?;
+        call!(VecScatterEnd(
+            self.scatter,
+            x.raw,
+            self.seq,
+            ffi::INSERT_VALUES,
+            ffi::SCATTER_FORWARD
+        ))?;
+        let mut n: ffi::PetscInt = 0;
+        call!(VecGetLocalSize(self.seq, &mut n))?;
+        let mut ptr: *const f64 = std::ptr::null();
+        call!(VecGetArrayRead(self.seq, &mut ptr))?;
+        // SAFETY: PETSc lends the sequential vector's n entries until VecRestoreArrayRead.
+        let out = unsafe { std::slice::from_raw_parts(ptr, n as usize) }.to_vec();
+        call!(VecRestoreArrayRead(self.seq, &mut ptr))?;
+        Ok(out)
+    }
+}
+
+impl Drop for Selection<'_> {
+    fn drop(&mut self) {
+        report_destroy(call!(VecScatterDestroy(&mut self.scatter)));
+        report_destroy(call!(VecDestroy(&mut self.seq)));
+    }
+}
+
 impl Drop for Vector<'_> {
     fn drop(&mut self) {
         report_destroy(call!(VecDestroy(&mut self.raw)));

@@ -23,11 +23,11 @@
 //! per elimination, 56 with the sparse one); a dense pivoted LU only where the sparse one
 //! meets a zero pivot.
 
-use crate::contact::kernel::PointRows;
+use crate::contact::kernel::{PointResponse, PointRows};
 use crate::contact::ContactModel;
 use crate::la::lapack::RealLu;
 use crate::la::local_lu::{Csr, LocalLu};
-use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange, Vector};
+use crate::la::{LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector};
 use crate::time::newmark::{Damping, NewmarkSettings, State};
 
 /// Local Newton iterations at most per elimination.
@@ -70,6 +70,8 @@ pub(super) struct Eliminator<'a, 'p> {
     petsc: &'p Petsc<'p>,
     contact: &'a ContactModel<'p>,
     rows: Vec<PointRows>,
+    /// For every point, each of its rows' DOFs' position in the zone (-1: eliminated).
+    zone_dofs: Vec<Vec<i32>>,
     /// For every unknown, the points whose rows couple it.
     points_of: Vec<Vec<u32>>,
     /// K, M and C (a damping matrix) on the unknowns of every contact point, whole on every
@@ -77,17 +79,22 @@ pub(super) struct Eliminator<'a, 'p> {
     /// elimination; taking its blocks out of the distributed operators cost 5.2 ms each at
     /// 600k, 10 % of the eliminations).
     zone: Zone,
+    /// The zone's entries of q, v and R gathered by one scatter built at the first
+    /// elimination (a scatter of the whole vector built per gather cost 7 % of them).
+    gather: Option<Selection<'p>>,
     rayleigh: (f64, f64),
     max_points: usize,
-    /// The last elimination's unknowns, L_bb for them (and the c1 it was built with) and its
-    /// last local factor, reused while the unknowns stay the same.
+    /// The last elimination's unknowns, L_bb for them (and the c1 it was built with), the
+    /// local Jacobian's pattern and its last local factor, reused while the unknowns stay
+    /// the same.
     kept: Option<Kept<'p>>,
     pub counts: EliminationCounts,
 }
 
 /// The unknowns coupled by the contact points and the operators' blocks on them.
 struct Zone {
-    /// Position in the zone of every unknown (-1: not coupled by any point).
+    unknowns: Vec<usize>,
+    /// Position in `unknowns` of every unknown (-1: not coupled by any point).
     position: Vec<i32>,
     k: Csr,
     m: Csr,
@@ -99,26 +106,35 @@ struct Kept<'p> {
     b: Vec<usize>,
     c1: f64,
     linear: Csr,
-    factor: LocalFactor<'p>,
+    pattern: LocalPattern,
+    factor: Option<LocalFactor<'p>>,
 }
+
+/// The local Jacobian's pattern on one set of unknowns, and where each term goes in it: the
+/// next local Jacobian on these unknowns is summed straight into its values (no triplets, no
+/// sorting) and refactored numerically.
+struct LocalPattern {
+    /// The pattern (its values unused).
+    jacobian: Csr,
+    /// For every entry of L_bb (in its order), its position in the pattern.
+    linear_slots: Vec<usize>,
+    /// For every coupling point, row-major over its rows' DOFs (k x k), the position of
+    /// each entry in the pattern (`HELD` where the row or the column is not in b).
+    point_slots: Vec<Vec<usize>>,
+}
+
+const HELD: usize = usize::MAX;
 
 /// A local Jacobian's LU: sparse, or dense and pivoted where the sparse one met a zero pivot.
 enum LocalFactor<'p> {
-    /// With the position in the LU's pattern of every (row, column, value) entry the local
-    /// Jacobian's assembly produces (the same sequence for the same unknowns and points):
-    /// the next local Jacobian on these unknowns fills the pattern and refactors it
-    /// numerically, without sorting, ordering or a symbolic phase again.
-    Sparse {
-        lu: LocalLu<'p>,
-        slots: Vec<usize>,
-    },
+    Sparse(LocalLu<'p>),
     Dense(RealLu),
 }
 
 impl LocalFactor<'_> {
     fn solve(&self, b: &mut [f64]) -> Result<(), LaError> {
         match self {
-            LocalFactor::Sparse { lu, .. } => lu.solve(b),
+            LocalFactor::Sparse(lu) => lu.solve(b),
             LocalFactor::Dense(lu) => Ok(lu.solve(b)?),
         }
     }
@@ -145,17 +161,26 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             p.sort_unstable();
             p.dedup();
         }
-        let zone_unknowns: Vec<usize> = (0..points_of.len())
+        let unknowns: Vec<usize> = (0..points_of.len())
             .filter(|&d| !points_of[d].is_empty())
             .collect();
         let mut position = vec![-1i32; points_of.len()];
-        for (z, &d) in zone_unknowns.iter().enumerate() {
+        for (z, &d) in unknowns.iter().enumerate() {
             position[d] = z as i32;
         }
+        let zone_dofs = rows
+            .iter()
+            .map(|r| {
+                r.dofs
+                    .iter()
+                    .map(|&d| if d >= 0 { position[d as usize] } else { -1 })
+                    .collect()
+            })
+            .collect();
         let block = |a: &SparseMatrix<'p>| -> Result<Csr, LaError> {
             match a.format() {
-                MatrixFormat::Aij => a.block(&zone_unknowns),
-                _ => a.convert(MatrixFormat::Aij)?.block(&zone_unknowns),
+                MatrixFormat::Aij => a.block(&unknowns),
+                _ => a.convert(MatrixFormat::Aij)?.block(&unknowns),
             }
         };
         let (c, rayleigh) = match c {
@@ -163,17 +188,21 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             Damping::Rayleigh { alpha, beta } => (None, (alpha, beta)),
             Damping::Matrix(c) => (Some(block(c)?), (0.0, 0.0)),
         };
+        let (k, m) = (block(k)?, block(m)?);
         Ok(Eliminator {
             petsc,
             contact,
             rows,
+            zone_dofs,
             points_of,
             zone: Zone {
+                unknowns,
                 position,
-                k: block(k)?,
-                m: block(m)?,
+                k,
+                m,
                 c,
             },
+            gather: None,
             rayleigh,
             max_points,
             kept: None,
@@ -223,28 +252,56 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             .collect();
         touching.sort_unstable();
         touching.dedup();
-        let (q, v, residual) = (at.q.gather_all()?, at.v.gather_all()?, r.gather_all()?);
+        if self.gather.is_none() {
+            self.gather = Some(Selection::new(r, &self.zone.unknowns)?);
+        }
+        let gather = self.gather.as_ref().expect("built above");
+        let (q, v, residual) = (
+            gather.gather(&at.q)?,
+            gather.gather(&at.v)?,
+            gather.gather(r)?,
+        );
         let c1 = ns.gamma / (ns.beta * ns.step);
-        // (Every rank holds the same b: the same branch everywhere, collective or not.)
-        let blocks = std::time::Instant::now();
-        let (linear, factor) = match self.kept.take() {
-            Some(k) if k.b == b && k.c1 == c1 => (k.linear, Some(k.factor)),
-            _ => (self.linear_block(ns, &b), None),
-        };
-        self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
         let problem = Local::new(
             self.petsc,
             self.contact,
             &self.rows,
+            &self.zone_dofs,
             &b,
             &touching,
             &q,
             &v,
             c1,
         );
-        let rb: Vec<f64> = b.iter().map(|&i| residual[i]).collect();
+        // (Every rank holds the same b: the same branch everywhere, collective or not.)
+        let blocks = std::time::Instant::now();
+        let kept = match self.kept.take() {
+            Some(k) if k.b == b && k.c1 == c1 => k,
+            _ => {
+                let linear = self.linear_block(ns, &b);
+                let pattern = problem.pattern(&linear);
+                Kept {
+                    b: b.clone(),
+                    c1,
+                    linear,
+                    pattern,
+                    factor: None,
+                }
+            }
+        };
+        self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
+        let rb: Vec<f64> = b
+            .iter()
+            .map(|&i| residual[self.zone.position[i] as usize])
+            .collect();
         let newton = std::time::Instant::now();
-        let solved = problem.newton(&linear, &rb, 0.1 * target, factor)?;
+        let Kept {
+            linear,
+            pattern,
+            factor,
+            ..
+        } = kept;
+        let solved = problem.newton(&linear, &pattern, &rb, 0.1 * target, factor)?;
         let c = &mut self.counts;
         c.seconds_local_newton += newton.elapsed().as_secs_f64();
         c.seconds_factorizing += solved.factor_seconds;
@@ -257,26 +314,24 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         c.numeric_refactorizations += solved.numeric_refactorizations;
         c.factor_entries += solved.factor_entries;
         c.unconverged += usize::from(!solved.converged);
-        let delta = solved.delta;
-        if let Some(factor) = solved.factor {
-            self.kept = Some(Kept {
-                b: b.clone(),
-                c1,
-                linear,
-                factor,
-            });
-        }
         let mut out = r.duplicate()?;
         out.set_all(0.0)?;
         let own = out.ownership();
         {
             let mut local = out.local_mut()?;
-            for (&i, &d) in b.iter().zip(&delta) {
+            for (&i, &d) in b.iter().zip(&solved.delta) {
                 if own.contains(&i) {
                     local[i - own.start] = d;
                 }
             }
         }
+        self.kept = Some(Kept {
+            b,
+            c1,
+            linear,
+            pattern,
+            factor: solved.factor,
+        });
         c.seconds += clock.elapsed().as_secs_f64();
         Ok(Some(out))
     }
@@ -319,12 +374,13 @@ struct Local<'s, 'p> {
     petsc: &'p Petsc<'p>,
     contact: &'s ContactModel<'p>,
     rows: &'s [PointRows],
+    zone_dofs: &'s [Vec<i32>],
     /// The eliminated unknowns (ascending) and the points that couple any of them.
     b: &'s [usize],
     points: &'s [usize],
     /// For every point, the position in b of each of its rows' DOFs (None: held).
     at: Vec<Vec<Option<usize>>>,
-    /// The iterate's displacement and velocity, whole.
+    /// The iterate's displacement and velocity on the zone.
     q: &'s [f64],
     v: &'s [f64],
     c1: f64,
@@ -336,6 +392,7 @@ impl<'s, 'p> Local<'s, 'p> {
         petsc: &'p Petsc<'p>,
         contact: &'s ContactModel<'p>,
         rows: &'s [PointRows],
+        zone_dofs: &'s [Vec<i32>],
         b: &'s [usize],
         points: &'s [usize],
         q: &'s [f64],
@@ -355,6 +412,7 @@ impl<'s, 'p> Local<'s, 'p> {
             petsc,
             contact,
             rows,
+            zone_dofs,
             b,
             points,
             at,
@@ -364,46 +422,138 @@ impl<'s, 'p> Local<'s, 'p> {
         }
     }
 
-    /// The points' force on b at q + delta (and, with `tangent`, its consistent tangent's
-    /// L-free part -df_b/d delta appended as (row, column, value) entries).
-    fn force(&self, delta: &[f64], mut tangent: Option<&mut Vec<(usize, usize, f64)>>) -> Vec<f64> {
+    /// The local Jacobian's pattern: L_bb's entries and every coupling point's (row, column)
+    /// pairs in b, whatever their values (a point's tangent fills different entries as it
+    /// opens, sticks or slips; the pattern holds them all). Row by row with a marker: the
+    /// ~200 pairs per unknown (~24 DOFs per point, ~18 of them in b) are not sorted.
+    fn pattern(&self, linear: &Csr) -> LocalPattern {
         let n = self.b.len();
-        let mut f = vec![0.0; n];
-        let (mut u, mut w, mut block) = (Vec::new(), Vec::new(), Vec::new());
+        // For every unknown of b, the (point, row of the point) pairs that land in its row.
+        let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
+        for (p, at) in self.at.iter().enumerate() {
+            for (li, pi) in at.iter().enumerate() {
+                if let Some(pi) = pi {
+                    rows_of[*pi].push((p, li));
+                }
+            }
+        }
+        let mut point_slots: Vec<Vec<usize>> = self
+            .at
+            .iter()
+            .map(|at| vec![HELD; at.len() * at.len()])
+            .collect();
+        let mut linear_slots = vec![HELD; linear.values.len()];
+        let mut jacobian = Csr {
+            n,
+            row_start: vec![0; n + 1],
+            columns: Vec::with_capacity(linear.values.len() * 2),
+            values: Vec::new(),
+        };
+        let mut slot_of = vec![HELD; n];
+        for i in 0..n {
+            let first = jacobian.columns.len();
+            let linear_row = linear.row_start[i]..linear.row_start[i + 1];
+            let point_columns = rows_of[i]
+                .iter()
+                .flat_map(|&(p, _)| self.at[p].iter().flatten().copied());
+            for j in linear.columns[linear_row.clone()]
+                .iter()
+                .copied()
+                .chain(point_columns)
+            {
+                if slot_of[j] == HELD {
+                    slot_of[j] = first;
+                    jacobian.columns.push(j);
+                }
+            }
+            jacobian.columns[first..].sort_unstable();
+            for (offset, &j) in jacobian.columns[first..].iter().enumerate() {
+                slot_of[j] = first + offset;
+            }
+            for k in linear_row {
+                linear_slots[k] = slot_of[linear.columns[k]];
+            }
+            for &(p, li) in &rows_of[i] {
+                let at = &self.at[p];
+                let k = at.len();
+                for (lj, pj) in at.iter().enumerate() {
+                    if let Some(pj) = pj {
+                        point_slots[p][li * k + lj] = slot_of[*pj];
+                    }
+                }
+            }
+            for &j in &jacobian.columns[first..] {
+                slot_of[j] = HELD;
+            }
+            jacobian.row_start[i + 1] = jacobian.columns.len();
+        }
+        jacobian.values = vec![0.0; jacobian.columns.len()];
+        LocalPattern {
+            jacobian,
+            linear_slots,
+            point_slots,
+        }
+    }
+
+    /// The points' force on b at q + delta, and every coupling point's response there.
+    fn force(&self, delta: &[f64]) -> (Vec<f64>, Vec<PointResponse>) {
+        let mut f = vec![0.0; self.b.len()];
+        let mut responses = Vec::with_capacity(self.points.len());
+        let (mut u, mut w) = (Vec::new(), Vec::new());
         for (&id, at) in self.points.iter().zip(&self.at) {
-            let rows = &self.rows[id];
+            let dofs = &self.zone_dofs[id];
             let value = |x: &[f64], scale: f64, out: &mut Vec<f64>| {
                 out.clear();
-                out.extend(rows.dofs.iter().zip(at).map(|(&d, p)| {
-                    let base = if d >= 0 { x[d as usize] } else { 0.0 };
+                out.extend(dofs.iter().zip(at).map(|(&z, p)| {
+                    let base = if z >= 0 { x[z as usize] } else { 0.0 };
                     base + p.map_or(0.0, |p| scale * delta[p])
                 }));
             };
             value(self.q, 1.0, &mut u);
             value(self.v, self.c1, &mut w);
-            let e = self.contact.evaluate_point(id, rows, &u, &w);
+            let e = self.contact.evaluate_point(id, &self.rows[id], &u, &w);
             for (i, p) in at.iter().enumerate() {
                 if let Some(p) = p {
                     f[*p] += e.force[i];
                 }
             }
-            if let Some(t) = tangent.as_deref_mut() {
-                let k = rows.dofs.len();
-                block.clear();
-                block.resize(k * k, 0.0);
-                self.contact
-                    .add_point_tangent(id, rows, &e.response, self.c1, &mut block);
-                for (i, pi) in at.iter().enumerate() {
-                    let Some(pi) = pi else { continue };
-                    for (j, pj) in at.iter().enumerate() {
-                        if let Some(pj) = pj {
-                            t.push((*pi, *pj, block[i * k + j]));
+            responses.push(e.response);
+        }
+        (f, responses)
+    }
+
+    /// L_bb + T_bb, T_bb the points' consistent tangent (-df_b/d delta) at `responses`, as
+    /// values of `pattern`.
+    fn jacobian_values(
+        &self,
+        linear: &Csr,
+        pattern: &LocalPattern,
+        responses: &[PointResponse],
+    ) -> Vec<f64> {
+        let mut values = vec![0.0; pattern.jacobian.values.len()];
+        for (&slot, &v) in pattern.linear_slots.iter().zip(&linear.values) {
+            values[slot] += v;
+        }
+        for ((&id, slots), response) in self.points.iter().zip(&pattern.point_slots).zip(responses)
+        {
+            let rows = &self.rows[id];
+            let k = rows.dofs.len();
+            for (coef, a, b) in self.contact.point_tangent_terms(id, response, self.c1) {
+                let (a, b) = (rows.row(a), rows.row(b));
+                for i in 0..k {
+                    if a[i] == 0.0 || slots[i * k..(i + 1) * k].iter().all(|&s| s == HELD) {
+                        continue;
+                    }
+                    let ai = coef * a[i];
+                    for (&slot, bj) in slots[i * k..(i + 1) * k].iter().zip(b) {
+                        if slot != HELD {
+                            values[slot] += ai * bj;
                         }
                     }
                 }
             }
         }
-        f
+        values
     }
 
     /// Newton with backtracking on |R_b| from delta = 0, its LU kept while it contracts the
@@ -413,21 +563,22 @@ impl<'s, 'p> Local<'s, 'p> {
     fn newton(
         &self,
         linear: &Csr,
+        pattern: &LocalPattern,
         rb: &[f64],
         tolerance: f64,
         mut factor: Option<LocalFactor<'p>>,
     ) -> Result<LocalSolution<'p>, LaError> {
         let n = self.b.len();
-        let f0 = self.force(&vec![0.0; n], None);
-        let residual = |delta: &[f64]| -> (Vec<f64>, f64) {
-            let f = self.force(delta, None);
+        let (f0, _) = self.force(&vec![0.0; n]);
+        let residual = |delta: &[f64]| -> (Vec<f64>, f64, Vec<PointResponse>) {
+            let (f, responses) = self.force(delta);
             let mut r = rb.to_vec();
             linear.mult_add(delta, &mut r);
             for i in 0..n {
                 r[i] -= f[i] - f0[i];
             }
             let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
-            (r, norm)
+            (r, norm, responses)
         };
         let mut out = LocalSolution {
             delta: vec![0.0; n],
@@ -440,7 +591,7 @@ impl<'s, 'p> Local<'s, 'p> {
             converged: false,
             factor: None,
         };
-        let (mut r, mut norm) = residual(&out.delta);
+        let (mut r, mut norm, mut responses) = residual(&out.delta);
         let mut previous = f64::INFINITY;
         while out.iterations < MAX_LOCAL_ITERATIONS {
             if norm <= tolerance {
@@ -450,12 +601,13 @@ impl<'s, 'p> Local<'s, 'p> {
             let fresh = factor.is_none() || norm > 0.1 * previous;
             if fresh {
                 let clock = std::time::Instant::now();
-                let (made, numeric_only) = self.factor(linear, &out.delta, factor.take())?;
+                let values = self.jacobian_values(linear, pattern, &responses);
+                let (made, numeric_only) = self.factor(pattern, values, factor.take())?;
                 out.factor_seconds += clock.elapsed().as_secs_f64();
                 out.factorizations += 1;
                 out.numeric_refactorizations += usize::from(numeric_only);
                 match &made {
-                    LocalFactor::Sparse { lu, .. } => out.factor_entries += lu.factor_entries(),
+                    LocalFactor::Sparse(lu) => out.factor_entries += lu.factor_entries(),
                     LocalFactor::Dense(_) => out.dense_factorizations += 1,
                 }
                 factor = Some(made);
@@ -469,11 +621,11 @@ impl<'s, 'p> Local<'s, 'p> {
                 let trial: Vec<f64> = (out.delta.iter().zip(&step))
                     .map(|(d, s)| d + alpha * s)
                     .collect();
-                let (rt, nt) = residual(&trial);
+                let (rt, nt, at_trial) = residual(&trial);
                 if nt.is_finite() && (nt <= (1.0 - 1e-4 * alpha) * norm || alpha < 1.0 / 64.0) {
                     if nt < norm {
                         previous = norm;
-                        (out.delta, r, norm) = (trial, rt, nt);
+                        (out.delta, r, norm, responses) = (trial, rt, nt, at_trial);
                     } else if fresh {
                         // No descent along the exact tangent's direction: give up here.
                         out.factor = factor;
@@ -492,33 +644,27 @@ impl<'s, 'p> Local<'s, 'p> {
         Ok(out)
     }
 
-    /// LU of the local Jacobian L_bb + T_bb(delta): sparse, dense where that meets a zero
-    /// pivot; `previous`, a sparse factor on these unknowns, is refactored in place (then
-    /// true: the numerical phase alone).
+    /// LU of the local Jacobian with `values` in `pattern`: sparse, dense where that meets a
+    /// zero pivot; `previous`, a sparse factor on these unknowns, is refactored in place
+    /// (then true: the numerical phase alone).
     fn factor(
         &self,
-        linear: &Csr,
-        delta: &[f64],
+        pattern: &LocalPattern,
+        values: Vec<f64>,
         previous: Option<LocalFactor<'p>>,
     ) -> Result<(LocalFactor<'p>, bool), LaError> {
-        let n = self.b.len();
-        let mut entries: Vec<(usize, usize, f64)> = linear.triplets(1.0).collect();
-        self.force(delta, Some(&mut entries));
-        if let Some(LocalFactor::Sparse { mut lu, slots }) = previous {
-            if slots.len() == entries.len() {
-                let mut values = vec![0.0; lu.pattern_len()];
-                for (&(_, _, v), &slot) in entries.iter().zip(&slots) {
-                    values[slot] += v;
-                }
-                if lu.refactor(&values)? {
-                    return Ok((LocalFactor::Sparse { lu, slots }, true));
-                }
+        if let Some(LocalFactor::Sparse(mut lu)) = previous {
+            if lu.refactor(&values)? {
+                return Ok((LocalFactor::Sparse(lu), true));
             }
         }
-        let (jacobian, slots) = Csr::from_triplets_with_slots(n, entries);
+        let jacobian = Csr {
+            values,
+            ..pattern.jacobian.clone()
+        };
         let made = match LocalLu::new(self.petsc, &jacobian)? {
-            Some(lu) => LocalFactor::Sparse { lu, slots },
-            None => LocalFactor::Dense(RealLu::new(n, jacobian.dense_columns())?),
+            Some(lu) => LocalFactor::Sparse(lu),
+            None => LocalFactor::Dense(RealLu::new(jacobian.n, jacobian.dense_columns())?),
         };
         Ok((made, false))
     }
