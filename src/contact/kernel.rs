@@ -192,34 +192,50 @@ pub fn tangent_terms(
     r: &PointResponse,
     part: Part,
 ) -> Vec<(f64, Channel, Channel)> {
+    let mut terms = Vec::with_capacity(4);
+    push_tangent_terms(weight, omega, r, part, 1.0, &mut terms);
+    terms
+}
+
+/// [`tangent_terms`] times `scale`, appended to `out` (no allocation per point).
+pub fn push_tangent_terms(
+    weight: f64,
+    omega: f64,
+    r: &PointResponse,
+    part: Part,
+    scale: f64,
+    out: &mut Vec<(f64, Channel, Channel)>,
+) {
     use Channel::*;
-    let terms = match part {
-        Part::Normal => vec![(weight * r.stiffness, Nor, Nor)],
+    let w = scale * weight;
+    let mut push = |c: f64, a: Channel, b: Channel| {
+        if c != 0.0 {
+            out.push((c, a, b));
+        }
+    };
+    match part {
+        Part::Normal => push(w * r.stiffness, Nor, Nor),
         Part::Stick => {
-            let k = r.stick_slip.map(|row| row.map(|x| weight * x));
-            vec![
-                (k[0][0], Tan, Tan),
-                (k[0][1], Tan, Tan2),
-                (k[1][0], Tan2, Tan),
-                (k[1][1], Tan2, Tan2),
-            ]
+            let k = r.stick_slip.map(|row| row.map(|x| w * x));
+            push(k[0][0], Tan, Tan);
+            push(k[0][1], Tan, Tan2);
+            push(k[1][0], Tan2, Tan);
+            push(k[1][1], Tan2, Tan2);
         }
         Part::StickCoupling if r.stick != 0.0 => {
             // The joints' traction depends on the gap through p and k_c.
-            let c = r.stick_gap.map(|x| weight * x);
-            vec![(c[0], Tan, Nor), (c[1], Tan2, Nor)]
+            let c = r.stick_gap.map(|x| w * x);
+            push(c[0], Tan, Nor);
+            push(c[1], Tan2, Nor);
         }
         Part::Friction if r.stick == 0.0 => {
             // t = T(p(g), w(u, v)): dp/dg = -k_c, dw/du = omega c_conv.
-            vec![
-                (-weight * r.d_pressure * r.stiffness, Tan, Nor),
-                (weight * r.d_speed * omega, Tan, Conv),
-            ]
+            push(-w * r.d_pressure * r.stiffness, Tan, Nor);
+            push(w * r.d_speed * omega, Tan, Conv);
         }
-        Part::Friction | Part::StickCoupling => Vec::new(),
-        Part::Damping => vec![(weight * r.d_speed, Tan, Tan)],
-    };
-    terms.into_iter().filter(|t| t.0 != 0.0).collect()
+        Part::Friction | Part::StickCoupling => {}
+        Part::Damping => push(w * r.d_speed, Tan, Tan),
+    }
 }
 
 /// Adds the point's contribution of `part` to a dense row-major |dofs| x |dofs| matrix.

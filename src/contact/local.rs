@@ -7,13 +7,6 @@ use super::kernel::{self, Channel, Observed, Part, PointResponse, PointRows};
 use super::ContactModel;
 use crate::la::{LaError, Petsc};
 
-/// One point's force and tangent at given DOF values.
-pub struct PointEvaluation {
-    pub response: PointResponse,
-    /// The force on the point's DOFs (dense over its rows' DOFs).
-    pub force: Vec<f64>,
-}
-
 impl<'p> ContactModel<'p> {
     /// Every point's observation rows on every rank, by point id (its DOFs in this model's
     /// numbering, -1 where eliminated). Gathered once: ~80 values per point.
@@ -64,52 +57,49 @@ impl<'p> ContactModel<'p> {
         Ok(all)
     }
 
-    /// Point `id`'s response and force at displacement `u` and velocity `v` given at its
-    /// rows' DOFs, as [`ContactModel::evaluate`] computes them (friction scale 1).
+    /// Point `id`'s response at displacement `u` and velocity `v` given at its rows' DOFs,
+    /// and its force on them written to `force` (|dofs| long), as [`ContactModel::evaluate`]
+    /// computes them (friction scale 1).
     pub fn evaluate_point(
         &self,
         id: usize,
         rows: &PointRows,
         u: &[f64],
         v: &[f64],
-    ) -> PointEvaluation {
+        force: &mut [f64],
+    ) -> PointResponse {
         let p = &self.points[id];
         let itf = &self.interfaces[p.interface];
         let omega = self.point_omega(id);
         let o: Observed = kernel::observe(rows, p.initial_gap, self.rigid_speed(id), omega, u, v);
         let response = kernel::respond(&itf.normal, &itf.friction, 1.0, o);
-        let mut force = vec![0.0; rows.dofs.len()];
-        kernel::force(rows, p.weight, &response, &mut force);
-        PointEvaluation { response, force }
+        kernel::force(rows, p.weight, &response, force);
+        response
     }
 
     /// Point `id`'s consistent tangent -d(force)/du at `response` as rank-one terms
     /// `coef c_a c_b^T` over its observation rows, the velocity's part through
     /// `velocity_factor` (dv/du of the time integration): the stiffness parts, and the
-    /// friction damping times that factor.
+    /// friction damping times that factor. Replaces `out`'s contents.
     pub fn point_tangent_terms(
         &self,
         id: usize,
         response: &PointResponse,
         velocity_factor: f64,
-    ) -> Vec<(f64, Channel, Channel)> {
+        out: &mut Vec<(f64, Channel, Channel)>,
+    ) {
         let weight = self.points[id].weight;
         let omega = self.point_omega(id);
-        let mut terms = Vec::with_capacity(8);
+        out.clear();
         for part in [
             Part::Normal,
             Part::Stick,
             Part::Friction,
             Part::StickCoupling,
         ] {
-            terms.extend(kernel::tangent_terms(weight, omega, response, part));
+            kernel::push_tangent_terms(weight, omega, response, part, 1.0, out);
         }
-        terms.extend(
-            kernel::tangent_terms(weight, omega, response, Part::Damping)
-                .into_iter()
-                .map(|(c, a, b)| (velocity_factor * c, a, b)),
-        );
-        terms
+        kernel::push_tangent_terms(weight, omega, response, Part::Damping, velocity_factor, out);
     }
 
     /// The disc speed on sliding interfaces (the convection term's factor), else 0.

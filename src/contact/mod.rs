@@ -14,7 +14,6 @@ mod state;
 mod summary;
 pub mod surface;
 
-pub use local::PointEvaluation;
 pub use model::{point_rows, ContactModel};
 pub use settings::{ContactSettings, InterfaceLaws, ResolvedInterface};
 pub use state::ContactState;

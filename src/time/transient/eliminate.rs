@@ -499,7 +499,7 @@ impl<'s, 'p> Local<'s, 'p> {
     fn force(&self, delta: &[f64]) -> (Vec<f64>, Vec<PointResponse>) {
         let mut f = vec![0.0; self.b.len()];
         let mut responses = Vec::with_capacity(self.points.len());
-        let (mut u, mut w) = (Vec::new(), Vec::new());
+        let (mut u, mut w, mut force) = (Vec::new(), Vec::new(), Vec::new());
         for (&id, at) in self.points.iter().zip(&self.at) {
             let dofs = &self.zone_dofs[id];
             let value = |x: &[f64], scale: f64, out: &mut Vec<f64>| {
@@ -511,13 +511,16 @@ impl<'s, 'p> Local<'s, 'p> {
             };
             value(self.q, 1.0, &mut u);
             value(self.v, self.c1, &mut w);
-            let e = self.contact.evaluate_point(id, &self.rows[id], &u, &w);
+            force.resize(at.len(), 0.0);
+            let response = self
+                .contact
+                .evaluate_point(id, &self.rows[id], &u, &w, &mut force);
             for (i, p) in at.iter().enumerate() {
                 if let Some(p) = p {
-                    f[*p] += e.force[i];
+                    f[*p] += force[i];
                 }
             }
-            responses.push(e.response);
+            responses.push(response);
         }
         (f, responses)
     }
@@ -531,6 +534,7 @@ impl<'s, 'p> Local<'s, 'p> {
         responses: &[PointResponse],
     ) -> Vec<f64> {
         let mut values = vec![0.0; pattern.jacobian.values.len()];
+        let mut terms = Vec::new();
         for (&slot, &v) in pattern.linear_slots.iter().zip(&linear.values) {
             values[slot] += v;
         }
@@ -538,7 +542,9 @@ impl<'s, 'p> Local<'s, 'p> {
         {
             let rows = &self.rows[id];
             let k = rows.dofs.len();
-            for (coef, a, b) in self.contact.point_tangent_terms(id, response, self.c1) {
+            self.contact
+                .point_tangent_terms(id, response, self.c1, &mut terms);
+            for &(coef, a, b) in &terms {
                 let (a, b) = (rows.row(a), rows.row(b));
                 for i in 0..k {
                     if a[i] == 0.0 || slots[i * k..(i + 1) * k].iter().all(|&s| s == HELD) {
