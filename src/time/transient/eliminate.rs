@@ -23,15 +23,13 @@
 //! per elimination, 56 with the sparse one); a dense pivoted LU only where the sparse one
 //! meets a zero pivot.
 
-use crate::contact::kernel::{Channel, PointResponse, PointRows};
+use super::local_jacobian::{BlockScratch, LocalPattern};
+use crate::contact::kernel::{PointResponse, PointRows};
 use crate::contact::ContactModel;
 use crate::la::lapack::RealLu;
 use crate::la::local_lu::{Csr, LocalLu};
 use crate::la::{LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector};
 use crate::time::newmark::{Damping, NewmarkSettings, State};
-
-/// The observation channels by their index (`Channel as usize`).
-const CHANNEL_ORDER: [Channel; 4] = [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv];
 
 /// Local Newton iterations at most per elimination.
 const MAX_LOCAL_ITERATIONS: usize = 25;
@@ -111,26 +109,6 @@ struct Kept<'p> {
     linear: Csr,
     pattern: LocalPattern,
     factor: Option<LocalFactor<'p>>,
-}
-
-/// The local Jacobian's pattern on one set of unknowns, and where each term goes in it: the
-/// next local Jacobian on these unknowns is summed straight into its values (no triplets, no
-/// sorting) and refactored numerically.
-struct LocalPattern {
-    /// The pattern (its values unused).
-    jacobian: Csr,
-    /// For every entry of L_bb (in its order), its position in the pattern.
-    linear_slots: Vec<usize>,
-    /// For every coupling point, its entries' positions in the pattern.
-    point_slots: Vec<PointSlots>,
-}
-
-/// Where one point's tangent block lands in the local Jacobian.
-struct PointSlots {
-    /// The point's rows' DOFs (their indices in its rows) that are in b, m of them.
-    in_b: Vec<usize>,
-    /// Row-major m x m: the position in the pattern of (in_b[i], in_b[j]).
-    slots: Vec<usize>,
 }
 
 /// A local Jacobian's LU: sparse, or dense and pivoted where the sparse one met a zero pivot.
@@ -287,7 +265,7 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             Some(k) if k.b == b && k.c1 == c1 => k,
             _ => {
                 let linear = self.linear_block(ns, &b);
-                let pattern = problem.pattern(&linear);
+                let pattern = LocalPattern::new(b.len(), &problem.at, &linear);
                 Kept {
                     b: b.clone(),
                     c1,
@@ -430,83 +408,6 @@ impl<'s, 'p> Local<'s, 'p> {
         }
     }
 
-    /// The local Jacobian's pattern: L_bb's entries and every coupling point's (row, column)
-    /// pairs in b, whatever their values (a point's tangent fills different entries as it
-    /// opens, sticks or slips; the pattern holds them all). Row by row with a marker: the
-    /// ~200 pairs per unknown (~24 DOFs per point, ~18 of them in b) are not sorted.
-    fn pattern(&self, linear: &Csr) -> LocalPattern {
-        let n = self.b.len();
-        let mut point_slots: Vec<PointSlots> = self
-            .at
-            .iter()
-            .map(|at| {
-                let in_b: Vec<usize> = (0..at.len()).filter(|&i| at[i].is_some()).collect();
-                let m = in_b.len();
-                PointSlots {
-                    in_b,
-                    slots: vec![0; m * m],
-                }
-            })
-            .collect();
-        // For every unknown of b, the (point, index in the point's in_b) pairs in its row.
-        let mut rows_of: Vec<Vec<(usize, usize)>> = vec![Vec::new(); n];
-        for (p, (at, points)) in self.at.iter().zip(&point_slots).enumerate() {
-            for (ii, &li) in points.in_b.iter().enumerate() {
-                rows_of[at[li].expect("in b")].push((p, ii));
-            }
-        }
-        let mut linear_slots = vec![0; linear.values.len()];
-        let mut jacobian = Csr {
-            n,
-            row_start: vec![0; n + 1],
-            columns: Vec::with_capacity(linear.values.len() * 2),
-            values: Vec::new(),
-        };
-        const UNSEEN: usize = usize::MAX;
-        let mut slot_of = vec![UNSEEN; n];
-        for i in 0..n {
-            let first = jacobian.columns.len();
-            let linear_row = linear.row_start[i]..linear.row_start[i + 1];
-            let point_columns = rows_of[i]
-                .iter()
-                .flat_map(|&(p, _)| self.at[p].iter().flatten().copied());
-            for j in linear.columns[linear_row.clone()]
-                .iter()
-                .copied()
-                .chain(point_columns)
-            {
-                if slot_of[j] == UNSEEN {
-                    slot_of[j] = first;
-                    jacobian.columns.push(j);
-                }
-            }
-            jacobian.columns[first..].sort_unstable();
-            for (offset, &j) in jacobian.columns[first..].iter().enumerate() {
-                slot_of[j] = first + offset;
-            }
-            for k in linear_row {
-                linear_slots[k] = slot_of[linear.columns[k]];
-            }
-            for &(p, ii) in &rows_of[i] {
-                let (at, point) = (&self.at[p], &mut point_slots[p]);
-                let m = point.in_b.len();
-                for (jj, &lj) in point.in_b.iter().enumerate() {
-                    point.slots[ii * m + jj] = slot_of[at[lj].expect("in b")];
-                }
-            }
-            for &j in &jacobian.columns[first..] {
-                slot_of[j] = UNSEEN;
-            }
-            jacobian.row_start[i + 1] = jacobian.columns.len();
-        }
-        jacobian.values = vec![0.0; jacobian.columns.len()];
-        LocalPattern {
-            jacobian,
-            linear_slots,
-            point_slots,
-        }
-    }
-
     /// The points' force on b at q + delta, and every coupling point's response there.
     fn force(&self, delta: &[f64]) -> (Vec<f64>, Vec<PointResponse>) {
         let mut f = vec![0.0; self.b.len()];
@@ -545,47 +446,12 @@ impl<'s, 'p> Local<'s, 'p> {
         pattern: &LocalPattern,
         responses: &[PointResponse],
     ) -> Vec<f64> {
-        let mut values = vec![0.0; pattern.jacobian.values.len()];
-        for (&slot, &v) in pattern.linear_slots.iter().zip(&linear.values) {
-            values[slot] += v;
-        }
-        // A point's block is a sum of rank-one terms coef c_a c_b^T over its observation
-        // rows; grouped by the row channel a (w_a = sum over b of coef c_b on the columns in
-        // b), every entry is one scattered add instead of one per term.
-        const CHANNELS: usize = 4;
-        let (mut terms, mut w, mut row) = (Vec::new(), Vec::new(), Vec::new());
-        for ((&id, point), response) in self.points.iter().zip(&pattern.point_slots).zip(responses)
-        {
-            let rows = &self.rows[id];
-            let m = point.in_b.len();
+        let mut values = pattern.linear_values(linear);
+        let (mut terms, mut scratch) = (Vec::new(), BlockScratch::default());
+        for (p, (&id, response)) in self.points.iter().zip(responses).enumerate() {
             self.contact
                 .point_tangent_terms(id, response, self.c1, &mut terms);
-            w.clear();
-            w.resize(CHANNELS * m, 0.0);
-            let mut used = [false; CHANNELS];
-            for &(coef, a, b) in &terms {
-                let column = rows.row(b);
-                let wa = &mut w[a as usize * m..(a as usize + 1) * m];
-                for (x, &lj) in wa.iter_mut().zip(&point.in_b) {
-                    *x += coef * column[lj];
-                }
-                used[a as usize] = true;
-            }
-            for (ii, &li) in point.in_b.iter().enumerate() {
-                row.clear();
-                row.resize(m, 0.0);
-                for c in (0..CHANNELS).filter(|&c| used[c]) {
-                    let ci = rows.row(CHANNEL_ORDER[c])[li];
-                    if ci != 0.0 {
-                        for (x, &wc) in row.iter_mut().zip(&w[c * m..(c + 1) * m]) {
-                            *x += ci * wc;
-                        }
-                    }
-                }
-                for (&slot, &x) in point.slots[ii * m..(ii + 1) * m].iter().zip(&row) {
-                    values[slot] += x;
-                }
-            }
+            pattern.add_point(p, &self.rows[id], &terms, &mut values, &mut scratch);
         }
         values
     }

@@ -11,6 +11,7 @@ mod eliminate;
 pub use checkpoint::check_resumable;
 pub use eliminate::EliminationCounts;
 mod jacobian;
+mod local_jacobian;
 mod recorder;
 mod settings;
 
