@@ -469,7 +469,7 @@ impl<'s, 'p> Local<'s, 'p> {
         mut factor: Option<LocalFactor<'p>>,
     ) -> Result<LocalSolution<'p>, LaError> {
         let n = self.b.len();
-        let (f0, _) = self.force(&vec![0.0; n]);
+        let (f0, responses0) = self.force(&vec![0.0; n]);
         let residual = |delta: &[f64]| -> (Vec<f64>, f64, Vec<PointResponse>) {
             let (f, responses) = self.force(delta);
             let mut r = rb.to_vec();
@@ -491,7 +491,9 @@ impl<'s, 'p> Local<'s, 'p> {
             converged: false,
             factor: None,
         };
-        let (mut r, mut norm, mut responses) = residual(&out.delta);
+        // At delta = 0 the residual is R_b itself (the forces' change is zero).
+        let (mut r, mut responses) = (rb.to_vec(), responses0);
+        let mut norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut previous = f64::INFINITY;
         while out.iterations < MAX_LOCAL_ITERATIONS {
             if norm <= tolerance {
