@@ -208,26 +208,31 @@ impl<'p> Vector<'p> {
         let mut scatter = std::ptr::null_mut();
         let mut seq = std::ptr::null_mut();
         call!(VecScatterCreateToAll(self.raw, &mut scatter, &mut seq))?;
-        call!(VecScatterBegin(
-            scatter,
-            self.raw,
-            seq,
-            ffi::INSERT_VALUES,
-            ffi::SCATTER_FORWARD
-        ))?;
-        call!(VecScatterEnd(
-            scatter,
-            self.raw,
-            seq,
-            ffi::INSERT_VALUES,
-            ffi::SCATTER_FORWARD
-        ))?;
+        scatter_forward(scatter, self.raw, seq)?;
         let seqv = Vector::from_raw(seq);
         let out = seqv.local()?.to_vec();
         drop(seqv);
         call!(VecScatterDestroy(&mut scatter))?;
         Ok(out)
     }
+}
+
+/// `to` = the entries of `from` that `scatter` selects.
+fn scatter_forward(scatter: ffi::VecScatter, from: ffi::Vec, to: ffi::Vec) -> Result<()> {
+    call!(VecScatterBegin(
+        scatter,
+        from,
+        to,
+        ffi::INSERT_VALUES,
+        ffi::SCATTER_FORWARD
+    ))?;
+    call!(VecScatterEnd(
+        scatter,
+        from,
+        to,
+        ffi::INSERT_VALUES,
+        ffi::SCATTER_FORWARD
+    ))
 }
 
 /// A fixed selection of a distributed vector's entries, gathered whole on every rank: the
@@ -281,20 +286,7 @@ impl<'p> Selection<'p> {
     ///
     /// # Collective
     pub fn gather(&self, x: &Vector<'p>) -> Result<Vec<f64>> {
-        call!(VecScatterBegin(
-            self.scatter,
-            x.raw,
-            self.seq,
-            ffi::INSERT_VALUES,
-            ffi::SCATTER_FORWARD
-        ))?;
-        call!(VecScatterEnd(
-            self.scatter,
-            x.raw,
-            self.seq,
-            ffi::INSERT_VALUES,
-            ffi::SCATTER_FORWARD
-        ))?;
+        scatter_forward(self.scatter, x.raw, self.seq)?;
         let mut n: ffi::PetscInt = 0;
         call!(VecGetLocalSize(self.seq, &mut n))?;
         let mut ptr: *const f64 = std::ptr::null();

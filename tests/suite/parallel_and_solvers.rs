@@ -33,7 +33,7 @@ use squeal::la::fem_assembly::assemble_system;
 use squeal::la::one_column_gemm;
 use squeal::la::{
     solve_quadratic, BlockAddPlan, DirectSolver, Factorization, MatrixFormat, Petsc,
-    QuadraticOptions, SparseMatrix, Vector,
+    QuadraticOptions, Selection, SparseMatrix, Vector,
 };
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
@@ -187,7 +187,45 @@ pub fn tests() -> Vec<super::NamedTest> {
             "brake_m0_newmark_block_local_sparse_lu_backward_stable",
             brake_m0_newmark_block_local_sparse_lu_backward_stable,
         ),
+        (
+            "selection_gathers_the_chosen_entries_in_their_order_on_every_rank",
+            selection_gathers_the_chosen_entries_in_their_order_on_every_rank,
+        ),
     ]
+}
+
+/// A `Selection` built once gathers the same chosen entries (owned by any rank, in any
+/// order) on every rank, each time, from vectors of the template's layout.
+fn selection_gathers_the_chosen_entries_in_their_order_on_every_rank(
+    petsc: &Petsc,
+) -> Result<(), String> {
+    let (rank, size) = (petsc.rank() as usize, petsc.size() as usize);
+    let global = 101;
+    // Uneven ownership: the last rank holds the remainder.
+    let share = global / size;
+    let local = if rank + 1 == size {
+        global - share * (size - 1)
+    } else {
+        share
+    };
+    let start = share * rank;
+    let values = |scale: f64| -> Vec<f64> {
+        (start..start + local)
+            .map(|i| scale * (i as f64 + 0.5))
+            .collect()
+    };
+    let x = Vector::from_local(petsc, &values(1.0)).map_err(|e| e.to_string())?;
+    let y = Vector::from_local(petsc, &values(-2.0)).map_err(|e| e.to_string())?;
+    let chosen = [100, 3, 57, 0, 42, 99];
+    let selection = Selection::new(&x, &chosen).map_err(|e| e.to_string())?;
+    for (v, scale) in [(&x, 1.0), (&y, -2.0), (&x, 1.0)] {
+        let got = selection.gather(v).map_err(|e| e.to_string())?;
+        let want: Vec<f64> = chosen.iter().map(|&i| scale * (i as f64 + 0.5)).collect();
+        if got != want {
+            return Err(format!("gathered {got:?}, expected {want:?}"));
+        }
+    }
+    Ok(())
 }
 
 fn data_dir() -> PathBuf {
