@@ -55,8 +55,8 @@ pub struct EliminationCounts {
     pub unconverged: usize,
     pub seconds: f64,
     /// Of `seconds`: ranking the points by their tangent change, taking L_bb out of the
-    /// operators (when the unknowns changed), the local Newton, and in it the local
-    /// Jacobians' assembly and LU.
+    /// operators and building the local Jacobian's pattern (when the unknowns changed), the
+    /// local Newton, and in it the local Jacobians' assembly and LU.
     pub seconds_ranking: f64,
     pub seconds_blocks: f64,
     pub seconds_local_newton: f64,
