@@ -66,29 +66,16 @@ impl Csr {
         // Each row's distinct columns found with a marker (a row of a local Jacobian holds
         // ~10 triplets per distinct entry), only those sorted; duplicates summed in the
         // triplets' order.
-        const UNSEEN: usize = usize::MAX;
-        let mut slot_of = vec![UNSEEN; n];
+        let mut marker = RowMarker::new(n);
         for i in 0..n {
             let row = &bucketed[start[i]..start[i + 1]];
-            let first = out.columns.len();
-            for &(j, _, _) in row {
-                if slot_of[j] == UNSEEN {
-                    slot_of[j] = first;
-                    out.columns.push(j);
-                }
-            }
-            out.columns[first..].sort_unstable();
-            for (p, &j) in out.columns[first..].iter().enumerate() {
-                slot_of[j] = first + p;
-            }
+            marker.push_row(row.iter().map(|&(j, _, _)| j), &mut out.columns);
             out.values.resize(out.columns.len(), 0.0);
             for &(j, v, t) in row {
-                out.values[slot_of[j]] += v;
-                slots[t] = slot_of[j];
+                out.values[marker.slot(j)] += v;
+                slots[t] = marker.slot(j);
             }
-            for &j in &out.columns[first..] {
-                slot_of[j] = UNSEEN;
-            }
+            marker.clear(&out.columns);
             out.row_start[i + 1] = out.columns.len();
         }
         (out, slots)
@@ -121,6 +108,53 @@ impl Csr {
             a[j * self.n + i] += v;
         }
         a
+    }
+}
+
+/// One row of a compressed-row pattern at a time: its distinct columns, found with a marker
+/// over all columns (no sort of the repeated ones), appended sorted to the pattern's columns,
+/// and each one's position there.
+pub(crate) struct RowMarker {
+    slot_of: Vec<usize>,
+    first: usize,
+}
+
+impl RowMarker {
+    const UNSEEN: usize = usize::MAX;
+
+    pub fn new(n: usize) -> RowMarker {
+        RowMarker {
+            slot_of: vec![Self::UNSEEN; n],
+            first: 0,
+        }
+    }
+
+    /// Appends the distinct values of `row` (columns below n, repeats allowed), sorted, to
+    /// `columns`.
+    pub fn push_row(&mut self, row: impl Iterator<Item = usize>, columns: &mut Vec<usize>) {
+        self.first = columns.len();
+        for j in row {
+            if self.slot_of[j] == Self::UNSEEN {
+                self.slot_of[j] = self.first;
+                columns.push(j);
+            }
+        }
+        columns[self.first..].sort_unstable();
+        for (offset, &j) in columns[self.first..].iter().enumerate() {
+            self.slot_of[j] = self.first + offset;
+        }
+    }
+
+    /// The position in `columns` of column j of the last row pushed.
+    pub fn slot(&self, j: usize) -> usize {
+        self.slot_of[j]
+    }
+
+    /// Unmarks the last row pushed (`columns` as `push_row` left it).
+    pub fn clear(&mut self, columns: &[usize]) {
+        for &j in &columns[self.first..] {
+            self.slot_of[j] = Self::UNSEEN;
+        }
     }
 }
 

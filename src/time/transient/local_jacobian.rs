@@ -4,7 +4,7 @@
 //! values (no triplets, no sorting) and refactored numerically.
 
 use crate::contact::kernel::{Channel, PointRows};
-use crate::la::local_lu::Csr;
+use crate::la::local_lu::{Csr, RowMarker};
 
 /// The local Jacobian's pattern on one set of unknowns, and where each term goes in it.
 pub(super) struct LocalPattern {
@@ -66,41 +66,25 @@ impl LocalPattern {
             columns: Vec::with_capacity(linear.values.len() * 2),
             values: Vec::new(),
         };
-        const UNSEEN: usize = usize::MAX;
-        let mut slot_of = vec![UNSEEN; n];
+        let mut marker = RowMarker::new(n);
         for i in 0..n {
-            let first = jacobian.columns.len();
             let linear_row = linear.row_start[i]..linear.row_start[i + 1];
             let point_columns = rows_of[i]
                 .iter()
                 .flat_map(|&(p, _)| at[p].iter().flatten().copied());
-            for j in linear.columns[linear_row.clone()]
-                .iter()
-                .copied()
-                .chain(point_columns)
-            {
-                if slot_of[j] == UNSEEN {
-                    slot_of[j] = first;
-                    jacobian.columns.push(j);
-                }
-            }
-            jacobian.columns[first..].sort_unstable();
-            for (offset, &j) in jacobian.columns[first..].iter().enumerate() {
-                slot_of[j] = first + offset;
-            }
+            let row = linear.columns[linear_row.clone()].iter().copied();
+            marker.push_row(row.chain(point_columns), &mut jacobian.columns);
             for k in linear_row {
-                linear_slots[k] = slot_of[linear.columns[k]];
+                linear_slots[k] = marker.slot(linear.columns[k]);
             }
             for &(p, ii) in &rows_of[i] {
                 let point = &mut point_slots[p];
                 let m = point.in_b.len();
                 for (jj, &lj) in point.in_b.iter().enumerate() {
-                    point.slots[ii * m + jj] = slot_of[at[p][lj].expect("in b")];
+                    point.slots[ii * m + jj] = marker.slot(at[p][lj].expect("in b"));
                 }
             }
-            for &j in &jacobian.columns[first..] {
-                slot_of[j] = UNSEEN;
-            }
+            marker.clear(&jacobian.columns);
             jacobian.row_start[i + 1] = jacobian.columns.len();
         }
         jacobian.values = vec![0.0; jacobian.columns.len()];
