@@ -5,6 +5,7 @@
 //! construction, not by convention.
 
 pub mod block_add;
+pub mod column_block;
 mod csr;
 pub mod dense_quadratic;
 pub mod eigen;
@@ -34,6 +35,7 @@ use mpi::topology::{Communicator, SimpleCommunicator};
 use petsc_sys as ffi;
 
 pub use block_add::BlockAddPlan;
+pub use column_block::ColumnBlock;
 pub use eigen::{EigenOptions, GeneralizedEigen, SymmetricEigenSolution};
 use error::call;
 pub use error::{DenseError, LaError, PetscError, Result};

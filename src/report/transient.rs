@@ -65,6 +65,10 @@ pub fn write_transient(
             "seconds_eliminating_factorizing",
             tr.eliminations.seconds_factorizing,
         ),
+        (
+            "seconds_eliminating_linear_change",
+            tr.eliminations.seconds_linear_change,
+        ),
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),
         ("failed_attempt_factor_solves", tr.failed_solves as f64),

@@ -20,6 +20,8 @@
 //!   Newmark Jacobian backward stably, like LAPACK's pivoted LU, and reports a zero pivot.
 //! - dense blocks added through a plan of their entries' places (the contact tangent's
 //!   route) land exactly where MatSetValues would put them, rows of other ranks included.
+//! - the product with a matrix's chosen columns, stored by column on each rank's rows (a
+//!   nonlinear elimination's change of the linear force), equals the whole product.
 
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use std::path::{Path, PathBuf};
@@ -191,7 +193,93 @@ pub fn tests() -> Vec<super::NamedTest> {
             "selection_gathers_the_chosen_entries_in_their_order_on_every_rank",
             selection_gathers_the_chosen_entries_in_their_order_on_every_rank,
         ),
+        (
+            "brake_m0_column_block_product_equals_the_whole_product",
+            brake_m0_column_block_product_equals_the_whole_product,
+        ),
     ]
+}
+
+/// Brake M0's Newmark Jacobian with friction (unsymmetric; Graebner et al., ZAMM 2016): its
+/// columns 1,500-2,699 taken by `ColumnBlock` on each rank's rows, times an x that is
+/// nonzero on every third of them (a nonlinear elimination's move), equal J x by PETSc's
+/// product on every row, rows of other ranks' columns included, to the round-off of two sums
+/// of the same terms in another order: |difference| <= 2 n_row eps (|J| |x|)_i with n_row the
+/// longest row's entries (the standard bound on a sum's rounding, for each of the two).
+/// The entries stored over the ranks are those of the chosen columns, none lost or doubled.
+fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Result<(), String> {
+    use squeal::la::ColumnBlock;
+    let e = |e: squeal::la::LaError| e.to_string();
+    let (j, _) = m0_newmark_system(petsc)?;
+    let columns: Vec<usize> = (1500..2700.min(j.global_rows())).collect();
+    let block = ColumnBlock::new(&j, &columns).map_err(e)?;
+    let moved: Vec<(usize, f64)> = (0..columns.len())
+        .step_by(3)
+        .map(|p| (p, (0.37 * p as f64).sin() * (1.0 + (p % 7) as f64)))
+        .collect();
+    let own = j.ownership();
+    let mut x_global = vec![0.0; j.global_rows()];
+    for &(p, v) in &moved {
+        x_global[columns[p]] = v;
+    }
+    let mut x = j.new_vector().map_err(e)?;
+    x.local_mut()
+        .map_err(e)?
+        .copy_from_slice(&x_global[own.clone()]);
+    let mut whole = x.duplicate().map_err(e)?;
+    j.mult(&x, &mut whole).map_err(e)?;
+    // (|J| |x|)_i, the longest row and the entries in the chosen columns, on this rank's rows.
+    let (mut scale, mut longest, mut stored) = (Vec::new(), 0usize, 0usize);
+    j.for_each_local_row(|_, cols, vals| {
+        longest = longest.max(cols.len());
+        stored += cols
+            .iter()
+            .filter(|&&c| (1500..2700).contains(&(c as usize)))
+            .count();
+        scale.push(
+            cols.iter()
+                .zip(vals)
+                .map(|(&c, v)| (v * x_global[c as usize]).abs())
+                .sum::<f64>(),
+        );
+    })
+    .map_err(e)?;
+    let mut by_columns = vec![0.0; own.len()];
+    block.mult_add(1.0, moved.iter().copied(), &mut by_columns);
+    let longest = squeal::parallel::max(petsc.world(), longest as f64);
+    let allowed = 2.0 * longest * f64::EPSILON;
+    let mut worst = 0.0f64;
+    {
+        let w = whole.local().map_err(e)?;
+        for i in 0..own.len() {
+            let ratio = if by_columns[i] == w[i] {
+                0.0
+            } else {
+                (by_columns[i] - w[i]).abs() / (allowed * scale[i]).max(f64::MIN_POSITIVE)
+            };
+            worst = nan_max(worst, ratio);
+        }
+    }
+    let mut counts = vec![0.0; 2];
+    counts[0] = block.entries() as f64;
+    counts[1] = stored as f64;
+    squeal::parallel::sum_in_place(petsc.world(), &mut counts);
+    let mut worst_all = vec![worst];
+    squeal::parallel::max_in_place(petsc.world(), &mut worst_all);
+    say(
+        petsc,
+        &format!(
+            "column block: {} entries over the ranks ({} in J's chosen columns), worst difference {:.2} of the round-off bound",
+            counts[0], counts[1], worst_all[0]
+        ),
+    );
+    if counts[0] != counts[1] {
+        return Err(format!(
+            "the column block holds {} entries, J has {} in those columns",
+            counts[0], counts[1]
+        ));
+    }
+    check_le("column block product / round-off bound", worst_all[0], 1.0)
 }
 
 /// A `Selection` built once gathers the same chosen entries (owned by any rank, in any

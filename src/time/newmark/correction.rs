@@ -27,8 +27,22 @@ pub type Linearize<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>) -> Result<B
 /// A nonlinear elimination at an iterate (the iterate, its residual R, the residual target):
 /// the increment of the unknowns coupled to the contact points whose tangent changed most
 /// that zeroes R's rows there with the other unknowns held (None: no such point).
-pub type Eliminate<'f, 'p> = dyn FnMut(&NewmarkSettings, &State<'p>, &Vector<'p>, f64) -> Result<Option<Vector<'p>>, LaError>
+pub type Eliminate<'f, 'p> = dyn FnMut(
+        &NewmarkSettings,
+        &State<'p>,
+        &Vector<'p>,
+        f64,
+    ) -> Result<Option<Elimination<'p>>, LaError>
     + 'f;
+
+/// What a nonlinear elimination moves: the increment delta of the unknowns (zero off the
+/// eliminated ones), and the change of the linear force M a + C v + K q it makes,
+/// L delta with L = M / (beta h^2) + gamma / (beta h) C + K (J without its contact part:
+/// computed from L's columns on the moved unknowns, not by a product with the whole J).
+pub struct Elimination<'p> {
+    pub delta: Vector<'p>,
+    pub linear_change: Vector<'p>,
+}
 
 /// How a step's corrections are computed.
 pub enum Correction<'r, 'f, 'p> {
@@ -159,7 +173,8 @@ impl<'p> Newmark<'_, 'p> {
     }
 
     /// Moves the iterate by the nonlinear elimination's increment (if it found points):
-    /// dq = -delta, z by -(J - X) dq through products (exact, no solve).
+    /// dq = -delta, z by the linear force's change the elimination computed (exact, no
+    /// solve).
     ///
     /// # Collective
     pub(super) fn eliminate(
@@ -167,25 +182,14 @@ impl<'p> Newmark<'_, 'p> {
         eliminate: &mut Eliminate<'_, 'p>,
         at: (f64, usize),
         target: f64,
-        report: &mut StepReport,
     ) -> Result<bool, LaError> {
         let iterate = self.iterate(at)?;
-        let Some(delta) = eliminate(&self.settings, &iterate, &self.r, target)? else {
+        let Some(moved) = eliminate(&self.settings, &iterate, &self.r, target)? else {
             return Ok(false);
         };
-        let j = self.jacobian.matrix.as_ref().ok_or_else(|| {
-            LaError::Invalid("a nonlinear elimination needs the Jacobian's matrix".into())
-        })?;
-        let clock = std::time::Instant::now();
-        self.dq.copy_from(&delta)?;
+        self.dq.copy_from(&moved.delta)?;
         self.dq.scale(-1.0)?;
-        j.mult(&self.dq, &mut self.dz)?;
-        self.dz.scale(-1.0)?;
-        if let Some(extra) = &self.jacobian.extra {
-            extra.mult_add(&self.dq, &mut self.dz)?;
-        }
-        report.product_seconds += clock.elapsed().as_secs_f64();
-        report.product_calls += 2;
+        self.dz.copy_from(&moved.linear_change)?;
         self.correct(1.0)?;
         Ok(true)
     }

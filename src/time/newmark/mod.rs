@@ -199,7 +199,7 @@ mod krylov;
 mod line_search;
 
 use correction::SolveCount;
-pub use correction::{Correction, Eliminate, Factorize, Linearize};
+pub use correction::{Correction, Eliminate, Elimination, Factorize, Linearize};
 pub use damping::{Damping, ModalDamping};
 
 /// A Newmark integrator over fixed operators M, C, K and a factor of J.
@@ -476,7 +476,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             }
             if let Correction::Eliminated(eliminate) = &mut correction {
                 let at = (t1, state.step + 1);
-                if self.eliminate(&mut **eliminate, at, target, &mut report)? {
+                if self.eliminate(&mut **eliminate, at, target)? {
                     (r, reference) = self.residual(t1, forces, &mut report)?;
                     let mismatch = self.residual_where_moved()? / target;
                     report.elimination_mismatch = nan_max(report.elimination_mismatch, mismatch);

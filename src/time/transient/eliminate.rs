@@ -28,8 +28,10 @@ use crate::contact::kernel::{PointResponse, PointRows};
 use crate::contact::ContactModel;
 use crate::la::lapack::RealLu;
 use crate::la::local_lu::{Csr, LocalLu};
-use crate::la::{LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector};
-use crate::time::newmark::{Damping, NewmarkSettings, State};
+use crate::la::{
+    ColumnBlock, LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector,
+};
+use crate::time::newmark::{Damping, Elimination, NewmarkSettings, State};
 
 /// Local Newton iterations at most per elimination.
 const MAX_LOCAL_ITERATIONS: usize = 25;
@@ -61,6 +63,9 @@ pub struct EliminationCounts {
     pub seconds_blocks: f64,
     pub seconds_local_newton: f64,
     pub seconds_factorizing: f64,
+    /// Of `seconds`: the linear force's change of each move, from the operators' columns on
+    /// the moved unknowns.
+    pub seconds_linear_change: f64,
     /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
     /// residual is the global residual's rows and every local Newton converged).
     pub worst_mismatch: f64,
@@ -80,6 +85,10 @@ pub(super) struct Eliminator<'a, 'p> {
     /// elimination; taking its blocks out of the distributed operators cost 5.2 ms each at
     /// 600k, 10 % of the eliminations).
     zone: Zone,
+    /// K, M and C's columns on the zone, this rank's rows: the linear force's change of a
+    /// move of b from b's columns alone (a product with the whole J streamed the operator
+    /// for the ~3 % of it a move of 256 points touches, 2026-11-30).
+    columns: ZoneColumns,
     /// The zone's entries of q, v and R gathered by one scatter built at the first
     /// elimination (a scatter of the whole vector built per gather cost 7 % of them).
     gather: Option<Selection<'p>>,
@@ -100,6 +109,13 @@ struct Zone {
     k: Csr,
     m: Csr,
     c: Option<Csr>,
+}
+
+/// The operators' columns on the zone's unknowns, this rank's rows.
+struct ZoneColumns {
+    k: ColumnBlock,
+    m: ColumnBlock,
+    c: Option<ColumnBlock>,
 }
 
 /// What an elimination leaves for the next one on the same unknowns.
@@ -169,18 +185,28 @@ impl<'a, 'p> Eliminator<'a, 'p> {
                 _ => a.convert(MatrixFormat::Aij)?.block(&unknowns),
             }
         };
-        let (c, rayleigh) = match c {
-            Damping::None => (None, (0.0, 0.0)),
-            Damping::Rayleigh { alpha, beta } => (None, (alpha, beta)),
-            Damping::Matrix(c) => (Some(block(c)?), (0.0, 0.0)),
+        let (c_block, c_columns, rayleigh) = match c {
+            Damping::None => (None, None, (0.0, 0.0)),
+            Damping::Rayleigh { alpha, beta } => (None, None, (alpha, beta)),
+            Damping::Matrix(c) => (
+                Some(block(c)?),
+                Some(ColumnBlock::new(c, &unknowns)?),
+                (0.0, 0.0),
+            ),
         };
-        let (k, m) = (block(k)?, block(m)?);
+        let columns = ZoneColumns {
+            k: ColumnBlock::new(k, &unknowns)?,
+            m: ColumnBlock::new(m, &unknowns)?,
+            c: c_columns,
+        };
+        let (k, m, c) = (block(k)?, block(m)?, c_block);
         Ok(Eliminator {
             petsc,
             contact,
             rows,
             zone_dofs,
             points_of,
+            columns,
             zone: Zone {
                 unknowns,
                 position,
@@ -208,7 +234,7 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         r: &Vector<'p>,
         tangent: &dyn TangentChange<'p>,
         target: f64,
-    ) -> Result<Option<Vector<'p>>, LaError> {
+    ) -> Result<Option<Elimination<'p>>, LaError> {
         let clock = std::time::Instant::now();
         // The `max_points` largest changes, however small the rest: a point left out with a
         // tangent far from J's stalls the global iteration (measured: keeping 99.99 % of the
@@ -300,17 +326,20 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         c.numeric_refactorizations += solved.numeric_refactorizations;
         c.factor_entries += solved.factor_entries;
         c.unconverged += usize::from(!solved.converged);
-        let mut out = r.duplicate()?;
-        out.set_all(0.0)?;
-        let own = out.ownership();
+        let mut delta = r.duplicate()?;
+        delta.set_all(0.0)?;
+        let own = delta.ownership();
         {
-            let mut local = out.local_mut()?;
+            let mut local = delta.local_mut()?;
             for (&i, &d) in b.iter().zip(&solved.delta) {
                 if own.contains(&i) {
                     local[i - own.start] = d;
                 }
             }
         }
+        let change = std::time::Instant::now();
+        let linear_change = self.linear_change(ns, &b, &solved.delta, r)?;
+        self.counts.seconds_linear_change += change.elapsed().as_secs_f64();
         self.kept = Some(Kept {
             b,
             c1,
@@ -318,16 +347,56 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             pattern,
             factor: solved.factor,
         });
-        c.seconds += clock.elapsed().as_secs_f64();
-        Ok(Some(out))
+        self.counts.seconds += clock.elapsed().as_secs_f64();
+        Ok(Some(Elimination {
+            delta,
+            linear_change,
+        }))
+    }
+
+    /// The factors of K, M and C in L = M / (beta h^2) + c1 C + K with the Rayleigh
+    /// damping's C = alpha M + beta K folded into the first two.
+    fn linear_coefficients(&self, ns: &NewmarkSettings) -> (f64, f64, f64) {
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        let (alpha, beta) = self.rayleigh;
+        let mass = 1.0 / (ns.beta * ns.step * ns.step) + c1 * alpha;
+        (1.0 + c1 * beta, mass, c1)
+    }
+
+    /// L delta (delta given on b), a vector laid out as `like`, from the operators' columns
+    /// on b: this rank's rows, no communication (every rank holds delta).
+    ///
+    /// # Collective
+    fn linear_change(
+        &self,
+        ns: &NewmarkSettings,
+        b: &[usize],
+        delta: &[f64],
+        like: &Vector<'p>,
+    ) -> Result<Vector<'p>, LaError> {
+        let (stiffness, mass, c1) = self.linear_coefficients(ns);
+        let mut out = like.duplicate()?;
+        out.set_all(0.0)?;
+        {
+            let mut y = out.local_mut()?;
+            let moved = || {
+                b.iter()
+                    .zip(delta)
+                    .map(|(&i, &d)| (self.zone.position[i] as usize, d))
+            };
+            let columns = &self.columns;
+            columns.k.mult_add(stiffness, moved(), &mut y);
+            columns.m.mult_add(mass, moved(), &mut y);
+            if let Some(c) = &columns.c {
+                c.mult_add(c1, moved(), &mut y);
+            }
+        }
+        Ok(out)
     }
 
     /// L_bb = M_bb / (beta h^2) + c1 C_bb + K_bb, sparse, from the zone's blocks.
     fn linear_block(&self, ns: &NewmarkSettings, b: &[usize]) -> Csr {
-        let c1 = ns.gamma / (ns.beta * ns.step);
-        let (alpha, beta) = self.rayleigh;
-        let mass = 1.0 / (ns.beta * ns.step * ns.step) + c1 * alpha;
-        let stiffness = 1.0 + c1 * beta;
+        let (stiffness, mass, c1) = self.linear_coefficients(ns);
         let zone = &self.zone;
         // Position in b of every zone unknown (-1: held).
         let mut in_b = vec![-1i32; zone.k.n];
