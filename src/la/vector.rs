@@ -97,6 +97,15 @@ impl<'p> Vector<'p> {
         call!(VecCopy(x.raw, self.raw))
     }
 
+    /// Whether every entry equals `x`'s exactly (same layout).
+    ///
+    /// # Collective
+    pub fn equals(&self, x: &Vector) -> Result<bool> {
+        let mut flag = ffi::PETSC_FALSE;
+        call!(VecEqual(self.raw, x.raw, &mut flag))?;
+        Ok(flag == ffi::PETSC_TRUE)
+    }
+
     /// # Collective
     pub fn dot(&self, x: &Vector) -> Result<f64> {
         let mut d = 0.0;

@@ -56,6 +56,10 @@ pub fn write_transient(
             "seconds_eliminating_ranking",
             tr.eliminations.seconds_ranking,
         ),
+        (
+            "seconds_eliminating_tangent",
+            tr.eliminations.seconds_tangent,
+        ),
         ("seconds_eliminating_blocks", tr.eliminations.seconds_blocks),
         (
             "seconds_eliminating_local_newton",

@@ -60,6 +60,9 @@ pub struct EliminationCounts {
     /// operators and building the local Jacobian's pattern (when the unknowns changed), the
     /// local Newton, and in it the local Jacobians' assembly and LU.
     pub seconds_ranking: f64,
+    /// Of `seconds`: the consistent tangent's change at the iterate (from the contact state
+    /// of the residual's evaluation there), which the ranking reads.
+    pub seconds_tangent: f64,
     pub seconds_blocks: f64,
     pub seconds_local_newton: f64,
     pub seconds_factorizing: f64,

@@ -127,12 +127,23 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         ns: &NewmarkSettings,
         at: &State<'p>,
     ) -> Result<TangentOperator<'a, 'p>, LaError> {
+        let cs = self.contact.evaluate(&at.q, Some(&at.v), 1.0)?;
+        self.linearize_at(ns, &cs)
+    }
+
+    /// [`Self::linearize`] from the iterate's contact state `cs`, already evaluated.
+    ///
+    /// # Collective
+    pub fn linearize_at(
+        &self,
+        ns: &NewmarkSettings,
+        cs: &ContactState,
+    ) -> Result<TangentOperator<'a, 'p>, LaError> {
         let contact = self.contact;
-        let cs = contact.evaluate(&at.q, Some(&at.v), 1.0)?;
         let c1 = ns.gamma / (ns.beta * ns.step);
         let damping: &[Part] = &[Part::Damping];
         let mock: &[Part] = &[Part::Normal, Part::Stick];
-        let mut terms = vec![(&cs, &CONSISTENT[..], 1.0), (&cs, damping, c1)];
+        let mut terms = vec![(cs, &CONSISTENT[..], 1.0), (cs, damping, c1)];
         match &self.built_contact {
             Some(built) => {
                 terms.push((built, &CONSISTENT[..], -1.0));
