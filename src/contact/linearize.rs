@@ -66,43 +66,53 @@ impl<'p> crate::la::Operator<'p> for TangentOperator<'_, 'p> {
     }
 }
 
-/// Explicit columns of the change for the preconditioner's low-rank update: a point's 4 x 4
-/// channel block D_p (rows a, columns b: the coefficient of O_a^T e_p e_p^T O_b), its
-/// columns O_a^T e_p.
-impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
-    /// The points with the largest Frobenius norm of D_p (all of them for a fraction of 1).
-    fn dominant(&self, max_points: usize, fraction: f64) -> Result<Option<Dominant>, LaError> {
-        const WIDTH: usize = 18; // row, norm, the 16 entries of D_p
+/// A ranked point's record: its row, the squared norm of its block, the block's 16 entries.
+const RECORD: usize = 18;
+
+impl TangentOperator<'_, '_> {
+    /// Point p's 4 x 4 channel block D_p, row-major.
+    fn block(&self, k: usize) -> [f64; 16] {
+        let mut d = [0.0; 16];
+        for (a, b, coef) in &self.blocks {
+            d[4 * *a as usize + *b as usize] = coef[k];
+        }
+        d
+    }
+
+    /// The records of the points with the largest squared norm of D_p over all ranks, at
+    /// most `max_points`, largest first (ties by row), stopping once they hold `fraction`
+    /// of the total; the same on every rank. None: no change anywhere.
+    ///
+    /// # Collective
+    fn ranked(&self, max_points: usize, fraction: f64) -> Result<Option<Vec<f64>>, LaError> {
         let contact = self.contact;
-        let block = |k: usize| {
-            let mut d = [0.0; 16];
-            for (a, b, coef) in &self.blocks {
-                d[4 * *a as usize + *b as usize] = coef[k];
-            }
-            d
-        };
         let mut local: Vec<(f64, usize)> = (0..contact.local.len())
-            .map(|k| (block(k).iter().map(|x| x * x).sum::<f64>(), k))
+            .map(|k| (self.block(k).iter().map(|x| x * x).sum::<f64>(), k))
             .collect();
-        let mut total = local.iter().map(|x| x.0).sum::<f64>();
-        local.sort_by(|x, y| y.0.total_cmp(&x.0));
+        let total = local.iter().map(|x| x.0).sum::<f64>();
+        let by_norm = |x: &(f64, usize), y: &(f64, usize)| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1));
+        if local.len() > max_points && max_points > 0 {
+            local.select_nth_unstable_by(max_points - 1, by_norm);
+            local.truncate(max_points);
+        }
+        local.sort_unstable_by(by_norm);
         local.truncate(max_points);
         // Every rank's candidates in its own slot of one buffer, summed over the ranks.
         use mpi::topology::Communicator;
         let (ranks, rank) = (self.world.size() as usize, self.world.rank() as usize);
-        let mut records = vec![0.0; ranks * max_points * WIDTH];
+        let mut records = vec![0.0; ranks * max_points * RECORD];
         for (slot, &(norm2, k)) in local.iter().enumerate() {
-            let r = &mut records[(rank * max_points + slot) * WIDTH..][..WIDTH];
+            let r = &mut records[(rank * max_points + slot) * RECORD..][..RECORD];
             r[0] = (contact.first_row + k) as f64;
             r[1] = norm2;
-            r[2..].copy_from_slice(&block(k));
+            r[2..].copy_from_slice(&self.block(k));
         }
         crate::parallel::sum_in_place(self.world, &mut records);
-        total = crate::parallel::sum(self.world, total);
+        let total = crate::parallel::sum(self.world, total);
         if !(total > 0.0 && total.is_finite()) {
             return Ok(None);
         }
-        let mut candidates: Vec<&[f64]> = records.chunks(WIDTH).filter(|r| r[1] > 0.0).collect();
+        let mut candidates: Vec<&[f64]> = records.chunks(RECORD).filter(|r| r[1] > 0.0).collect();
         candidates.sort_by(|x, y| y[1].total_cmp(&x[1]).then(x[0].total_cmp(&y[0])));
         let mut held = 0.0;
         let mut chosen = Vec::new();
@@ -111,12 +121,25 @@ impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
                 break;
             }
             held += r[1];
-            chosen.push(r);
+            chosen.extend_from_slice(r);
         }
+        Ok(Some(chosen))
+    }
+}
+
+/// Explicit columns of the change for the preconditioner's low-rank update: a point's 4 x 4
+/// channel block D_p (rows a, columns b: the coefficient of O_a^T e_p e_p^T O_b), its
+/// columns O_a^T e_p.
+impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
+    /// The points with the largest Frobenius norm of D_p (all of them for a fraction of 1).
+    fn dominant(&self, max_points: usize, fraction: f64) -> Result<Option<Dominant>, LaError> {
+        let Some(chosen) = self.ranked(max_points, fraction)? else {
+            return Ok(None);
+        };
         // Per point, the channels its block touches.
         let mut keys = Vec::new();
         let mut entries = Vec::new();
-        for r in &chosen {
+        for r in chosen.chunks(RECORD) {
             let d = &r[2..];
             for a in 0..4 {
                 if (0..4).any(|b| d[4 * a + b] != 0.0 || d[4 * b + a] != 0.0) {
@@ -135,6 +158,14 @@ impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
             }
         }
         Ok(Some(Dominant { keys, d }))
+    }
+
+    /// The ranked points' rows alone (no coupling block: at 256 points of ~4 channels it
+    /// is 1,024^2 entries, most of an elimination's ranking time).
+    fn dominant_points(&self, max_points: usize) -> Result<Option<Vec<usize>>, LaError> {
+        Ok(self
+            .ranked(max_points, 1.0)?
+            .map(|chosen| chosen.chunks(RECORD).map(|r| r[0] as usize).collect()))
     }
 
     fn column(&self, key: ColumnKey, out: &mut Vector<'p>) -> Result<(), LaError> {

@@ -36,6 +36,20 @@ pub trait TangentChange<'p>: Operator<'p> {
         Ok(None)
     }
 
+    /// The rows of the points with the largest change (squared Frobenius norm of their
+    /// block), at most `max_points`, largest first; the same on every rank. What a nonlinear
+    /// elimination needs: the points, not the coupling block of [`Self::dominant`], whose
+    /// size grows with the square of their channels.
+    ///
+    /// # Collective
+    fn dominant_points(&self, max_points: usize) -> Result<Option<Vec<usize>>, LaError> {
+        Ok(self.dominant(max_points, 1.0)?.map(|d| {
+            let mut rows: Vec<usize> = d.keys.iter().map(|k| k.0).collect();
+            rows.dedup();
+            rows
+        }))
+    }
+
     /// The column of `key` into `out` (a vector of the operator's layout).
     ///
     /// # Collective

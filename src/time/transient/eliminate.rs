@@ -242,13 +242,13 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         // The `max_points` largest changes, however small the rest: a point left out with a
         // tangent far from J's stalls the global iteration (measured: keeping 99.99 % of the
         // change's norm instead, ~30 points on the small brake, refreshed J 6x as often).
-        let dominant = tangent.dominant(self.max_points, 1.0)?;
+        let dominant = tangent.dominant_points(self.max_points)?;
         self.counts.seconds_ranking += clock.elapsed().as_secs_f64();
         let Some(dominant) = dominant else {
             return Ok(None);
         };
         let row_ids = self.contact.row_ids();
-        let mut chosen: Vec<usize> = dominant.keys.iter().map(|k| row_ids[k.0]).collect();
+        let mut chosen: Vec<usize> = dominant.iter().map(|&row| row_ids[row]).collect();
         chosen.dedup();
         let mut b: Vec<usize> = chosen
             .iter()
