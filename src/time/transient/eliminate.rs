@@ -27,7 +27,7 @@ use super::local_jacobian::{BlockScratch, LocalPattern};
 use crate::contact::kernel::{PointResponse, PointRows};
 use crate::contact::ContactModel;
 use crate::la::lapack::RealLu;
-use crate::la::local_lu::{Csr, LocalLu};
+use crate::la::local_lu::{Csr, LocalLu, RowMarker};
 use crate::la::{
     ColumnBlock, LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector,
 };
@@ -83,6 +83,9 @@ pub(super) struct Eliminator<'a, 'p> {
     zone_dofs: Vec<Vec<i32>>,
     /// For every unknown, the points whose rows couple it.
     points_of: Vec<Vec<u32>>,
+    /// Markers over the unknowns and over the points (their distinct members, sorted).
+    unknown_marker: RowMarker,
+    point_marker: RowMarker,
     /// K, M and C (a damping matrix) on the unknowns of every contact point, whole on every
     /// rank: L_bb of any b is taken out of them, no communication (b changes at nearly every
     /// elimination; taking its blocks out of the distributed operators cost 5.2 ms each at
@@ -206,8 +209,10 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         Ok(Eliminator {
             petsc,
             contact,
+            point_marker: RowMarker::new(rows.len()),
             rows,
             zone_dofs,
+            unknown_marker: RowMarker::new(points_of.len()),
             points_of,
             columns,
             zone: Zone {
@@ -250,23 +255,25 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         let row_ids = self.contact.row_ids();
         let mut chosen: Vec<usize> = dominant.iter().map(|&row| row_ids[row]).collect();
         chosen.dedup();
-        let mut b: Vec<usize> = chosen
+        // The distinct unknowns and points by markers (sorting the repeated ones, ~6 per
+        // unknown, took 5 % of the eliminations).
+        let mut b = Vec::new();
+        let dofs = chosen
             .iter()
             .flat_map(|&id| self.rows[id].dofs.iter())
             .filter(|&&d| d >= 0)
-            .map(|&d| d as usize)
-            .collect();
-        b.sort_unstable();
-        b.dedup();
+            .map(|&d| d as usize);
+        self.unknown_marker.push_row(dofs, &mut b);
+        self.unknown_marker.clear(&b);
         if b.is_empty() {
             return Ok(None);
         }
-        let mut touching: Vec<usize> = b
+        let mut touching = Vec::new();
+        let points = b
             .iter()
-            .flat_map(|&d| self.points_of[d].iter().map(|&p| p as usize))
-            .collect();
-        touching.sort_unstable();
-        touching.dedup();
+            .flat_map(|&d| self.points_of[d].iter().map(|&p| p as usize));
+        self.point_marker.push_row(points, &mut touching);
+        self.point_marker.clear(&touching);
         if self.gather.is_none() {
             self.gather = Some(Selection::new(r, &self.zone.unknowns)?);
         }
