@@ -123,6 +123,10 @@ pub struct TransientSummary {
     pub updated_retries: usize,
     /// The nonlinear eliminations of this process's run.
     pub eliminations: crate::time::transient::EliminationCounts,
+    /// Steps of this process's run (fewer than `steps` after a restart) and their accepted
+    /// iterations per step.
+    pub steps_run: usize,
+    pub iterations_per_step_run: f64,
     /// Per step of this process's run, counting the attempts that failed too: iterations
     /// and solves with the factor (GMRES' and the update's column solves included).
     pub all_iterations_per_step: f64,
@@ -413,6 +417,8 @@ impl TransientSummary {
             krylov_iterations: t.krylov_iterations,
             updated_retries: t.updated_retries,
             eliminations: t.eliminations,
+            steps_run: t.steps_run,
+            iterations_per_step_run: t.iterations_run as f64 / steps_run,
             all_iterations_per_step: (t.iterations_run + t.failed_iterations) as f64 / steps_run,
             all_solves_per_step: (t.factor_solves + t.failed_solves) as f64 / steps_run,
             factorizations: t.factorizations,
