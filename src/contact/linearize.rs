@@ -349,19 +349,36 @@ impl<'p> ContactModel<'p> {
         parts: &[(&ContactState, &[Part], f64)],
     ) -> Result<TangentOperator<'c, 'p>, LaError> {
         let n = self.local.len();
-        // One coefficient column per (a, b) channel pair that occurs on any rank.
+        // One coefficient column per (a, b) channel pair that occurs on any rank, found by
+        // its slot 4 a + b; the terms of a point appended to one reused buffer (an operator
+        // is built per elimination: a Vec per point and a search per term were most of it).
         let mut blocks: Vec<(Channel, Channel, Vec<f64>)> = Vec::new();
+        let mut slot_of = [usize::MAX; 16];
+        let mut terms = Vec::with_capacity(16);
         for &(state, part_list, scale) in parts {
-            for (k, terms) in self.tangent_terms(state, part_list).into_iter().enumerate() {
-                for (coef, a, b) in terms {
-                    let i = match blocks.iter().position(|x| x.0 == a && x.1 == b) {
-                        Some(i) => i,
-                        None => {
-                            blocks.push((a, b, vec![0.0; n]));
-                            blocks.len() - 1
-                        }
-                    };
-                    blocks[i].2[k] += scale * coef;
+            for (k, &id) in self.local.iter().enumerate() {
+                let point = &self.points[id];
+                let sliding = self.interfaces[point.interface].friction.is_sliding();
+                let omega = if sliding { self.disc_speed } else { 0.0 };
+                terms.clear();
+                for &part in part_list {
+                    let response = &state.response[k];
+                    kernel::push_tangent_terms(
+                        point.weight,
+                        omega,
+                        response,
+                        part,
+                        1.0,
+                        &mut terms,
+                    );
+                }
+                for &(coef, a, b) in &terms {
+                    let slot = &mut slot_of[4 * a as usize + b as usize];
+                    if *slot == usize::MAX {
+                        *slot = blocks.len();
+                        blocks.push((a, b, vec![0.0; n]));
+                    }
+                    blocks[*slot].2[k] += scale * coef;
                 }
             }
         }
