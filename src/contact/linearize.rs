@@ -91,12 +91,13 @@ impl TangentOperator<'_, '_> {
             .collect();
         let total = local.iter().map(|x| x.0).sum::<f64>();
         let by_norm = |x: &(f64, usize), y: &(f64, usize)| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1));
-        if local.len() > max_points && max_points > 0 {
-            local.select_nth_unstable_by(max_points - 1, by_norm);
+        if local.len() > max_points {
+            if max_points > 0 {
+                local.select_nth_unstable_by(max_points - 1, by_norm);
+            }
             local.truncate(max_points);
         }
         local.sort_unstable_by(by_norm);
-        local.truncate(max_points);
         // Every rank's candidates in its own slot of one buffer, summed over the ranks.
         use mpi::topology::Communicator;
         let (ranks, rank) = (self.world.size() as usize, self.world.rank() as usize);
