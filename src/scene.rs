@@ -208,6 +208,7 @@ impl Scene {
             t.update_factor = defaults.update_factor;
             t.eliminate_points = defaults.eliminate_points;
             t.anderson = defaults.anderson;
+            t.step_error_fraction = defaults.step_error_fraction;
             t.jacobian_factor = defaults.jacobian_factor;
             t.tolerance = defaults.tolerance;
             t.max_iterations = defaults.max_iterations;

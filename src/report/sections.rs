@@ -164,7 +164,7 @@ impl RunSummary {
                 "no solve with the factor in this process (resumed at the run's end)".to_string()
             };
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; this process's {} steps {:.2} iterations each, with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs {}; per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; this process's {} steps {:.2} iterations each ({} accepted on the step's truncation error), with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs {}; per step {:.2} ms in forces, {:.2} ms in operator products",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -178,6 +178,7 @@ impl RunSummary {
                 t.full_newton_retries,
                 t.steps_run,
                 t.iterations_per_step_run,
+                t.steps_on_step_error,
                 t.all_iterations_per_step,
                 t.all_solves_per_step,
                 t.factorizations,

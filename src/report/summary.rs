@@ -127,6 +127,8 @@ pub struct TransientSummary {
     /// iterations per step.
     pub steps_run: usize,
     pub iterations_per_step_run: f64,
+    /// Of this process's steps, those accepted on the step's truncation error.
+    pub steps_on_step_error: usize,
     /// Per step of this process's run, counting the attempts that failed too: iterations
     /// and solves with the factor (GMRES' and the update's column solves included).
     pub all_iterations_per_step: f64,
@@ -418,6 +420,7 @@ impl TransientSummary {
             updated_retries: t.updated_retries,
             eliminations: t.eliminations,
             steps_run: t.steps_run,
+            steps_on_step_error: t.steps_on_step_error,
             iterations_per_step_run: t.iterations_run as f64 / steps_run,
             all_iterations_per_step: (t.iterations_run + t.failed_iterations) as f64 / steps_run,
             all_solves_per_step: (t.factor_solves + t.failed_solves) as f64 / steps_run,

@@ -94,6 +94,7 @@ pub fn write_transient(
         ("seconds_in_forces", tr.seconds_in_forces),
         ("seconds_in_products", tr.seconds_in_products),
         ("iterations_run", tr.iterations_run as f64),
+        ("steps_on_step_error", tr.steps_on_step_error as f64),
     ];
     for (name, value) in numbers {
         file.set_number(g, name, value)?;

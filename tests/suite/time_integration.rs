@@ -51,6 +51,10 @@ pub fn tests() -> Vec<super::NamedTest> {
             exponential_contact_periods,
         ),
         (
+            "newmark_exponential_contact_period_kept_with_iterations_stopped_at_the_step_error",
+            step_error_criterion_keeps_the_contact_period,
+        ),
+        (
             "brake_transient_from_the_static_state_stays_there",
             brake_transient_at_rest,
         ),
@@ -555,8 +559,33 @@ fn integrate<'p>(
     q0: &[f64],
     steps: usize,
     forces: &mut Forces<'_, 'p>,
-    mut observe: impl FnMut(&State<'p>) -> Result<(), String>,
+    observe: impl FnMut(&State<'p>) -> Result<(), String>,
 ) -> Result<usize, String> {
+    let counts = integrate_counted(petsc, m, k, mock, settings, q0, steps, forces, observe)?;
+    Ok(counts.most)
+}
+
+/// What the steps of [`integrate_counted`] took.
+struct IterationCounts {
+    most: usize,
+    total: usize,
+    /// Steps accepted on the truncation-error criterion.
+    on_step_error: usize,
+}
+
+/// [`integrate`], counting every step's iterations.
+#[allow(clippy::too_many_arguments)]
+fn integrate_counted<'p>(
+    petsc: &'p Petsc,
+    m: &SparseMatrix<'p>,
+    k: &SparseMatrix<'p>,
+    mock: Option<&SparseMatrix<'p>>,
+    settings: NewmarkSettings,
+    q0: &[f64],
+    steps: usize,
+    forces: &mut Forces<'_, 'p>,
+    mut observe: impl FnMut(&State<'p>) -> Result<(), String>,
+) -> Result<IterationCounts, String> {
     let e = |e: squeal::la::LaError| e.to_string();
     let j = jacobian(&settings, m, Damping::None, k, mock).map_err(e)?;
     let factor = Jacobian {
@@ -577,7 +606,11 @@ fn integrate<'p>(
     };
     initial_acceleration(m, Damping::None, k, &mut state, forces, &mass).map_err(e)?;
     observe(&state)?;
-    let mut most = 0;
+    let mut counts = IterationCounts {
+        most: 0,
+        total: 0,
+        on_step_error: 0,
+    };
     // Anderson accelerates the eliminated iteration's corrections; with no contact point to
     // eliminate, that is the fixed factor's iteration accelerated.
     let mut no_points = |_: &NewmarkSettings, _: &State<'p>, _: &Vector<'p>, _: f64| Ok(None);
@@ -589,10 +622,12 @@ fn integrate<'p>(
             integrator.step(&mut state, forces)
         };
         let report = step.map_err(|e| e.to_string())?;
-        most = most.max(report.iterations);
+        counts.most = counts.most.max(report.iterations);
+        counts.total += report.iterations;
+        counts.on_step_error += usize::from(report.on_step_error);
         observe(&state)?;
     }
-    Ok(most)
+    Ok(counts)
 }
 
 fn no_force<'f, 'p>() -> Box<Forces<'f, 'p>> {
@@ -990,6 +1025,82 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             rel(period, reference)
         ));
         if exceeds(rel(period, reference), 1e-5) || exceeds(energy_error, 1e-5) {
+            return Err(report.join("; "));
+        }
+    }
+    for line in report {
+        say(petsc, &line);
+    }
+    Ok(())
+}
+
+/// Stopping the fixed Jacobian's iterations at the step's own error (`[transient]
+/// step_error_fraction`, `time::newmark::step_error`), verified on the exponential-contact
+/// oscillator released at g0 = 2 (reference period 6.88757415, above) at a step where the
+/// fixed Jacobian (mock stiffness 1 against the contact's 0.14-3.4) needs several iterations,
+/// h = 0.05. The run converged to 1e-12 has the trapezoidal rule's own period error
+/// e_h = T_h - T_ref. A run that stops each step once its remaining error is estimated below
+/// kappa of the step's truncation error adds at most kappa of the local error to every step,
+/// so its period differs from the converged run's by at most kappa |e_h|: asserted with a
+/// factor 2 for the two estimates (the geometric tail theta / (1 - theta) and Zienkiewicz and
+/// Xie's truncation error are both asymptotic), for kappa = 0.1 and 0.01, and its largest
+/// energy error within (1 + 2 kappa) of the converged run's. It must take fewer iterations and
+/// accept steps on the criterion, or the criterion was not what the run used.
+fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), String> {
+    let (g0, reference, h) = (2.0, 6.88757415, 0.05);
+    let m = tridiagonal(petsc, &[1.0], &[])?;
+    let k = tridiagonal(petsc, &[0.0], &[])?;
+    let mock = tridiagonal(petsc, &[1.0], &[])?;
+    let steps = (3.2 * reference / h) as usize;
+    let run = |kappa: f64| -> Result<(f64, f64, IterationCounts), String> {
+        let settings = NewmarkSettings {
+            step: h,
+            tolerance: 1e-12,
+            step_error_fraction: kappa,
+            ..Default::default()
+        };
+        let mut forces = contact_force;
+        let mut oscillation = Oscillation::released_at(g0);
+        let counts = integrate_counted(
+            petsc,
+            &m,
+            &k,
+            Some(&mock),
+            settings,
+            &[g0],
+            steps,
+            &mut forces,
+            |s| {
+                let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
+                oscillation.observe(s.time, g, v);
+                Ok(())
+            },
+        )?;
+        let period = oscillation.period().ok_or(format!(
+            "kappa = {kappa}: fewer than two maxima in three periods"
+        ))?;
+        Ok((period, oscillation.energy_error, counts))
+    };
+    let (period, energy, converged) = run(0.0)?;
+    let own_error = (period - reference).abs();
+    let mut report = vec![format!(
+        "converged: T = {period:.8} (ref. {reference}, error {own_error:.2e}), energy {energy:.2e}, {:.2} iterations/step",
+        converged.total as f64 / steps as f64
+    )];
+    for kappa in [0.1, 0.01] {
+        let (t, e, counts) = run(kappa)?;
+        let deviation = (t - period).abs();
+        report.push(format!(
+            "kappa {kappa}: T deviates {deviation:.2e} ({:.3} of the step's error), energy {e:.2e}, {:.2} iterations/step, {} of {steps} steps on the criterion",
+            deviation / own_error,
+            counts.total as f64 / steps as f64,
+            counts.on_step_error
+        ));
+        if exceeds(deviation, 2.0 * kappa * own_error)
+            || exceeds(e, (1.0 + 2.0 * kappa) * energy)
+            || counts.total >= converged.total
+            || counts.on_step_error == 0
+        {
             return Err(report.join("; "));
         }
     }

@@ -48,6 +48,10 @@ pub struct NewmarkSettings {
     /// Earlier iterates the eliminated iteration (`Correction::Eliminated`) combines
     /// (`anderson.rs`; 0: the plain modified Newton).
     pub anderson: usize,
+    /// Also accept an iterate once the iteration's remaining error, estimated from the
+    /// contraction of its last two full moves, is below this fraction of the step's own
+    /// truncation error (`step_error.rs`); 0: the residual tolerance alone.
+    pub step_error_fraction: f64,
 }
 
 impl Default for NewmarkSettings {
@@ -59,6 +63,7 @@ impl Default for NewmarkSettings {
             tolerance: 1e-8,
             max_iterations: 30,
             anderson: 0,
+            step_error_fraction: 0.0,
         }
     }
 }
@@ -99,6 +104,9 @@ pub struct StepReport {
     /// over the step's residual target (its local Newton zeroes those rows to 0.1 of it: more
     /// means the local residual is not the global one's rows); 0 without an elimination.
     pub elimination_mismatch: f64,
+    /// The step was accepted on the truncation-error criterion (`step_error.rs`), its
+    /// residual above the tolerance.
+    pub on_step_error: bool,
 }
 
 /// A factorized J and X = J - L, the part beyond the linear operators (the contact stiffness
@@ -197,6 +205,7 @@ mod correction;
 mod damping;
 mod krylov;
 mod line_search;
+mod step_error;
 
 use correction::SolveCount;
 pub use correction::{Correction, Eliminate, Elimination, Factorize, Linearize};
@@ -245,6 +254,10 @@ pub struct Newmark<'a, 'p> {
     anderson: anderson::Anderson<'p>,
     target_q: Vector<'p>,
     target_z: Vector<'p>,
+    /// The iterate before the current iteration's moves, and the contraction of the moves
+    /// (`step_error.rs`).
+    q_before: Vector<'p>,
+    contraction: step_error::Contraction,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -287,6 +300,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             anderson: anderson::Anderson::new(settings.anderson),
             target_q: q1.duplicate()?,
             target_z: q1.duplicate()?,
+            q_before: q1.duplicate()?,
+            contraction: step_error::Contraction::default(),
             q1,
         })
     }
@@ -433,6 +448,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             factor_solves: 0,
             factor_solve_seconds: 0.0,
             elimination_mismatch: 0.0,
+            on_step_error: false,
         };
         // R = z - f at the predictor; later iterates come evaluated from the correction.
         let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
@@ -446,6 +462,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             });
         }
         let mut history = Vec::new();
+        let judge_step_error = self.settings.step_error_fraction > 0.0;
+        self.contraction.new_step();
         loop {
             let mut target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
             if r <= target && inexact && self.drift.due(Some(r), target) {
@@ -473,6 +491,9 @@ impl<'a, 'p> Newmark<'a, 'p> {
                     residual: r,
                     target,
                 });
+            }
+            if judge_step_error {
+                self.q_before.copy_from(&self.q1)?;
             }
             if let Correction::Eliminated(eliminate) = &mut correction {
                 let at = (t1, state.step + 1);
@@ -512,11 +533,14 @@ impl<'a, 'p> Newmark<'a, 'p> {
             self.tmp.copy_from(&self.q1)?;
             self.tmp.axpy(-1.0, &state.q)?;
             let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
-            if correction <= self.settings.tolerance * self.tmp.norm2()? + floor {
+            let converged = correction <= self.settings.tolerance * self.tmp.norm2()? + floor;
+            let within_step_error = judge_step_error && self.within_step_error(state, alpha)?;
+            if converged || within_step_error {
                 if inexact && self.drift.due(None, self.settings.tolerance * reference) {
                     self.exact_linear_force(pred_exact, &mut report)?;
                 }
                 report.forces_current = line_search;
+                report.on_step_error = !converged;
                 return self.finish(state, t1, report);
             }
             if !line_search {

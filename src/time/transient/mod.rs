@@ -130,6 +130,9 @@ pub struct Transient {
     pub factor_passes: f64,
     pub steps_run: usize,
     pub iterations_run: usize,
+    /// Of this process's steps, those accepted on the truncation-error criterion
+    /// (`transient.step_error_fraction`) with their residual above the tolerance.
+    pub steps_on_step_error: usize,
     /// |K0 q_s - f_c(q_s) - f_ext| at the static state (N): what the static Newton left,
     /// removed from the load so the run starts from an equilibrium ([`balanced_load`]).
     pub static_residual: f64,
@@ -249,6 +252,7 @@ impl Transient {
             factor_passes: 1.0,
             steps_run: 0,
             iterations_run: 0,
+            steps_on_step_error: 0,
             static_residual: 0.0,
             stopped_at_saturation: None,
             states: 0,
@@ -308,6 +312,7 @@ pub fn run<'p>(
         tolerance: settings.tolerance,
         max_iterations: settings.max_iterations,
         anderson: settings.anderson,
+        step_error_fraction: settings.step_error_fraction,
         ..Default::default()
     };
     let contact = input.contact;
@@ -404,6 +409,7 @@ pub fn run<'p>(
             out.tangent_products += report.product_calls;
             out.steps_run += 1;
             out.iterations_run += report.iterations;
+            out.steps_on_step_error += usize::from(report.on_step_error);
             out.krylov_iterations += report.krylov_iterations;
             out.factor_solves += report.factor_solves;
             out.seconds_in_factor_solves += report.factor_solve_seconds;

@@ -22,6 +22,12 @@ pub struct TransientSettings {
     /// solve: `time::newmark::anderson`); 0: none. No effect without `eliminate_points`.
     #[serde(default = "default_anderson", skip_serializing_if = "is_zero")]
     pub anderson: usize,
+    /// Also accept a step's iterate once the iteration's remaining error (estimated from the
+    /// contraction of its last two moves) is below this fraction of Newmark's own local
+    /// truncation error, (beta - 1/6) h^2 |a1 - a0| (`time::newmark::step_error`); 0
+    /// (default): the residual `tolerance` alone.
+    #[serde(default, skip_serializing_if = "is_zero_f64")]
+    pub step_error_fraction: f64,
     /// The perturbation of the static state the run starts from (see [`Start`]).
     #[serde(default)]
     pub start: Start,
@@ -219,6 +225,9 @@ fn default_max_iterations() -> usize {
 fn is_zero(n: &usize) -> bool {
     *n == 0
 }
+fn is_zero_f64(x: &f64) -> bool {
+    *x == 0.0
+}
 fn default_anderson() -> usize {
     0
 }
@@ -262,6 +271,16 @@ impl TransientSettings {
             return Err(InvalidSetting::new(
                 "transient.tolerance",
                 format!(" = {}: must be in (0, 0.01)", self.tolerance),
+            ));
+        }
+        if !(0.0..1.0).contains(&self.step_error_fraction) {
+            return Err(InvalidSetting::new(
+                "transient.step_error_fraction",
+                format!(
+                    " = {}: must be in [0, 1) (a fraction of the step's truncation error, e.g. \
+                     0.1; 0: the residual tolerance alone)",
+                    self.step_error_fraction
+                ),
             ));
         }
         if self.anderson > MAX_ANDERSON {
@@ -360,17 +379,33 @@ mod tests {
                 "transient.eliminate_points",
             ),
             ("steps = 10\nanderson = 21", "transient.anderson"),
+            (
+                "steps = 10\nstep_error_fraction = 1.0",
+                "transient.step_error_fraction",
+            ),
+            (
+                "steps = 10\nstep_error_fraction = -0.1",
+                "transient.step_error_fraction",
+            ),
+            (
+                "steps = 10\nstep_error_fraction = nan",
+                "transient.step_error_fraction",
+            ),
         ] {
             let err = settings(text).validate().unwrap_err();
             assert_eq!(err.key, key, "{err}");
         }
-        assert!(settings("steps = 10\neliminate_points = 64\nanderson = 5")
-            .validate()
-            .is_ok());
+        assert!(settings(
+            "steps = 10\neliminate_points = 64\nanderson = 5\nstep_error_fraction = 0.1"
+        )
+        .validate()
+        .is_ok());
         // Unset, they are not written: the restart fingerprints of older scenes stay the same.
         let text = toml::to_string(&settings("steps = 10")).unwrap();
         assert!(
-            !text.contains("eliminate") && !text.contains("anderson"),
+            !text.contains("eliminate")
+                && !text.contains("anderson")
+                && !text.contains("step_error"),
             "{text}"
         );
     }
