@@ -978,6 +978,39 @@ fn contact_force(
     Ok(())
 }
 
+/// The exponential-contact oscillator (unit mass, no stiffness, the fixed Jacobian's mock
+/// contact stiffness 1, the equilibrium's) released at rest at gap `g0`, for `steps` steps:
+/// what it did and what its steps took.
+fn oscillate(
+    petsc: &Petsc,
+    settings: NewmarkSettings,
+    g0: f64,
+    steps: usize,
+) -> Result<(Oscillation, IterationCounts), String> {
+    let m = tridiagonal(petsc, &[1.0], &[])?;
+    let k = tridiagonal(petsc, &[0.0], &[])?;
+    let mock = tridiagonal(petsc, &[1.0], &[])?;
+    // f = -1 (external, towards the wall) + exp(-g) (contact), q = g.
+    let mut forces = contact_force;
+    let mut oscillation = Oscillation::released_at(g0);
+    let counts = integrate_counted(
+        petsc,
+        &m,
+        &k,
+        Some(&mock),
+        settings,
+        &[g0],
+        steps,
+        &mut forces,
+        |s| {
+            let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
+            oscillation.observe(s.time, g, v);
+            Ok(())
+        },
+    )?;
+    Ok((oscillation, counts))
+}
+
 fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
     let references: [(f64, f64); 4] = [
         (0.1, 6.28571843),
@@ -985,10 +1018,6 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
         (1.0, 6.47714219),
         (2.0, 6.88757415),
     ];
-    let m = tridiagonal(petsc, &[1.0], &[])?;
-    let k = tridiagonal(petsc, &[0.0], &[])?;
-    // The equilibrium contact stiffness lambda p0 A exp(0) = 1 in the fixed Jacobian.
-    let mock = tridiagonal(petsc, &[1.0], &[])?;
     let h = 2e-3;
     let mut report = Vec::new();
     for (g0, reference) in references {
@@ -997,25 +1026,9 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             tolerance: 1e-12,
             ..Default::default()
         };
-        // f = -1 (external, towards the wall) + exp(-g) (contact), q = g.
-        let mut forces = contact_force;
-        let mut oscillation = Oscillation::released_at(g0);
         let steps = (3.2 * reference / h) as usize;
-        let iterations = integrate(
-            petsc,
-            &m,
-            &k,
-            Some(&mock),
-            settings,
-            &[g0],
-            steps,
-            &mut forces,
-            |s| {
-                let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
-                oscillation.observe(s.time, g, v);
-                Ok(())
-            },
-        )?;
+        let (oscillation, counts) = oscillate(petsc, settings, g0, steps)?;
+        let iterations = counts.most;
         let period = oscillation
             .period()
             .ok_or(format!("g0 = {g0}: fewer than two maxima in three periods"))?;
@@ -1048,9 +1061,6 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
 /// accept steps on the criterion, or the criterion was not what the run used.
 fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), String> {
     let (g0, reference, h) = (2.0, 6.88757415, 0.05);
-    let m = tridiagonal(petsc, &[1.0], &[])?;
-    let k = tridiagonal(petsc, &[0.0], &[])?;
-    let mock = tridiagonal(petsc, &[1.0], &[])?;
     let steps = (3.2 * reference / h) as usize;
     let run = |kappa: f64| -> Result<(f64, f64, IterationCounts), String> {
         let settings = NewmarkSettings {
@@ -1059,23 +1069,7 @@ fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), St
             step_error_fraction: kappa,
             ..Default::default()
         };
-        let mut forces = contact_force;
-        let mut oscillation = Oscillation::released_at(g0);
-        let counts = integrate_counted(
-            petsc,
-            &m,
-            &k,
-            Some(&mock),
-            settings,
-            &[g0],
-            steps,
-            &mut forces,
-            |s| {
-                let (g, v) = (first(petsc, &s.q)?, first(petsc, &s.v)?);
-                oscillation.observe(s.time, g, v);
-                Ok(())
-            },
-        )?;
+        let (oscillation, counts) = oscillate(petsc, settings, g0, steps)?;
         let period = oscillation.period().ok_or(format!(
             "kappa = {kappa}: fewer than two maxima in three periods"
         ))?;

@@ -11,8 +11,10 @@
 //! ||R|| <= tolerance x max(||f||, ||z||), or until the correction is below
 //! tolerance x ||q1 - q0||: R carries M (q1 - q0) / (beta h^2), whose round-off (eps times
 //! that, ~1e-9 of the forces at h = 1e-3) no iteration removes, while the correction shows
-//! convergence of q1 itself. A step that does not converge is an error naming the step, the
-//! time and the residual: never accepted silently.
+//! convergence of q1 itself; with `step_error_fraction` also once the iteration's remaining
+//! error is below that fraction of the step's own truncation error (`step_error.rs`). A step
+//! that does not converge is an error naming the step, the time and the residual: never
+//! accepted silently.
 //!
 //! The linear part z = M a1 + C v1 + K q1 is carried from step to step with the state: at
 //! the predictor it is z_n + C h a_n + K (h v_n + h^2/2 a_n) (one sparse product with
@@ -29,7 +31,8 @@
 //! The step and the carried linear force are here; the step's corrections (modified Newton
 //! with the fixed factor, full Newton) in `correction.rs`, Newton-Krylov with its GMRES and
 //! the Woodbury preconditioner in `krylov.rs`, the residual and the line search in
-//! `line_search.rs`, the damping operators in `damping.rs`; all work on the same iterate vectors
+//! `line_search.rs`, the damping operators in `damping.rs`, the acceptance on the step's own
+//! error in `step_error.rs`; all work on the same iterate vectors
 //! of one `Newmark`. The adaptive control around the step is in `super::adaptive`.
 
 use crate::la::{DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, Vector};
@@ -527,26 +530,44 @@ impl<'a, 'p> Newmark<'a, 'p> {
                 self.correct(1.0)?;
                 1.0
             };
-            let correction = alpha * self.dq.norm2()?;
-            // Converged in q1 (the residual's round-off floor reached): accept.
-            // (q1 itself is known to its own round-off at best: 10 eps |q1|.)
-            self.tmp.copy_from(&self.q1)?;
-            self.tmp.axpy(-1.0, &state.q)?;
-            let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
-            let converged = correction <= self.settings.tolerance * self.tmp.norm2()? + floor;
-            let within_step_error = judge_step_error && self.within_step_error(state, alpha)?;
-            if converged || within_step_error {
+            if let Some(on_step_error) = self.accepted_on_moves(state, alpha, judge_step_error)? {
                 if inexact && self.drift.due(None, self.settings.tolerance * reference) {
                     self.exact_linear_force(pred_exact, &mut report)?;
                 }
                 report.forces_current = line_search;
-                report.on_step_error = !converged;
+                report.on_step_error = on_step_error;
                 return self.finish(state, t1, report);
             }
             if !line_search {
                 (r, reference) = self.residual(t1, forces, &mut report)?;
             }
         }
+    }
+
+    /// Whether the iterate, after a move by `alpha` of the correction, is accepted without
+    /// its residual: Some(false) when converged in q1 (the correction below the tolerance of
+    /// the step's move: the residual's round-off floor reached, q1 itself known to its own
+    /// round-off at best, 10 eps |q1|), Some(true) when only within the step's own error
+    /// (`step_error.rs`, which sees every move when `judge_step_error`).
+    ///
+    /// # Collective
+    fn accepted_on_moves(
+        &mut self,
+        state: &State<'p>,
+        alpha: f64,
+        judge_step_error: bool,
+    ) -> Result<Option<bool>, LaError> {
+        let correction = alpha * self.dq.norm2()?;
+        self.tmp.copy_from(&self.q1)?;
+        self.tmp.axpy(-1.0, &state.q)?;
+        let floor = 10.0 * f64::EPSILON * self.q1.norm2()?;
+        let converged = correction <= self.settings.tolerance * self.tmp.norm2()? + floor;
+        let within_step_error = judge_step_error && self.within_step_error(state, alpha)?;
+        Ok(match (converged, within_step_error) {
+            (true, _) => Some(false),
+            (false, true) => Some(true),
+            (false, false) => None,
+        })
     }
 
     /// max |R_i| over the unknowns the last move changed (dq_i != 0).
