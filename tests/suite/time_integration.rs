@@ -145,7 +145,8 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
                 last = s.q.gather_all().map_err(|e| e.to_string())?;
                 Ok(())
             },
-        )?;
+        )?
+        .most;
         Ok((most, last))
     };
     let (exact_iterations, exact) = run(Some(&ke), 0)?;
@@ -547,25 +548,7 @@ where
     })
 }
 
-/// Integrates M q'' + K q = f(t, q) for `steps` steps from (q0, v0); `observe` sees every
-/// state. Returns the largest number of iterations of a step.
-#[allow(clippy::too_many_arguments)]
-fn integrate<'p>(
-    petsc: &'p Petsc,
-    m: &SparseMatrix<'p>,
-    k: &SparseMatrix<'p>,
-    mock: Option<&SparseMatrix<'p>>,
-    settings: NewmarkSettings,
-    q0: &[f64],
-    steps: usize,
-    forces: &mut Forces<'_, 'p>,
-    observe: impl FnMut(&State<'p>) -> Result<(), String>,
-) -> Result<usize, String> {
-    let counts = integrate_counted(petsc, m, k, mock, settings, q0, steps, forces, observe)?;
-    Ok(counts.most)
-}
-
-/// What the steps of [`integrate_counted`] took.
+/// What the steps of [`integrate`] took.
 struct IterationCounts {
     most: usize,
     total: usize,
@@ -573,9 +556,10 @@ struct IterationCounts {
     on_step_error: usize,
 }
 
-/// [`integrate`], counting every step's iterations.
+/// Integrates M q'' + K q = f(t, q) for `steps` steps from (q0, v0); `observe` sees every
+/// state. Returns what the steps took.
 #[allow(clippy::too_many_arguments)]
-fn integrate_counted<'p>(
+fn integrate<'p>(
     petsc: &'p Petsc,
     m: &SparseMatrix<'p>,
     k: &SparseMatrix<'p>,
@@ -899,7 +883,8 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
             }
             Ok(())
         },
-    )?;
+    )?
+    .most;
     let (e1, e5) = first.ok_or("no state")?;
     let (t, (end1, end5)) = *at_periods.last().ok_or("no whole period reached")?;
     let measured = -(end1 / e1).ln() / (2.0 * w1 * t);
@@ -993,7 +978,7 @@ fn oscillate(
     // f = -1 (external, towards the wall) + exp(-g) (contact), q = g.
     let mut forces = contact_force;
     let mut oscillation = Oscillation::released_at(g0);
-    let counts = integrate_counted(
+    let counts = integrate(
         petsc,
         &m,
         &k,
