@@ -34,6 +34,11 @@ pub fn write_transient(
         ),
         ("eliminated_points", tr.eliminations.points as f64),
         ("eliminated_unknowns", tr.eliminations.unknowns as f64),
+        ("elimination_parts", tr.eliminations.parts as f64),
+        (
+            "elimination_largest_part_unknowns",
+            tr.eliminations.largest_parts as f64,
+        ),
         (
             "elimination_local_iterations",
             tr.eliminations.local_iterations as f64,
@@ -72,6 +77,10 @@ pub fn write_transient(
         (
             "seconds_eliminating_linear_change",
             tr.eliminations.seconds_linear_change,
+        ),
+        (
+            "seconds_eliminating_combining",
+            tr.eliminations.seconds_combining,
         ),
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),

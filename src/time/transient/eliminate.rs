@@ -2,7 +2,10 @@
 //! Wilkes, SIAM J. Sci. Comput. 17 (1996) 1139; Cai & Li, SIAM J. Sci. Comput. 33 (2011)
 //! 746): at an iterate, the unknowns b those points couple are moved so that the residual's
 //! rows b vanish with the other unknowns held, solving the small nonlinear system
-//! R_b(q + delta) = 0 by Newton with its exact tangent, redundantly on every rank. The
+//! R_b(q + delta) = 0 by Newton with its exact tangent. b falls into independent parts
+//! (`parts.rs`), each solved on one rank (`local_newton.rs`), their moves summed over the
+//! ranks (before, every rank solved all of b: at 600k the eliminations took 1.6x as long
+//! on 2 ranks, benches/transient-results.md, twenty-sixth session). The
 //! fixed factor's correction then acts on a residual whose stiff, switching local laws (the
 //! friction band's mu p / slip_speed through gamma / (beta h), the exponential contact of a
 //! point that opens or closes) are already satisfied: the kinks at which the fixed J's
@@ -23,18 +26,18 @@
 //! per elimination, 56 with the sparse one); a dense pivoted LU only where the sparse one
 //! meets a zero pivot.
 
-use super::local_jacobian::{BlockScratch, LocalPattern};
-use crate::contact::kernel::{PointResponse, PointRows};
+use super::local_jacobian::LocalPattern;
+use super::local_newton::{Local, LocalFactor, PartUnknowns};
+use super::parts::{block, share_out, split};
+use crate::contact::kernel::PointRows;
 use crate::contact::ContactModel;
-use crate::la::lapack::RealLu;
-use crate::la::local_lu::{Csr, LocalLu, RowMarker};
+use crate::la::local_lu::{Csr, RowMarker};
 use crate::la::{
     ColumnBlock, LaError, MatrixFormat, Petsc, Selection, SparseMatrix, TangentChange, Vector,
 };
+use crate::measure::nan_max;
+use crate::parallel::sum_in_place;
 use crate::time::newmark::{Damping, Elimination, NewmarkSettings, State};
-
-/// Local Newton iterations at most per elimination.
-const MAX_LOCAL_ITERATIONS: usize = 25;
 
 /// What the eliminations of a run did.
 #[derive(Debug, Clone, Copy, Default)]
@@ -42,6 +45,11 @@ pub struct EliminationCounts {
     pub eliminations: usize,
     pub points: usize,
     pub unknowns: usize,
+    /// The independent parts the eliminations' unknowns fell into (`parts.rs`), and the
+    /// unknowns of each elimination's largest part, summed over the eliminations.
+    pub parts: usize,
+    pub largest_parts: usize,
+    /// Local Newton iterations, of each elimination the most any of its parts took.
     pub local_iterations: usize,
     /// LU factorizations of the local Jacobian (a factor is kept while it contracts the
     /// local residual tenfold per iteration, across the eliminations of a step when their
@@ -69,6 +77,9 @@ pub struct EliminationCounts {
     /// Of `seconds`: the linear force's change of each move, from the operators' columns on
     /// the moved unknowns.
     pub seconds_linear_change: f64,
+    /// Of `seconds`: the reduction that gives every rank all the parts' moves (with this
+    /// rank's wait for the others: the parts' imbalance).
+    pub seconds_combining: f64,
     /// The largest of the steps' `StepReport::elimination_mismatch` (<= 0.1 where the local
     /// residual is the global residual's rows and every local Newton converged).
     pub worst_mismatch: f64,
@@ -128,25 +139,23 @@ struct ZoneColumns {
 struct Kept<'p> {
     b: Vec<usize>,
     c1: f64,
+    /// b's parts (positions in b), and this rank's parts with their blocks and factors.
+    parts: Vec<Vec<usize>>,
+    own: Vec<OwnPart<'p>>,
+}
+
+/// A part of b this rank solves: its unknowns, the points that couple them, L_bb on them,
+/// the local Jacobian's pattern and its last local factor.
+struct OwnPart<'p> {
+    part: usize,
+    unknowns: PartUnknowns,
     linear: Csr,
     pattern: LocalPattern,
     factor: Option<LocalFactor<'p>>,
 }
 
-/// A local Jacobian's LU: sparse, or dense and pivoted where the sparse one met a zero pivot.
-enum LocalFactor<'p> {
-    Sparse(LocalLu<'p>),
-    Dense(RealLu),
-}
-
-impl LocalFactor<'_> {
-    fn solve(&self, b: &mut [f64]) -> Result<(), LaError> {
-        match self {
-            LocalFactor::Sparse(lu) => lu.solve(b),
-            LocalFactor::Dense(lu) => Ok(lu.solve(b)?),
-        }
-    }
-}
+/// The counters an elimination adds up over the ranks, after its moves in one reduction.
+const SUMMED: usize = 5;
 
 impl<'a, 'p> Eliminator<'a, 'p> {
     /// # Collective
@@ -284,84 +293,137 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             gather.gather(r)?,
         );
         let c1 = ns.gamma / (ns.beta * ns.step);
-        let problem = Local::new(
-            self.petsc,
-            self.contact,
-            &self.rows,
-            &self.zone_dofs,
-            &b,
-            &touching,
-            &q,
-            &v,
-            c1,
-        );
         // (Every rank holds the same b: the same branch everywhere, collective or not.)
         let blocks = std::time::Instant::now();
-        let kept = match self.kept.take() {
+        let mut kept = match self.kept.take() {
             Some(k) if k.b == b && k.c1 == c1 => k,
-            _ => {
-                let linear = self.linear_block(ns, &b);
-                let pattern = LocalPattern::new(b.len(), &problem.at, &linear);
-                Kept {
-                    b: b.clone(),
-                    c1,
-                    linear,
-                    pattern,
-                    factor: None,
-                }
-            }
+            _ => self.split(ns, b, &touching, c1),
         };
         self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
-        let rb: Vec<f64> = b
-            .iter()
-            .map(|&i| residual[self.zone.position[i] as usize])
-            .collect();
+        let n = kept.b.len();
+        // This rank's parts' moves in place in b, then the counters; zero elsewhere, so one
+        // sum over the ranks gives every rank all of delta (a sum with zeros is exact).
+        let ranks = self.petsc.size() as usize;
+        let mut combined = vec![0.0; n + SUMMED + ranks];
         let newton = std::time::Instant::now();
-        let Kept {
-            linear,
-            pattern,
-            factor,
-            ..
-        } = kept;
-        let solved = problem.newton(&linear, &pattern, &rb, 0.1 * target, factor)?;
+        let mut deepest = 0usize;
+        for own in &mut kept.own {
+            let members = &kept.parts[own.part];
+            let problem = Local::new(
+                self.petsc,
+                self.contact,
+                &self.rows,
+                &self.zone_dofs,
+                &own.unknowns,
+                &q,
+                &v,
+                c1,
+            );
+            let rb: Vec<f64> = own
+                .unknowns
+                .b
+                .iter()
+                .map(|&i| residual[self.zone.position[i] as usize])
+                .collect();
+            // |R_b| <= 0.1 target over all parts when each part's share is held to its
+            // share of the unknowns.
+            let tolerance = 0.1 * target * (members.len() as f64 / n as f64).sqrt();
+            let solved =
+                problem.newton(&own.linear, &own.pattern, &rb, tolerance, own.factor.take())?;
+            for (&i, &d) in members.iter().zip(&solved.delta) {
+                combined[i] = d;
+            }
+            let summed = &mut combined[n..n + SUMMED];
+            summed[0] += solved.factorizations as f64;
+            summed[1] += solved.dense_factorizations as f64;
+            summed[2] += solved.numeric_refactorizations as f64;
+            summed[3] += solved.factor_entries;
+            summed[4] += f64::from(u8::from(!solved.converged));
+            deepest = deepest.max(solved.iterations);
+            self.counts.seconds_factorizing += solved.factor_seconds;
+            own.factor = solved.factor;
+        }
+        self.counts.seconds_local_newton += newton.elapsed().as_secs_f64();
+        combined[n + SUMMED + self.petsc.rank() as usize] = deepest as f64;
+        let waiting = std::time::Instant::now();
+        sum_in_place(self.petsc.world(), &mut combined);
+        self.counts.seconds_combining += waiting.elapsed().as_secs_f64();
+        let summed = &combined[n..n + SUMMED];
         let c = &mut self.counts;
-        c.seconds_local_newton += newton.elapsed().as_secs_f64();
-        c.seconds_factorizing += solved.factor_seconds;
         c.eliminations += 1;
         c.points += chosen.len();
-        c.unknowns += b.len();
-        c.local_iterations += solved.iterations;
-        c.local_factorizations += solved.factorizations;
-        c.dense_factorizations += solved.dense_factorizations;
-        c.numeric_refactorizations += solved.numeric_refactorizations;
-        c.factor_entries += solved.factor_entries;
-        c.unconverged += usize::from(!solved.converged);
+        c.unknowns += n;
+        c.parts += kept.parts.len();
+        c.largest_parts += kept.parts.iter().map(Vec::len).max().unwrap_or(0);
+        c.local_iterations += combined[n + SUMMED..]
+            .iter()
+            .fold(0.0, |m, &x| nan_max(m, x)) as usize;
+        c.local_factorizations += summed[0] as usize;
+        c.dense_factorizations += summed[1] as usize;
+        c.numeric_refactorizations += summed[2] as usize;
+        c.factor_entries += summed[3];
+        c.unconverged += usize::from(summed[4] > 0.0);
+        let solved_delta = &combined[..n];
+        let b = &kept.b;
         let mut delta = r.duplicate()?;
         delta.set_all(0.0)?;
         let own = delta.ownership();
         {
             let mut local = delta.local_mut()?;
-            for (&i, &d) in b.iter().zip(&solved.delta) {
+            for (&i, &d) in b.iter().zip(solved_delta) {
                 if own.contains(&i) {
                     local[i - own.start] = d;
                 }
             }
         }
         let change = std::time::Instant::now();
-        let linear_change = self.linear_change(ns, &b, &solved.delta, r)?;
+        let linear_change = self.linear_change(ns, b, solved_delta, r)?;
         self.counts.seconds_linear_change += change.elapsed().as_secs_f64();
-        self.kept = Some(Kept {
-            b,
-            c1,
-            linear,
-            pattern,
-            factor: solved.factor,
-        });
+        self.kept = Some(kept);
         self.counts.seconds += clock.elapsed().as_secs_f64();
         Ok(Some(Elimination {
             delta,
             linear_change,
         }))
+    }
+
+    /// b's parts, and this rank's with their L_bb and local Jacobian's pattern.
+    fn split(&self, ns: &NewmarkSettings, b: Vec<usize>, touching: &[usize], c1: f64) -> Kept<'p> {
+        let linear = self.linear_block(ns, &b);
+        let point_unknowns: Vec<Vec<usize>> = touching
+            .iter()
+            .map(|&id| {
+                let dofs = self.rows[id].dofs.iter().filter(|&&d| d >= 0);
+                dofs.filter_map(|&d| b.binary_search(&(d as usize)).ok())
+                    .collect()
+            })
+            .collect();
+        let (parts, point_part) = split(&linear, &point_unknowns);
+        let owner = share_out(&parts, self.petsc.size() as usize);
+        let rank = self.petsc.rank() as usize;
+        let own = (0..parts.len())
+            .filter(|&p| owner[p] == rank)
+            .map(|part| {
+                let part_b: Vec<usize> = parts[part].iter().map(|&i| b[i]).collect();
+                let points: Vec<usize> = touching
+                    .iter()
+                    .zip(&point_part)
+                    .filter(|&(_, &p)| p == part)
+                    .map(|(&id, _)| id)
+                    .collect();
+                let linear = block(&linear, &parts[part]);
+                let unknowns = PartUnknowns::new(&self.rows, part_b, points);
+                let pattern = LocalPattern::new(unknowns.b.len(), &unknowns.at, &linear);
+                OwnPart {
+                    part,
+                    unknowns,
+                    linear,
+                    pattern,
+                    factor: None,
+                }
+            })
+            .collect();
+        Kept { b, c1, parts, own }
     }
 
     /// The factors of K, M and C in L = M / (beta h^2) + c1 C + K with the Rayleigh
@@ -432,235 +494,4 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         }
         Csr::from_triplets(b.len(), entries)
     }
-}
-
-/// One elimination's subproblem, the same on every rank.
-struct Local<'s, 'p> {
-    petsc: &'p Petsc<'p>,
-    contact: &'s ContactModel<'p>,
-    rows: &'s [PointRows],
-    zone_dofs: &'s [Vec<i32>],
-    /// The eliminated unknowns (ascending) and the points that couple any of them.
-    b: &'s [usize],
-    points: &'s [usize],
-    /// For every point, the position in b of each of its rows' DOFs (None: held).
-    at: Vec<Vec<Option<usize>>>,
-    /// The iterate's displacement and velocity on the zone.
-    q: &'s [f64],
-    v: &'s [f64],
-    c1: f64,
-}
-
-impl<'s, 'p> Local<'s, 'p> {
-    #[allow(clippy::too_many_arguments)] // the subproblem's parts, each named once here
-    fn new(
-        petsc: &'p Petsc<'p>,
-        contact: &'s ContactModel<'p>,
-        rows: &'s [PointRows],
-        zone_dofs: &'s [Vec<i32>],
-        b: &'s [usize],
-        points: &'s [usize],
-        q: &'s [f64],
-        v: &'s [f64],
-        c1: f64,
-    ) -> Self {
-        let position = |dof: i32| -> Option<usize> {
-            (dof >= 0)
-                .then(|| b.binary_search(&(dof as usize)).ok())
-                .flatten()
-        };
-        let at = points
-            .iter()
-            .map(|&id| rows[id].dofs.iter().map(|&d| position(d)).collect())
-            .collect();
-        Local {
-            petsc,
-            contact,
-            rows,
-            zone_dofs,
-            b,
-            points,
-            at,
-            q,
-            v,
-            c1,
-        }
-    }
-
-    /// The points' force on b at q + delta, and every coupling point's response there.
-    fn force(&self, delta: &[f64]) -> (Vec<f64>, Vec<PointResponse>) {
-        let mut f = vec![0.0; self.b.len()];
-        let mut responses = Vec::with_capacity(self.points.len());
-        let (mut u, mut w, mut force) = (Vec::new(), Vec::new(), Vec::new());
-        for (&id, at) in self.points.iter().zip(&self.at) {
-            let dofs = &self.zone_dofs[id];
-            let value = |x: &[f64], scale: f64, out: &mut Vec<f64>| {
-                out.clear();
-                out.extend(dofs.iter().zip(at).map(|(&z, p)| {
-                    let base = if z >= 0 { x[z as usize] } else { 0.0 };
-                    base + p.map_or(0.0, |p| scale * delta[p])
-                }));
-            };
-            value(self.q, 1.0, &mut u);
-            value(self.v, self.c1, &mut w);
-            force.resize(at.len(), 0.0);
-            let response = self
-                .contact
-                .evaluate_point(id, &self.rows[id], &u, &w, &mut force);
-            for (i, p) in at.iter().enumerate() {
-                if let Some(p) = p {
-                    f[*p] += force[i];
-                }
-            }
-            responses.push(response);
-        }
-        (f, responses)
-    }
-
-    /// L_bb + T_bb, T_bb the points' consistent tangent (-df_b/d delta) at `responses`, as
-    /// values of `pattern`.
-    fn jacobian_values(
-        &self,
-        linear: &Csr,
-        pattern: &LocalPattern,
-        responses: &[PointResponse],
-    ) -> Vec<f64> {
-        let mut values = pattern.linear_values(linear);
-        let (mut terms, mut scratch) = (Vec::new(), BlockScratch::default());
-        for (p, (&id, response)) in self.points.iter().zip(responses).enumerate() {
-            self.contact
-                .point_tangent_terms(id, response, self.c1, &mut terms);
-            pattern.add_point(p, &self.rows[id], &terms, &mut values, &mut scratch);
-        }
-        values
-    }
-
-    /// Newton with backtracking on |R_b| from delta = 0, its LU kept while it contracts the
-    /// residual tenfold per iteration (a chord: the local tangent changes at few points
-    /// between iterates), starting from `factor` (the previous elimination's, on the same
-    /// unknowns) when given.
-    fn newton(
-        &self,
-        linear: &Csr,
-        pattern: &LocalPattern,
-        rb: &[f64],
-        tolerance: f64,
-        mut factor: Option<LocalFactor<'p>>,
-    ) -> Result<LocalSolution<'p>, LaError> {
-        let n = self.b.len();
-        let (f0, responses0) = self.force(&vec![0.0; n]);
-        let residual = |delta: &[f64]| -> (Vec<f64>, f64, Vec<PointResponse>) {
-            let (f, responses) = self.force(delta);
-            let mut r = rb.to_vec();
-            linear.mult_add(delta, &mut r);
-            for i in 0..n {
-                r[i] -= f[i] - f0[i];
-            }
-            let norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
-            (r, norm, responses)
-        };
-        let mut out = LocalSolution {
-            delta: vec![0.0; n],
-            iterations: 0,
-            factorizations: 0,
-            dense_factorizations: 0,
-            numeric_refactorizations: 0,
-            factor_entries: 0.0,
-            factor_seconds: 0.0,
-            converged: false,
-            factor: None,
-        };
-        // At delta = 0 the residual is R_b itself (the forces' change is zero).
-        let (mut r, mut responses) = (rb.to_vec(), responses0);
-        let mut norm = r.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let mut previous = f64::INFINITY;
-        while out.iterations < MAX_LOCAL_ITERATIONS {
-            if norm <= tolerance {
-                out.converged = true;
-                break;
-            }
-            let fresh = factor.is_none() || norm > 0.1 * previous;
-            if fresh {
-                let clock = std::time::Instant::now();
-                let values = self.jacobian_values(linear, pattern, &responses);
-                let (made, numeric_only) = self.factor(pattern, values, factor.take())?;
-                out.factor_seconds += clock.elapsed().as_secs_f64();
-                out.factorizations += 1;
-                out.numeric_refactorizations += usize::from(numeric_only);
-                match &made {
-                    LocalFactor::Sparse(lu) => out.factor_entries += lu.factor_entries(),
-                    LocalFactor::Dense(_) => out.dense_factorizations += 1,
-                }
-                factor = Some(made);
-            }
-            let lu = factor.as_ref().expect("factored above");
-            let mut step: Vec<f64> = r.iter().map(|x| -x).collect();
-            lu.solve(&mut step)?;
-            out.iterations += 1;
-            let mut alpha = 1.0;
-            loop {
-                let trial: Vec<f64> = (out.delta.iter().zip(&step))
-                    .map(|(d, s)| d + alpha * s)
-                    .collect();
-                let (rt, nt, at_trial) = residual(&trial);
-                if nt.is_finite() && (nt <= (1.0 - 1e-4 * alpha) * norm || alpha < 1.0 / 64.0) {
-                    if nt < norm {
-                        previous = norm;
-                        (out.delta, r, norm, responses) = (trial, rt, nt, at_trial);
-                    } else if fresh {
-                        // No descent along the exact tangent's direction: give up here.
-                        out.factor = factor;
-                        return Ok(out);
-                    } else {
-                        // A kept factor's direction: refactor at this iterate and retry.
-                        previous = 0.0;
-                    }
-                    break;
-                }
-                alpha *= 0.5;
-            }
-        }
-        out.converged = norm <= tolerance;
-        out.factor = factor;
-        Ok(out)
-    }
-
-    /// LU of the local Jacobian with `values` in `pattern`: sparse, dense where that meets a
-    /// zero pivot; `previous`, a sparse factor on these unknowns, is refactored in place
-    /// (then true: the numerical phase alone).
-    fn factor(
-        &self,
-        pattern: &LocalPattern,
-        values: Vec<f64>,
-        previous: Option<LocalFactor<'p>>,
-    ) -> Result<(LocalFactor<'p>, bool), LaError> {
-        if let Some(LocalFactor::Sparse(mut lu)) = previous {
-            if lu.refactor(&values)? {
-                return Ok((LocalFactor::Sparse(lu), true));
-            }
-        }
-        let jacobian = Csr {
-            values,
-            ..pattern.jacobian.clone()
-        };
-        let made = match LocalLu::new(self.petsc, &jacobian)? {
-            Some(lu) => LocalFactor::Sparse(lu),
-            None => LocalFactor::Dense(RealLu::new(jacobian.n, jacobian.dense_columns())?),
-        };
-        Ok((made, false))
-    }
-}
-
-/// A local Newton's outcome.
-struct LocalSolution<'p> {
-    delta: Vec<f64>,
-    iterations: usize,
-    factorizations: usize,
-    dense_factorizations: usize,
-    numeric_refactorizations: usize,
-    factor_entries: f64,
-    factor_seconds: f64,
-    converged: bool,
-    /// The last factor used (for the next elimination on the same unknowns).
-    factor: Option<LocalFactor<'p>>,
 }

@@ -12,6 +12,8 @@ pub use checkpoint::check_resumable;
 pub use eliminate::EliminationCounts;
 mod jacobian;
 mod local_jacobian;
+mod local_newton;
+mod parts;
 mod recorder;
 mod settings;
 
