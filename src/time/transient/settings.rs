@@ -58,8 +58,9 @@ pub struct TransientSettings {
     pub update_factor: bool,
     /// Where the fixed Jacobian's iterations stall, eliminate the contact points whose tangent
     /// changed most, at most this many, at every iterate (a small nonlinear system over their
-    /// unknowns, solved by Newton on every rank: `eliminate.rs`) before the fixed factor's
-    /// correction, instead of updating the factor there; 0 (default): no elimination.
+    /// unknowns, split into independent parts, each solved by Newton on one rank:
+    /// `eliminate.rs`) before the fixed factor's correction, instead of updating the factor
+    /// there; 0 (default): no elimination.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub eliminate_points: usize,
     /// `"modified"` (default): the fixed Jacobian; `"full"`: J rebuilt with the contact tangent
