@@ -196,12 +196,13 @@ impl RunSummary {
                 let per = |x: usize| x as f64 / e.eliminations as f64;
                 writeln!(
                     f,
-                    "    {} nonlinear eliminations of contact points (the updated-factor retries above made them in place of the update): {:.1} points and {:.1} unknowns each in {:.1} independent parts (the largest {:.1} unknowns; each part solved on one rank), {:.2} local Newton iterations (its slowest part's) and {:.2} LU factorizations (all its parts') each (sparse, {:.0} entries each, {} of them by the numerical phase alone; {} dense after a zero pivot; {} ended unconverged), {:.1} s (the tangent's change at the iterate {:.1} s, ranking the points {:.1} s, their operator blocks and the local Jacobian's pattern {:.1} s, local Newton {:.1} s, of which local Jacobians and their LU {:.1} s; the linear force's change of the moves {:.2} s, combining the parts' moves over the ranks {:.2} s); the global residual on the eliminated unknowns after them at most {:.2} of the target (0.1 when consistent)",
+                    "    {} nonlinear eliminations of contact points (the updated-factor retries above made them in place of the update): {:.1} points and {:.1} unknowns each in {:.1} independent parts (the largest {:.1} unknowns; each part solved on one rank; {} parts started from a kept factor), {:.2} local Newton iterations (its slowest part's) and {:.2} LU factorizations (all its parts') each (sparse, {:.0} entries each, {} of them by the numerical phase alone; {} dense after a zero pivot; {} ended unconverged), {:.1} s (the tangent's change at the iterate {:.1} s, ranking the points {:.1} s, their operator blocks and the local Jacobian's pattern {:.1} s, local Newton {:.1} s, of which local Jacobians and their LU {:.1} s; the linear force's change of the moves {:.2} s, combining the parts' moves over the ranks {:.2} s); the global residual on the eliminated unknowns after them at most {:.2} of the target (0.1 when consistent)",
                     e.eliminations,
                     per(e.points),
                     per(e.unknowns),
                     per(e.parts),
                     per(e.largest_parts),
+                    e.parts_on_kept_factors,
                     per(e.local_iterations),
                     per(e.local_factorizations),
                     e.factor_entries / (e.local_factorizations - e.dense_factorizations).max(1) as f64,

@@ -40,6 +40,10 @@ pub fn write_transient(
             tr.eliminations.largest_parts as f64,
         ),
         (
+            "elimination_parts_on_kept_factors",
+            tr.eliminations.parts_on_kept_factors as f64,
+        ),
+        (
             "elimination_local_iterations",
             tr.eliminations.local_iterations as f64,
         ),

@@ -82,15 +82,24 @@ pub(super) fn block(a: &Csr, members: &[usize]) -> Csr {
     out
 }
 
-/// The rank that solves each part: the largest first, each to the rank with the least work
-/// so far (the lowest rank among equals), the work of a part of m unknowns taken as m^1.5
-/// (a sparse LU under nested dissection on a surface mesh). Every rank computes the same.
-pub(super) fn share_out(parts: &[Vec<usize>], ranks: usize) -> Vec<usize> {
+/// The rank that solves each part: `fixed[p]` where given (a part on the same unknowns as
+/// one of the last elimination's stays where its factor is), the others the largest first,
+/// each to the rank with the least work so far (the lowest rank among equals), the work of a
+/// part of m unknowns taken as m^1.5 (a sparse LU under nested dissection on a surface mesh).
+/// Every rank computes the same, and which parts keep their factor does not depend on the
+/// number of ranks.
+pub(super) fn share_out(parts: &[Vec<usize>], ranks: usize, fixed: &[Option<usize>]) -> Vec<usize> {
     let work = |p: &Vec<usize>| (p.len() as f64).powf(1.5);
-    let mut order: Vec<usize> = (0..parts.len()).collect();
-    order.sort_by(|&a, &b| parts[b].len().cmp(&parts[a].len()).then(a.cmp(&b)));
     let mut load = vec![0.0; ranks.max(1)];
     let mut owner = vec![0; parts.len()];
+    for (p, f) in fixed.iter().enumerate() {
+        if let Some(rank) = *f {
+            owner[p] = rank;
+            load[rank] += work(&parts[p]);
+        }
+    }
+    let mut order: Vec<usize> = (0..parts.len()).filter(|&p| fixed[p].is_none()).collect();
+    order.sort_by(|&a, &b| parts[b].len().cmp(&parts[a].len()).then(a.cmp(&b)));
     for p in order {
         let (rank, _) = load
             .iter()
@@ -144,11 +153,15 @@ mod tests {
     fn parts_are_shared_out_largest_first_to_the_least_loaded_rank() {
         let part = |m: usize| (0..m).collect::<Vec<_>>();
         let parts = vec![part(100), part(460), part(130), part(60), part(40)];
-        let owner = share_out(&parts, 2);
+        let free = vec![None; 5];
+        let owner = share_out(&parts, 2, &free);
         // 460 alone outweighs the rest (460^1.5 = 9,866 > 1,482 + 1,000 + 465 + 253).
         assert_eq!(owner, vec![1, 0, 1, 1, 1]);
-        assert_eq!(share_out(&parts, 1), vec![0; 5]);
+        assert_eq!(share_out(&parts, 1, &free), vec![0; 5]);
         let even = vec![part(50), part(50), part(50), part(50)];
-        assert_eq!(share_out(&even, 2), vec![0, 1, 0, 1]);
+        assert_eq!(share_out(&even, 2, &[None; 4]), vec![0, 1, 0, 1]);
+        // The 100 and 60 stay on rank 0 with their factors; the rest balance around them.
+        let fixed = [Some(0), None, None, Some(0), None];
+        assert_eq!(share_out(&parts, 2, &fixed), vec![0, 1, 0, 0, 0]);
     }
 }
