@@ -164,7 +164,7 @@ impl RunSummary {
                 "no solve with the factor in this process (resumed at the run's end)".to_string()
             };
             writeln!(f,
-                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; this process's {} steps {:.2} iterations each ({} accepted on the step's truncation error), with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs {}; per step {:.2} ms in forces, {:.2} ms in operator products",
+                "transient: {} steps to t = {:.4e} s, {:.2} iterations per step (max {}), {:.2} ms per step; {} step cuts, {} Jacobian refreshes, {} updated-factor retries, {} Newton-Krylov retries ({} GMRES iterations), {} full-Newton retries; this process's {} steps {:.2} iterations each ({} accepted on the step's truncation error), with the failed attempts {:.2} iterations and {:.2} solves with the factor per step; {} Jacobian factorizations ({}, {:.3e} entries, {:.2} s, of which {:.2} s assembling J); one iteration {:.2} ms vs {}; per step {:.2} ms in forces, {:.2} ms in operator products, {:.2} ms in the failed attempts, {:.2} ms writing the signals, states and checkpoints",
                 t.steps,
                 t.simulated,
                 t.mean_iterations,
@@ -189,14 +189,16 @@ impl RunSummary {
                 1e3 * t.seconds_per_iteration,
                 solve,
                 1e3 * t.seconds_forces_per_step,
-                1e3 * t.seconds_products_per_step
+                1e3 * t.seconds_products_per_step,
+                1e3 * t.seconds_failed_per_step,
+                1e3 * t.seconds_recording_per_step
             )?;
             let e = &t.eliminations;
             if e.eliminations > 0 {
                 let per = |x: usize| x as f64 / e.eliminations as f64;
                 writeln!(
                     f,
-                    "    {} nonlinear eliminations of contact points (the updated-factor retries above made them in place of the update): {:.1} points and {:.1} unknowns each in {:.1} independent parts (the largest {:.1} unknowns; each part solved on one rank; {} parts started from a kept factor), {:.2} local Newton iterations (its slowest part's) and {:.2} LU factorizations (all its parts') each (sparse, {:.0} entries each, {} of them by the numerical phase alone; {} dense after a zero pivot; {} ended unconverged), {:.1} s (the tangent's change at the iterate {:.1} s, ranking the points {:.1} s, their operator blocks and the local Jacobian's pattern {:.1} s, local Newton {:.1} s, of which local Jacobians and their LU {:.1} s; the linear force's change of the moves {:.2} s, combining the parts' moves over the ranks {:.2} s); the global residual on the eliminated unknowns after them at most {:.2} of the target (0.1 when consistent)",
+                    "    {} nonlinear eliminations of contact points (the updated-factor retries above made them in place of the update): {:.1} points and {:.1} unknowns each in {:.1} independent parts (the largest {:.1} unknowns; each part solved on one rank; {} parts started from a kept factor), {:.2} local Newton iterations (its slowest part's) and {:.2} LU factorizations (all its parts') each (sparse, {:.0} entries each, {} of them by the numerical phase alone; {} dense after a zero pivot; {} ended unconverged), {:.1} s (the tangent's change at the iterate {:.1} s, ranking the points {:.1} s, their operator blocks and the local Jacobian's pattern {:.1} s, local Newton {:.1} s (on the slowest rank {:.1} s), of which local Jacobians and their LU {:.1} s; the linear force's change of the moves {:.2} s, combining the parts' moves over the ranks {:.2} s); the global residual on the eliminated unknowns after them at most {:.2} of the target (0.1 when consistent)",
                     e.eliminations,
                     per(e.points),
                     per(e.unknowns),
@@ -214,6 +216,7 @@ impl RunSummary {
                     e.seconds_ranking,
                     e.seconds_blocks,
                     e.seconds_local_newton,
+                    e.seconds_local_newton_slowest,
                     e.seconds_factorizing,
                     e.seconds_linear_change,
                     e.seconds_combining,

@@ -133,6 +133,10 @@ pub struct TransientSummary {
     /// and solves with the factor (GMRES' and the update's column solves included).
     pub all_iterations_per_step: f64,
     pub all_solves_per_step: f64,
+    /// Per step of this process's run: the attempts that failed (wall time), and what
+    /// follows each accepted step (signals, states and checkpoints written, progress).
+    pub seconds_failed_per_step: f64,
+    pub seconds_recording_per_step: f64,
     pub factorizations: usize,
     /// One fixed-Jacobian iteration (forces, residual, solve) and one solve with the factor.
     pub seconds_per_iteration: f64,
@@ -424,6 +428,8 @@ impl TransientSummary {
             iterations_per_step_run: t.iterations_run as f64 / steps_run,
             all_iterations_per_step: (t.iterations_run + t.failed_iterations) as f64 / steps_run,
             all_solves_per_step: (t.factor_solves + t.failed_solves) as f64 / steps_run,
+            seconds_failed_per_step: t.seconds_in_failed_attempts / steps_run,
+            seconds_recording_per_step: t.seconds_recording / steps_run,
             factorizations: t.factorizations,
             seconds_per_iteration: stepping / iterations_run,
             seconds_per_solve: t.seconds_in_factor_solves / t.factor_solves.max(1) as f64,

@@ -75,6 +75,10 @@ pub fn write_transient(
             tr.eliminations.seconds_local_newton,
         ),
         (
+            "seconds_eliminating_local_newton_slowest_rank",
+            tr.eliminations.seconds_local_newton_slowest,
+        ),
+        (
             "seconds_eliminating_factorizing",
             tr.eliminations.seconds_factorizing,
         ),
@@ -89,6 +93,8 @@ pub fn write_transient(
         ("elimination_worst_mismatch", tr.eliminations.worst_mismatch),
         ("failed_attempt_iterations", tr.failed_iterations as f64),
         ("failed_attempt_factor_solves", tr.failed_solves as f64),
+        ("seconds_in_failed_attempts", tr.seconds_in_failed_attempts),
+        ("seconds_recording", tr.seconds_recording),
         ("factorizations", tr.factorizations as f64),
         ("factor_entries", tr.factor_entries),
         ("states_written", tr.states as f64),
@@ -109,7 +115,11 @@ pub fn write_transient(
         ("iterations_run", tr.iterations_run as f64),
         ("steps_on_step_error", tr.steps_on_step_error as f64),
     ];
-    for (name, value) in numbers {
+    // The counts and times are this process's (the summary prints rank 0's): an attribute
+    // takes one value, so every rank writes rank 0's (the times differ between ranks).
+    let mut values: Vec<f64> = numbers.iter().map(|&(_, v)| v).collect();
+    crate::parallel::broadcast_f64s(petsc.world(), 0, &mut values);
+    for ((name, _), value) in numbers.iter().zip(values) {
         file.set_number(g, name, value)?;
     }
     file.set_number(g, "static_residual_removed_n", tr.static_residual)?;

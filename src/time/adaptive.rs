@@ -11,7 +11,7 @@ use crate::la::SparseMatrix;
 
 /// What an adaptive run did besides stepping, and where its step control stands (so a
 /// checkpoint can resume it exactly).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepControl {
     pub steps: usize,
     /// Steps halved after a failed step (each with a new factor), and doublings back.
@@ -40,6 +40,8 @@ pub struct StepControl {
     /// attempts' are in each step's report).
     pub failed_iterations: usize,
     pub failed_solves: usize,
+    /// Wall time of the attempts that failed (s, this process's).
+    pub failed_seconds: f64,
 }
 
 /// How a step is corrected (`StepControl::fallback`): the fixed factor, the factor updated at
@@ -129,6 +131,23 @@ fn attempt_name(control: &StepControl, full_newton: bool, eliminating: bool) -> 
         _ if control.fresh => "the refreshed Jacobian",
         _ => "the fixed Jacobian",
     }
+}
+
+/// A failed attempt's course for the log: its iterations, the residual at the predictor and
+/// the least one, and its wall time.
+fn attempt_history(residuals: &[f64], seconds: f64) -> String {
+    let least = residuals
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map_or(String::new(), |(k, r)| format!(", least {r:.3e} after {k}"));
+    let first = residuals
+        .first()
+        .map_or(String::new(), |r| format!(", {r:.3e} at the predictor"));
+    format!(
+        "{} iterations{first}{least}, {seconds:.3} s",
+        residuals.len().saturating_sub(1)
+    )
 }
 
 /// What the caller of [`integrate_adaptive`] wants after an accepted step.
@@ -257,8 +276,10 @@ pub fn integrate_adaptive<'p>(
                     residual, target, ..
                 }) => {
                     let (iterations, solves) = integrator.failed_attempt();
+                    let (residuals, seconds) = integrator.failed_attempt_residuals();
                     control.failed_iterations += iterations;
                     control.failed_solves += solves;
+                    control.failed_seconds += seconds;
                     let failed = attempt_name(control, full_newton, eliminate.is_some());
                     let next = next_attempt(
                         control,
@@ -279,7 +300,10 @@ pub fn integrate_adaptive<'p>(
                         });
                     };
                     let t = state.time;
-                    let tail = format!("(residual {residual:.3e} vs {target:.3e})");
+                    let tail = format!(
+                        "(residual {residual:.3e} vs {target:.3e}; {})",
+                        attempt_history(residuals, seconds)
+                    );
                     match next {
                         Next::Refresh => {
                             control.refreshed = true;

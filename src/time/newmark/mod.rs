@@ -241,8 +241,11 @@ pub struct Newmark<'a, 'p> {
     /// Newton-Krylov's preconditioner: the factor updated by the tangent change's dominant
     /// points (their columns cached for this factor's life).
     low_rank: LowRankUpdate<'p>,
-    /// Iterations of the last attempt that did not converge (its solves: `solves`).
+    /// Iterations of the last attempt that did not converge (its solves: `solves`), its
+    /// residual at each iterate and its wall time.
     failed_iterations: usize,
+    failed_residuals: Vec<f64>,
+    failed_seconds: f64,
     /// The full Newton's last J, renewed in place at the next iterate.
     full_newton_spare: Option<RetiredJacobian<'p>>,
     /// The predictor and its linear force, kept when the factor solves only to single
@@ -295,6 +298,8 @@ impl<'a, 'p> Newmark<'a, 'p> {
             solves: SolveCount::default(),
             low_rank: LowRankUpdate::default(),
             failed_iterations: 0,
+            failed_residuals: Vec::new(),
+            failed_seconds: 0.0,
             full_newton_spare: None,
             q_pred: q1.duplicate()?,
             z_pred: q1.duplicate()?,
@@ -403,6 +408,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
         mut correction: Correction<'_, '_, 'p>,
         line_search: bool,
     ) -> Result<StepReport, TimeError> {
+        let started = std::time::Instant::now();
         let h = self.settings.step;
         let t1 = state.time + h;
         // Anderson's combination redirects the fixed factor's corrections after an
@@ -481,11 +487,15 @@ impl<'a, 'p> Newmark<'a, 'p> {
             history.push(r);
             // Stalled: less than a halving over the last four iterations after eight; at that
             // rate the tolerance is out of reach within the limit, and the caller has better
-            // corrections to try.
+            // corrections to try (a patient rule that let such attempts go on while their rate
+            // reached the target was neutral at 600k: benches/transient-results.md, twentieth
+            // session).
             let k = history.len();
             let stalled = k > 8 && r > 0.5 * history[k - 5];
             if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
                 self.failed_iterations = report.iterations;
+                self.failed_seconds = started.elapsed().as_secs_f64();
+                self.failed_residuals = history;
                 self.drift = drift_at_start;
                 return Err(TimeError::NotConverged {
                     step: state.step + 1,
@@ -611,6 +621,12 @@ impl<'a, 'p> Newmark<'a, 'p> {
     /// (what a retry cost beyond the accepted attempt's report).
     pub fn failed_attempt(&self) -> (usize, usize) {
         (self.failed_iterations, self.solves.solves)
+    }
+
+    /// The last failed attempt's residual at each iterate (the predictor's first) and its
+    /// wall time.
+    pub fn failed_attempt_residuals(&self) -> (&[f64], f64) {
+        (&self.failed_residuals, self.failed_seconds)
     }
 
     /// Accepts the iterate and completes the step's report.

@@ -151,6 +151,7 @@ impl<'p> Checkpoint<'p> {
                 ("updated_retries", c.updated_retries as f64),
                 ("failed_iterations", c.failed_iterations as f64),
                 ("failed_solves", c.failed_solves as f64),
+                ("failed_seconds", c.failed_seconds),
                 ("signal_rows", out.time.len() as f64),
                 ("state_rows", out.states as f64),
                 ("jacobian_state", f64::from(u8::from(jacobian_at.is_some()))),
@@ -261,6 +262,7 @@ impl<'p> Checkpoint<'p> {
             updated_retries: number("updated_retries").unwrap_or(0.0) as usize,
             failed_iterations: number("failed_iterations").unwrap_or(0.0) as usize,
             failed_solves: number("failed_solves").unwrap_or(0.0) as usize,
+            failed_seconds: number("failed_seconds").unwrap_or(0.0),
         };
         let state_rows = number("state_rows")? as usize;
         let mut checkpoint = Checkpoint {

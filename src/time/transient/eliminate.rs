@@ -79,6 +79,9 @@ pub struct EliminationCounts {
     pub seconds_blocks: f64,
     pub seconds_local_newton: f64,
     pub seconds_factorizing: f64,
+    /// Of each elimination the local Newton's time on the rank that took longest, summed:
+    /// what the parts cost on the critical path (`seconds_combining` is this rank's wait).
+    pub seconds_local_newton_slowest: f64,
     /// Of `seconds`: the linear force's change of each move, from the operators' columns on
     /// the moved unknowns.
     pub seconds_linear_change: f64,
@@ -312,7 +315,8 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         // This rank's parts' moves in place in b, then the counters; zero elsewhere, so one
         // sum over the ranks gives every rank all of delta (a sum with zeros is exact).
         let ranks = self.petsc.size() as usize;
-        let mut combined = vec![0.0; n + SUMMED + ranks];
+        // After the counters: each rank's deepest local Newton, then its time.
+        let mut combined = vec![0.0; n + SUMMED + 2 * ranks];
         let newton = std::time::Instant::now();
         let mut deepest = 0usize;
         for own in &mut kept.own {
@@ -352,8 +356,11 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             self.counts.seconds_factorizing += solved.factor_seconds;
             own.factor = solved.factor;
         }
-        self.counts.seconds_local_newton += newton.elapsed().as_secs_f64();
-        combined[n + SUMMED + self.petsc.rank() as usize] = deepest as f64;
+        let newton_seconds = newton.elapsed().as_secs_f64();
+        self.counts.seconds_local_newton += newton_seconds;
+        let rank = self.petsc.rank() as usize;
+        combined[n + SUMMED + rank] = deepest as f64;
+        combined[n + SUMMED + ranks + rank] = newton_seconds;
         let waiting = std::time::Instant::now();
         sum_in_place(self.petsc.world(), &mut combined);
         self.counts.seconds_combining += waiting.elapsed().as_secs_f64();
@@ -365,9 +372,9 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         c.parts += kept.parts.len();
         c.parts_on_kept_factors += summed[5] as usize;
         c.largest_parts += kept.parts.iter().map(Vec::len).max().unwrap_or(0);
-        c.local_iterations += combined[n + SUMMED..]
-            .iter()
-            .fold(0.0, |m, &x| nan_max(m, x)) as usize;
+        let (deepest, newton_seconds) = combined[n + SUMMED..].split_at(ranks);
+        c.local_iterations += deepest.iter().fold(0.0, |m, &x| nan_max(m, x)) as usize;
+        c.seconds_local_newton_slowest += newton_seconds.iter().fold(0.0, |m, &x| nan_max(m, x));
         c.local_factorizations += summed[0] as usize;
         c.dense_factorizations += summed[1] as usize;
         c.numeric_refactorizations += summed[2] as usize;

@@ -88,6 +88,12 @@ pub struct Transient {
     pub updated_retries: usize,
     pub failed_iterations: usize,
     pub failed_solves: usize,
+    /// Wall time of the attempts that failed (their eliminations too, which
+    /// `eliminations.seconds` also counts).
+    pub seconds_in_failed_attempts: f64,
+    /// Wall time after each accepted step: the signals and states written, checkpoints, the
+    /// saturation check, progress.
+    pub seconds_recording: f64,
     /// GMRES iterations of the Newton-Krylov retries.
     pub krylov_iterations: usize,
     /// The nonlinear eliminations of this process's run (`transient.eliminate_points`).
@@ -228,6 +234,8 @@ impl Transient {
             updated_retries: 0,
             failed_iterations: 0,
             failed_solves: 0,
+            seconds_in_failed_attempts: 0.0,
+            seconds_recording: 0.0,
             krylov_iterations: 0,
             eliminations: EliminationCounts::default(),
             factorizations: 0,
@@ -343,7 +351,11 @@ pub fn run<'p>(
     let mut control = StepControl::default();
     let (mut recorder, restart_at) =
         open_record(petsc, settings, &input, files, &mut state, &mut control)?;
-    let failed_before = (control.failed_iterations, control.failed_solves);
+    let failed_before = (
+        control.failed_iterations,
+        control.failed_solves,
+        control.failed_seconds,
+    );
     let builder = RefCell::new(JacobianBuilder::new(
         petsc,
         contact,
@@ -399,6 +411,7 @@ pub fn run<'p>(
     let mut checkpoint_failure = None;
     let mut on_step =
         |s: &State<'p>, report: &StepReport, c: &StepControl| -> Result<Flow, TimeError> {
+            let recording = Instant::now();
             let h = settings.step / f64::from(1u32 << c.level);
             status_changes.set(0);
             let out = &mut recorder.out;
@@ -460,6 +473,7 @@ pub fn run<'p>(
                 let rate = (done - first_step) as f64 / t.elapsed().as_secs_f64().max(1e-9);
                 bar.update(done, &progress_line(&recorder.out, s.time, rate));
             }
+            recorder.out.seconds_recording += recording.elapsed().as_secs_f64();
             Ok(if stop { Flow::Stop } else { Flow::Continue })
         };
     let rank0 = petsc.rank() == 0;
@@ -536,6 +550,7 @@ pub fn run<'p>(
     // This process's part, like `iterations_run` and `factor_solves`.
     out.failed_iterations = control.failed_iterations - failed_before.0;
     out.failed_solves = control.failed_solves - failed_before.1;
+    out.seconds_in_failed_attempts = control.failed_seconds - failed_before.2;
     out.count_sizes(&k0, contact)?;
     Ok((out, result.err()))
 }
