@@ -139,6 +139,7 @@ fn attempt_history(residuals: &[f64], seconds: f64) -> String {
     let least = residuals
         .iter()
         .enumerate()
+        .filter(|(_, r)| !r.is_nan())
         .min_by(|a, b| a.1.total_cmp(b.1))
         .map_or(String::new(), |(k, r)| format!(", least {r:.3e} after {k}"));
     let first = residuals
@@ -362,4 +363,21 @@ pub fn integrate_adaptive<'p>(
         retired = factor.retire();
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::attempt_history;
+
+    #[test]
+    fn a_stall_line_gives_the_attempts_course() {
+        let line = attempt_history(&[1.0e4, 30.0, 6.9, 7.5], 0.147);
+        assert_eq!(
+            line,
+            "3 iterations, 1.000e4 at the predictor, least 6.900e0 after 2, 0.147 s"
+        );
+        // A NaN residual is not the least one.
+        let line = attempt_history(&[2.0, -f64::NAN], 0.01);
+        assert!(line.contains("least 2.000e0 after 0"), "{line}");
+    }
 }
