@@ -493,10 +493,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             let k = history.len();
             let stalled = k > 8 && r > 0.5 * history[k - 5];
             if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
-                self.failed_iterations = report.iterations;
-                self.failed_seconds = started.elapsed().as_secs_f64();
-                self.failed_residuals = history;
-                self.drift = drift_at_start;
+                self.fail(report.iterations, started, history, drift_at_start);
                 return Err(TimeError::NotConverged {
                     step: state.step + 1,
                     time: t1,
@@ -621,6 +618,21 @@ impl<'a, 'p> Newmark<'a, 'p> {
     /// (what a retry cost beyond the accepted attempt's report).
     pub fn failed_attempt(&self) -> (usize, usize) {
         (self.failed_iterations, self.solves.solves)
+    }
+
+    /// Records a failed attempt (its iterations, start and residuals) and restores the
+    /// carried z's drift to the step's start (its solves do not count).
+    fn fail(
+        &mut self,
+        iterations: usize,
+        started: std::time::Instant,
+        residuals: Vec<f64>,
+        drift: carried::Drift,
+    ) {
+        self.failed_iterations = iterations;
+        self.failed_seconds = started.elapsed().as_secs_f64();
+        self.failed_residuals = residuals;
+        self.drift = drift;
     }
 
     /// The last failed attempt's residual at each iterate (the predictor's first) and its
