@@ -140,23 +140,28 @@ impl SeriesFile {
         Ok(())
     }
 
-    /// Appends one row of a distributed vector: every rank writes `local` at `columns`.
+    /// Appends `rows` rows of a distributed vector: every rank writes `local` (row-major,
+    /// `rows` x its columns) at `columns`.
     ///
     /// # Collective
     pub fn append_distributed(
         &self,
         path: &str,
         local: &[f64],
+        rows: usize,
         columns: std::ops::Range<usize>,
     ) -> Result<(), ResultsError> {
+        if rows == 0 {
+            return Ok(());
+        }
         let ds = self.dataset(path)?;
         let shape = ds.shape();
         let row = shape[0];
-        ds.resize([row + 1, shape[1]]).map_err(self.err())?;
+        ds.resize([row + rows, shape[1]]).map_err(self.err())?;
         if !columns.is_empty() {
-            let a = Array2::from_shape_vec((1, local.len()), local.to_vec())
-                .expect("one row of local values");
-            ds.write_slice(&a, s![row..row + 1, columns.start..columns.end])
+            let a = Array2::from_shape_vec((rows, columns.len()), local.to_vec())
+                .expect("rows x local columns values");
+            ds.write_slice(&a, s![row..row + rows, columns.start..columns.end])
                 .map_err(self.err())?;
         }
         Ok(())
@@ -283,9 +288,10 @@ impl Series for SeriesFile {
         &self,
         path: &str,
         local: &[f64],
+        rows: usize,
         columns: Range<usize>,
     ) -> StoreResult<()> {
-        SeriesFile::append_distributed(self, path, local, columns).map_err(store)
+        SeriesFile::append_distributed(self, path, local, rows, columns).map_err(store)
     }
     fn truncate(&self, path: &str, rows: usize) -> StoreResult<()> {
         SeriesFile::truncate(self, path, rows).map_err(store)

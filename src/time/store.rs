@@ -24,11 +24,12 @@ pub trait Series {
     fn rows(&self, path: &str) -> StoreResult<usize>;
     /// Appends whole rows (rank 0's values; the others pass theirs too and write nothing).
     fn append(&self, path: &str, values: &[f64]) -> StoreResult<()>;
-    /// Appends one row of which every rank holds `columns`.
+    /// Appends `rows` rows of which every rank holds `columns` (`local` row-major).
     fn append_distributed(
         &self,
         path: &str,
         local: &[f64],
+        rows: usize,
         columns: Range<usize>,
     ) -> StoreResult<()>;
     /// Cuts a series back to `rows` rows.
