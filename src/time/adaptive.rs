@@ -170,7 +170,7 @@ pub enum Flow {
 /// fails too is the error returned. `control` starts at its default, or where a checkpoint
 /// left it.
 ///
-/// About 185 lines, on purpose: the factor's loop and the step's loop share the integrator
+/// About 190 lines, on purpose: the factor's loop and the step's loop share the integrator
 /// (which borrows the factor) and the control; what to do after a failure is decided in
 /// [`next_attempt`], what stays here is each outcome's bookkeeping and its log line.
 ///
