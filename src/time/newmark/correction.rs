@@ -6,10 +6,10 @@
 use super::{Jacobian, Newmark, NewmarkSettings, RetiredJacobian, State, StepReport};
 use crate::la::{DirectSolver, LaError, LowRankUpdate, TangentChange, Vector};
 
-/// Builds and factorizes J for a step size; `None`: the initial (mock) tangent, `Some(state)`:
-/// the tangent of that state. The third argument hands back the matrix and factor of the
-/// Jacobian this one replaces, which a builder may renew in place (numerical refactorization
-/// on the same pattern) instead of building anew.
+/// Builds and factorizes J for a step size; `None`: the initial tangent (the static state's),
+/// `Some(state)`: the tangent of that state. The third argument hands back the matrix and
+/// factor of the Jacobian this one replaces, which a builder may renew in place (numerical
+/// refactorization on the same pattern) instead of building anew.
 pub type Factorize<'f, 'p> = dyn FnMut(
         &NewmarkSettings,
         Option<&State<'p>>,

@@ -1,14 +1,16 @@
-//! The transient's Jacobians: J = M/(beta h^2) + gamma/(beta h) C + K0 + K_mock, factorized by
-//! MUMPS over the ranks or, for a small reduced model, whole on every rank by PETSc's LU (one
-//! solve streams the factor at one core's bandwidth, ~3x faster than MUMPS' distributed solve
-//! at 2,000 unknowns: benches/transient-results.md). The first uses the static state's contact
-//! stiffness (normal and stick: symmetric, Cholesky with MUMPS) as the mock contact stiffness
-//! of DESIGN.md; a refresh uses the tangent of the current state, friction and friction
-//! damping included (unsymmetric, LU).
+//! The transient's Jacobians: J = M/(beta h^2) + gamma/(beta h) C + K0 + the contact tangent,
+//! factorized by MUMPS over the ranks or, for a small reduced model, whole on every rank by
+//! PETSc's LU (one solve streams the factor at one core's bandwidth, ~3x faster than MUMPS'
+//! distributed solve at 2,000 unknowns: benches/transient-results.md). The first uses the
+//! static state's tangent: by default the consistent one (friction coupling and friction
+//! damping included, unsymmetric, LU: the growth's iterations need ~1 correction per step),
+//! or with `first_jacobian = "mock"` its normal and stick stiffness alone (symmetric, Cholesky
+//! with MUMPS), the mock contact stiffness of DESIGN.md; a refresh uses the tangent of the
+//! current state, friction and friction damping included (unsymmetric, LU).
 
 use std::time::Instant;
 
-use super::settings::JacobianFactor;
+use super::settings::{FirstJacobian, JacobianFactor};
 use crate::contact::kernel::Part;
 use crate::contact::linearize::Base;
 use crate::contact::linearize::TangentOperator;
@@ -36,13 +38,15 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     m: &'a SparseMatrix<'p>,
     c: Damping<'a, 'p>,
     static_state: &'a ContactState,
-    /// The static mock contact stiffness (normal and stick).
-    mock: SparseMatrix<'p>,
+    /// The static mock contact stiffness (normal and stick), with `first_jacobian = "mock"`.
+    mock: Option<SparseMatrix<'p>>,
     /// Where J is factorized ("auto" resolved).
     factor: JacobianFactor,
+    /// The first J's contact tangent at the static state.
+    first: FirstJacobian,
     /// A restart's saved Jacobian state, used by the first factorization.
     restart_at: Option<(Vector<'p>, Vector<'p>)>,
-    /// The state the current Jacobian was built at (None: the static mock).
+    /// The state the current Jacobian was built at (None: the static state, the first J).
     pub built_at: Option<(Vector<'p>, Vector<'p>)>,
     /// The contact state the current Jacobian's tangent was built from (None: the static
     /// mock's), and gamma / (beta h) of its friction damping (0: none).
@@ -87,13 +91,17 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         static_state: &'a ContactState,
         restart_at: Option<(Vector<'p>, Vector<'p>)>,
         factor: JacobianFactor,
+        first: FirstJacobian,
     ) -> Result<Self, LaError> {
-        let mock = contact.linearize(
-            petsc,
-            Base::PatternOf(k0_input),
-            static_state,
-            &[Part::Normal, Part::Stick],
-        )?;
+        let mock = match first {
+            FirstJacobian::Mock => Some(contact.linearize(
+                petsc,
+                Base::PatternOf(k0_input),
+                static_state,
+                &[Part::Normal, Part::Stick],
+            )?),
+            FirstJacobian::Consistent => None,
+        };
         Ok(JacobianBuilder {
             petsc,
             contact,
@@ -103,6 +111,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             static_state,
             mock,
             factor,
+            first,
             restart_at,
             built_at: None,
             built_contact: None,
@@ -164,7 +173,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
     }
 
     /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
-    /// mock; a restart's saved state takes precedence once. The contact tangent beyond K0
+    /// state's (`first_jacobian`); a restart's saved state takes precedence once. The contact tangent beyond K0
     /// comes back as an operator applied through the observation rows (the iteration's
     /// correction of the carried linear force). `retired`, the Jacobian this one replaces:
     /// when it is the last refreshed J of this step size, its matrix takes the new values in
@@ -184,9 +193,18 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             (None, Some(s)) => Some((&s.q, &s.v)),
             (None, None) => None,
         };
-        let Some((q, v)) = at else {
-            drop(retired);
-            return self.factorize_mock(ns, t);
+        let (cs, built_at) = match (at, self.first) {
+            (Some((q, v)), _) => (
+                self.contact.evaluate(q, Some(v), 1.0)?,
+                Some((q.try_clone()?, v.try_clone()?)),
+            ),
+            // The static state's consistent tangent; `built_at` None marks it as the first
+            // J, which a checkpoint's restart rebuilds the same way.
+            (None, FirstJacobian::Consistent) => (self.static_state.clone(), None),
+            (None, FirstJacobian::Mock) => {
+                drop(retired);
+                return self.factorize_mock(ns, t);
+            }
         };
         let contact = self.contact;
         // The friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
@@ -194,10 +212,9 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
         // (StickCoupling).
         let c1 = ns.gamma / (ns.beta * ns.step);
         let terms: [(&[Part], f64); 2] = [(&CONSISTENT, 1.0), (&[Part::Damping], c1)];
-        let cs = contact.evaluate(q, Some(v), 1.0)?;
         let (mut j, old_factor) = self.refresh_matrix(ns, retired)?;
         self.add_tangent(&cs, &terms, &mut j)?;
-        self.built_at = Some((q.try_clone()?, v.try_clone()?));
+        self.built_at = built_at;
         self.built_damping = c1;
         let extra = contact.tangent_operator(self.petsc, &cs, &terms)?;
         self.built_contact = Some(cs);
@@ -227,7 +244,7 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             self.static_state,
             &[(&[Part::Normal, Part::Stick], 1.0)],
         )?;
-        let j = jacobian(ns, self.m, self.c, self.k0, Some(&self.mock))?;
+        let j = jacobian(ns, self.m, self.c, self.k0, self.mock.as_ref())?;
         j.set_symmetric(true)?;
         self.seconds_assembling += t.elapsed().as_secs_f64();
         let factor = self.factorize_matrix(&j, Factorization::Cholesky)?;

@@ -366,6 +366,7 @@ pub fn run<'p>(
         input.static_state,
         restart_at,
         settings.jacobian_factor.resolve(k0.global_rows()),
+        settings.first_jacobian,
     )?);
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State<'p>>, retired| {
         builder.borrow_mut().factorize(ns, at, retired)

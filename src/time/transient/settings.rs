@@ -95,6 +95,15 @@ pub struct TransientSettings {
     /// key existed stays the same.)
     #[serde(default, skip_serializing_if = "JacobianFactor::is_auto")]
     pub jacobian_factor: JacobianFactor,
+    /// The contact tangent of the first J, at the static state: `"consistent"` (default: the
+    /// normal and stick stiffness, the friction's coupling and its damping through
+    /// gamma / (beta h); unsymmetric, LU; the tangent the complex modes see, so in the growth
+    /// the residual after one correction is of second order in the amplitude) or `"mock"`
+    /// (the normal and stick stiffness alone, the paper's mock contact stiffness: symmetric,
+    /// Cholesky; the default before 2026-12-01). (Not written when "consistent": restart
+    /// fingerprints stay the same.)
+    #[serde(default, skip_serializing_if = "FirstJacobian::is_consistent")]
+    pub first_jacobian: FirstJacobian,
     /// Upper frequency of the spectrogram plot (Hz).
     #[serde(default = "default_spectrogram_max_hz")]
     pub spectrogram_max_hz: f64,
@@ -176,6 +185,23 @@ pub enum JacobianFactor {
 /// memory is then on every rank and its factorization is not parallel, so larger reduced
 /// models stay with MUMPS unless a scene asks.
 pub const PER_RANK_MAX_UNKNOWNS: usize = 10_000;
+
+/// The contact tangent of the transient's first Jacobian (at the static state).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum FirstJacobian {
+    /// The consistent tangent, friction coupling and damping included (LU).
+    #[default]
+    Consistent,
+    /// Normal and stick stiffness (symmetric: Cholesky).
+    Mock,
+}
+
+impl FirstJacobian {
+    fn is_consistent(&self) -> bool {
+        *self == FirstJacobian::Consistent
+    }
+}
 
 impl JacobianFactor {
     fn is_auto(&self) -> bool {
@@ -428,6 +454,28 @@ mod tests {
         let nan = nan.validate().unwrap_err();
         assert!(nan.key == "transient.impulse" && nan.detail.contains("finite"));
         assert!(toml::from_str::<TransientSettings>("steps = 1\nstart = \"noise\"").is_err());
+    }
+
+    #[test]
+    fn first_jacobian_is_the_consistent_tangent_unless_the_scene_says_mock() {
+        let default = settings("steps = 1");
+        assert_eq!(default.first_jacobian, FirstJacobian::Consistent);
+        // The default is not written: the restart fingerprints stay the same.
+        assert!(!toml::to_string(&default)
+            .unwrap()
+            .contains("first_jacobian"));
+        let mock = settings("steps = 1\nfirst_jacobian = \"mock\"");
+        assert_eq!(mock.first_jacobian, FirstJacobian::Mock);
+        assert!(toml::to_string(&mock)
+            .unwrap()
+            .contains("first_jacobian = \"mock\""));
+        let err = toml::from_str::<TransientSettings>("steps = 1\nfirst_jacobian = \"static\"")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("first_jacobian") || err.contains("consistent"),
+            "{err}"
+        );
     }
 
     #[test]
