@@ -49,6 +49,9 @@ struct Args {
     /// (la::one_column_gemm).
     #[arg(long, value_delimiter = ',', default_value = "on")]
     gemm_forwarding: Vec<String>,
+    /// The transient's `first_jacobian` in part 2: `consistent` (the default) or `mock`.
+    #[arg(long, default_value = "consistent")]
+    first_jacobian: String,
     /// Target size of the step-size study (DOF); 0 skips part 3.
     #[arg(long, default_value_t = 12_000)]
     study_dofs: usize,
@@ -72,6 +75,7 @@ fn scene(
     steps: usize,
     amplitude: f64,
     factor: &str,
+    first_jacobian: &str,
 ) -> String {
     format!(
         "[model]\nsource = \"brake\"\ntarget_dofs = {dofs}\npressure_bar = 20.0\n\
@@ -82,6 +86,7 @@ fn scene(
          [reduction]\n\
          [transient]\nstep = {step:e}\nsteps = {steps}\nmode = 2\namplitude = {amplitude:e}\n\
          state_interval = 0.0\ncheckpoint_every = 0\njacobian_factor = \"{factor}\"\n\
+         first_jacobian = \"{first_jacobian}\"\n\
          [transient.sensors]\npad = [0.12, 0.0, 0.0295]\n"
     )
 }
@@ -287,7 +292,15 @@ fn main() {
             other => panic!("--gemm-forwarding takes on, gemm or off, not {other}"),
         };
         squeal::la::one_column_gemm::set_forwarding_of(gemm, trsm);
-        let text = scene(args.dofs, args.modes, 2e-6, args.steps, 1e-9, factor);
+        let text = scene(
+            args.dofs,
+            args.modes,
+            2e-6,
+            args.steps,
+            1e-9,
+            factor,
+            &args.first_jacobian,
+        );
         let calls_before = squeal::la::one_column_gemm::calls();
         let s = run(
             &petsc,
@@ -358,7 +371,7 @@ fn main() {
             let t = Instant::now();
             let s = run(
                 &petsc,
-                &scene(args.study_dofs, 60, h, n, 1e-7, "auto"),
+                &scene(args.study_dofs, 60, h, n, 1e-7, "auto", "consistent"),
                 &dir,
             );
             (dir, t.elapsed().as_secs_f64(), s)
