@@ -173,9 +173,9 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
     }
 
     /// Factorizes J at `at` (the current state's tangent) or, with None, with the static
-    /// state's (`first_jacobian`); a restart's saved state takes precedence once. The contact tangent beyond K0
-    /// comes back as an operator applied through the observation rows (the iteration's
-    /// correction of the carried linear force). `retired`, the Jacobian this one replaces:
+    /// state's (`first_jacobian`); a restart's saved state takes precedence once. The contact
+    /// tangent beyond K0 comes back as an operator applied through the observation rows (the
+    /// iteration's correction of the carried linear force). `retired`, the Jacobian this one replaces:
     /// when it is the last refreshed J of this step size, its matrix takes the new values in
     /// place and its factor is renewed by the numerical phase alone.
     ///
