@@ -38,12 +38,11 @@ pub(super) struct JacobianBuilder<'a, 'p> {
     m: &'a SparseMatrix<'p>,
     c: Damping<'a, 'p>,
     static_state: &'a ContactState,
-    /// The static mock contact stiffness (normal and stick), with `first_jacobian = "mock"`.
+    /// The static mock contact stiffness (normal and stick), with `first_jacobian = "mock"`;
+    /// None: the first J is the static state's consistent tangent.
     mock: Option<SparseMatrix<'p>>,
     /// Where J is factorized ("auto" resolved).
     factor: JacobianFactor,
-    /// The first J's contact tangent at the static state.
-    first: FirstJacobian,
     /// A restart's saved Jacobian state, used by the first factorization.
     restart_at: Option<(Vector<'p>, Vector<'p>)>,
     /// The state the current Jacobian was built at (None: the static state, the first J).
@@ -111,7 +110,6 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             static_state,
             mock,
             factor,
-            first,
             restart_at,
             built_at: None,
             built_contact: None,
@@ -193,18 +191,18 @@ impl<'a, 'p> JacobianBuilder<'a, 'p> {
             (None, Some(s)) => Some((&s.q, &s.v)),
             (None, None) => None,
         };
-        let (cs, built_at) = match (at, self.first) {
-            (Some((q, v)), _) => (
+        let (cs, built_at) = match at {
+            Some((q, v)) => (
                 self.contact.evaluate(q, Some(v), 1.0)?,
                 Some((q.try_clone()?, v.try_clone()?)),
             ),
-            // The static state's consistent tangent; `built_at` None marks it as the first
-            // J, which a checkpoint's restart rebuilds the same way.
-            (None, FirstJacobian::Consistent) => (self.static_state.clone(), None),
-            (None, FirstJacobian::Mock) => {
+            None if self.mock.is_some() => {
                 drop(retired);
                 return self.factorize_mock(ns, t);
             }
+            // The static state's consistent tangent; `built_at` None marks it as the first
+            // J, which a checkpoint's restart rebuilds the same way.
+            None => (self.static_state.clone(), None),
         };
         let contact = self.contact;
         // The friction damping C_f (w dt/dw c_t c_t^T, large where points nearly stick)
