@@ -7,7 +7,7 @@ use super::newmark::{
     Correction, Damping, Eliminate, Factorize, Forces, Linearize, Newmark, NewmarkSettings, State,
     StepReport, TimeError,
 };
-use crate::la::SparseMatrix;
+use crate::la::{SparseMatrix, Vector};
 
 /// What an adaptive run did besides stepping, and where its step control stands (so a
 /// checkpoint can resume it exactly).
@@ -168,7 +168,8 @@ pub enum Flow {
 /// the nominal one and the fixed factor tried again. Once refreshed, every later factorization
 /// uses the current state's tangent. Every change goes to `log`. Only when the smallest step
 /// fails too is the error returned. `control` starts at its default, or where a checkpoint
-/// left it.
+/// left it. With `equilibrium` (the static equilibrium's force) the residual is judged
+/// against the forces' departure from it ([`Newmark::judge_against_equilibrium`]).
 ///
 /// About 190 lines, on purpose: the factor's loop and the step's loop share the integrator
 /// (which borrows the factor) and the control; what to do after a failure is decided in
@@ -186,6 +187,7 @@ pub fn integrate_adaptive<'p>(
     mut eliminate: Option<&mut Eliminate<'_, 'p>>,
     state: &mut State<'p>,
     forces: &mut Forces<'_, 'p>,
+    equilibrium: Option<&Vector<'p>>,
     end_time: f64,
     adaptivity: Adaptivity,
     control: &mut StepControl,
@@ -214,6 +216,9 @@ pub fn integrate_adaptive<'p>(
         )?;
         control.factorizations += 1;
         let mut integrator = Newmark::new(step_settings, m, c, k, &factor)?;
+        if let Some(force) = equilibrium {
+            integrator.judge_against_equilibrium(force)?;
+        }
         loop {
             if state.time >= end_time - 0.25 * step_settings.step {
                 break;

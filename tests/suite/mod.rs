@@ -19,6 +19,7 @@ pub mod stages;
 pub mod static_solve;
 pub mod stick_slip;
 pub mod time_integration;
+pub mod tolerance_reference;
 
 use std::time::Duration;
 
@@ -38,6 +39,7 @@ pub fn all() -> Vec<NamedTest> {
     v.extend(complex_modes::tests());
     v.extend(dense_reference::tests());
     v.extend(time_integration::tests());
+    v.extend(tolerance_reference::tests());
     v.extend(reduction::tests());
     v.extend(stages::tests());
     v.extend(stick_slip::tests());

@@ -441,6 +441,7 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
         None,
         &mut state,
         &mut forces,
+        None,
         end,
         Adaptivity {
             max_cuts: 6,

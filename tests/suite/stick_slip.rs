@@ -202,6 +202,7 @@ fn run(
         None,
         &mut state,
         &mut forces,
+        None,
         5.2 * period,
         Adaptivity {
             max_cuts: 6,

@@ -231,6 +231,7 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
         None,
         &mut state,
         &mut forces,
+        None,
         30.0,
         adaptivity,
         &mut control,
@@ -365,6 +366,7 @@ fn cut_and_restore(
         None,
         &mut state,
         &mut forces,
+        None,
         30.0,
         squeal::time::adaptive::Adaptivity {
             max_cuts: 8,

@@ -101,7 +101,7 @@ impl Drift {
 
 impl<'p> Newmark<'_, 'p> {
     /// The residual judged with z recomputed (the carried z assumed J dq = R exactly):
-    /// |R| and the reference force max(|f|, |z|), f being current at the iterate.
+    /// |R| and the reference force (`reference_force`), f being current at the iterate.
     ///
     /// # Collective
     pub(super) fn residual_with_exact_z(
@@ -112,7 +112,7 @@ impl<'p> Newmark<'_, 'p> {
         self.exact_linear_force(pred_exact, report)?;
         self.r.copy_from(&self.z)?;
         self.r.axpy(-1.0, &self.f)?;
-        let reference = self.f.norm2()?.max(self.z.norm2()?);
+        let reference = self.reference_force()?;
         Ok((self.r.norm2()?, reference))
     }
 

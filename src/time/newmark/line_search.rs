@@ -4,9 +4,16 @@
 use super::{Forces, Newmark, NewmarkSettings, StepReport};
 use crate::la::LaError;
 
+/// The least share of the whole force a vibration's reference counts for. At rest on the
+/// equilibrium (no kick) the departure is zero and so would be the target; the residual's
+/// round-off there is a few eps of the whole force (z and f each sum to it), so the target
+/// stays ~1e4 eps above it at a tolerance of 1e-6 (the correction criterion, which needs
+/// no reference, ends such steps first).
+pub(crate) const VIBRATION_FLOOR: f64 = 1e-6;
+
 impl<'p> Newmark<'_, 'p> {
     /// R = z - f at the current iterate (into `r`); returns |R| and the reference force
-    /// max(|f|, |z|).
+    /// (`reference_force`).
     ///
     /// # Collective
     pub(super) fn residual(
@@ -21,8 +28,31 @@ impl<'p> Newmark<'_, 'p> {
         report.force_calls += 1;
         self.r.copy_from(&self.z)?;
         self.r.axpy(-1.0, &self.f)?;
-        let reference = self.f.norm2()?.max(self.z.norm2()?);
+        let reference = self.reference_force()?;
         Ok((self.r.norm2()?, reference))
+    }
+
+    /// The force the residual is judged against, f and z being current at the iterate: the
+    /// whole force max(|f|, |z|), or with an equilibrium force f_s their departure from it,
+    /// max(|f - f_s|, |z - f_s|), counted at least [`VIBRATION_FLOOR`] of the whole force.
+    ///
+    /// # Collective
+    pub(super) fn reference_force(&mut self) -> Result<f64, LaError> {
+        let total = self.f.norm2()?.max(self.z.norm2()?);
+        let Some((equilibrium, departure)) = &mut self.equilibrium else {
+            return Ok(total);
+        };
+        departure.copy_from(&self.f)?;
+        departure.axpy(-1.0, equilibrium)?;
+        let of_f = departure.norm2()?;
+        departure.copy_from(&self.z)?;
+        departure.axpy(-1.0, equilibrium)?;
+        let of_z = departure.norm2()?;
+        // NaN propagates (max would drop it): a NaN force must fail the step.
+        if of_f.is_nan() || of_z.is_nan() {
+            return Ok(f64::NAN);
+        }
+        Ok(of_f.max(of_z).max(VIBRATION_FLOOR * total))
     }
 
     /// Moves the iterate by `-alpha dq` (q1, a1, v1 by the Newmark relations, z linearly).

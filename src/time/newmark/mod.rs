@@ -8,7 +8,8 @@
 //!   v1 = v0 + h ((1 - gamma) a0 + gamma a1)
 //!   R(q1) = M a1 + C v1 + K q1 - f(t + h, q1, v1)
 //! iterated as q1 <- q1 - J^-1 R(q1) from the constant-acceleration predictor, until
-//! ||R|| <= tolerance x max(||f||, ||z||), or until the correction is below
+//! ||R|| <= tolerance x max(||f||, ||z||) (or with an equilibrium force the departure from it,
+//! `line_search.rs`), or until the correction is below
 //! tolerance x ||q1 - q0||: R carries M (q1 - q0) / (beta h^2), whose round-off (eps times
 //! that, ~1e-9 of the forces at h = 1e-3) no iteration removes, while the correction shows
 //! convergence of q1 itself; with `step_error_fraction` also once the iteration's remaining
@@ -264,6 +265,9 @@ pub struct Newmark<'a, 'p> {
     /// (`step_error.rs`).
     q_before: Vector<'p>,
     contraction: step_error::Contraction,
+    /// The static equilibrium's force K q_s, when the residual is judged against the forces'
+    /// departure from it (`line_search.rs`, `reference_force`), and a work vector for it.
+    equilibrium: Option<(Vector<'p>, Vector<'p>)>,
 }
 
 impl<'a, 'p> Newmark<'a, 'p> {
@@ -310,8 +314,16 @@ impl<'a, 'p> Newmark<'a, 'p> {
             target_z: q1.duplicate()?,
             q_before: q1.duplicate()?,
             contraction: step_error::Contraction::default(),
+            equilibrium: None,
             q1,
         })
+    }
+
+    /// Judges the residual against the forces' departure from the static equilibrium's
+    /// force `equilibrium` (K q_s = f(q_s, 0)) instead of the whole force.
+    pub fn judge_against_equilibrium(&mut self, equilibrium: &Vector<'p>) -> Result<(), LaError> {
+        self.equilibrium = Some((equilibrium.try_clone()?, equilibrium.duplicate()?));
+        Ok(())
     }
 
     /// Sets a1 and v1 from q1 (the Newmark relations).

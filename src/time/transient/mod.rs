@@ -35,7 +35,8 @@ use checkpoint::Checkpoint;
 use jacobian::JacobianBuilder;
 use recorder::{Recorder, StepLog};
 pub use settings::{
-    random_coefficients, Impulse, Newton, Start, TransientSettings, SATURATION_CHECK_EVERY,
+    random_coefficients, Impulse, Newton, Start, ToleranceReference, TransientSettings,
+    SATURATION_CHECK_EVERY,
 };
 
 /// The kick in the integrated unknowns.
@@ -334,6 +335,16 @@ pub fn run<'p>(
         ..input
     };
     let mut state = start_state(petsc, settings, &input, &k0)?;
+    // K q_s, the force of the static equilibrium on both sides of the equation of motion
+    // (z = K q_s at rest there, and f = the balanced load + f_c(q_s, 0), the same).
+    let equilibrium = match settings.tolerance_reference {
+        ToleranceReference::Total => None,
+        ToleranceReference::Vibration => {
+            let mut force = input.q_static.duplicate()?;
+            k0.mult(input.q_static, &mut force)?;
+            Some(force)
+        }
+    };
     let seconds_start = t.elapsed().as_secs_f64();
 
     // The contact state of the last force evaluation and where it was taken: the step's
@@ -508,6 +519,7 @@ pub fn run<'p>(
             .then_some(&mut eliminate as &mut crate::time::newmark::Eliminate<'_, 'p>),
         &mut state,
         forces,
+        equilibrium.as_ref(),
         end_time,
         Adaptivity {
             max_cuts: settings.max_cuts,

@@ -15,6 +15,13 @@ pub struct TransientSettings {
     /// Relative tolerance of the fixed-Jacobian iterations.
     #[serde(default = "default_tolerance")]
     pub tolerance: f64,
+    /// What `tolerance` is relative to: `"total"` (default: the whole force on the model,
+    /// max(|f|, |z|), the preload included) or `"vibration"` (the forces' departure from the
+    /// static equilibrium, max(|f - K q_s|, |z - K q_s|): the residual then bounds the
+    /// vibration's own relative error, however small the vibration is against the preload).
+    /// (Not written when "total": restart fingerprints stay the same.)
+    #[serde(default, skip_serializing_if = "ToleranceReference::is_total")]
+    pub tolerance_reference: ToleranceReference,
     #[serde(default = "default_max_iterations")]
     pub max_iterations: usize,
     /// Earlier iterates the eliminated iteration (`eliminate_points`) combines by Anderson
@@ -185,6 +192,23 @@ pub enum JacobianFactor {
 /// memory is then on every rank and its factorization is not parallel, so larger reduced
 /// models stay with MUMPS unless a scene asks.
 pub const PER_RANK_MAX_UNKNOWNS: usize = 10_000;
+
+/// What the transient's residual tolerance is relative to (`[transient] tolerance_reference`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ToleranceReference {
+    /// The whole force, max(|f|, |z|).
+    #[default]
+    Total,
+    /// The departure of f and z from the static equilibrium's force.
+    Vibration,
+}
+
+impl ToleranceReference {
+    fn is_total(&self) -> bool {
+        *self == ToleranceReference::Total
+    }
+}
 
 /// The contact tangent of the transient's first Jacobian (at the static state).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -454,6 +478,26 @@ mod tests {
         let nan = nan.validate().unwrap_err();
         assert!(nan.key == "transient.impulse" && nan.detail.contains("finite"));
         assert!(toml::from_str::<TransientSettings>("steps = 1\nstart = \"noise\"").is_err());
+    }
+
+    #[test]
+    fn tolerance_is_against_the_whole_force_unless_the_scene_says_vibration() {
+        let default = settings("steps = 1");
+        assert_eq!(default.tolerance_reference, ToleranceReference::Total);
+        // The default is not written: the restart fingerprints stay the same.
+        assert!(!toml::to_string(&default)
+            .unwrap()
+            .contains("tolerance_reference"));
+        let vibration = settings("steps = 1\ntolerance_reference = \"vibration\"");
+        assert_eq!(vibration.tolerance_reference, ToleranceReference::Vibration);
+        assert!(toml::to_string(&vibration)
+            .unwrap()
+            .contains("tolerance_reference = \"vibration\""));
+        let err =
+            toml::from_str::<TransientSettings>("steps = 1\ntolerance_reference = \"preload\"")
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("total") && err.contains("vibration"), "{err}");
     }
 
     #[test]
