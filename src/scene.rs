@@ -211,6 +211,7 @@ impl Scene {
             t.step_error_fraction = defaults.step_error_fraction;
             t.jacobian_factor = defaults.jacobian_factor;
             t.tolerance = defaults.tolerance;
+            t.tolerance_reference = defaults.tolerance_reference;
             t.max_iterations = defaults.max_iterations;
             t.state_interval = 0.0;
             t.sensors.clear();
@@ -586,10 +587,13 @@ mod tests {
                 "{reference:?}"
             );
         }
-        let longer = print(&base.replace("steps = 100", "steps = 900\nnewton = \"full\""));
+        let longer = print(&base.replace(
+            "steps = 100",
+            "steps = 900\nnewton = \"full\"\ntolerance = 1e-4\ntolerance_reference = \"vibration\"",
+        ));
         assert_eq!(
             reference, longer,
-            "a longer run with another Newton is the same run"
+            "a longer run with another Newton and tolerance is the same run"
         );
         for (changed, table) in [
             (base.replace("6000", "7000"), "model"),
