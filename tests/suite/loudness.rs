@@ -36,6 +36,15 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// with the gap (unsymmetric, left out of the real modes; measured 5.9 % off, the ERP's peak
 /// 2.45 times its mean where one mode alone gives 2).
 ///
+/// Without friction the pads are held tangentially and radially by their abutments and rails
+/// alone, open contacts of nearly no stiffness: the preload's tangent is nearly singular, and
+/// on 2 ranks, where MUMPS' dynamically scheduled factorization rounds differently from run to
+/// run, the modified Newton's reused factors steered the iterates along that direction
+/// differently every time: 17 of 100 runs of this preload cut load steps, one 18 times, and
+/// one suite run failed at load step 9 (24 cuts are allowed). A full Newton (a new factor at
+/// every iteration) cut in 3 of 100, once each: this test uses it (the preload is its start,
+/// not its subject; the transient starts from it as an equilibrium whatever its route).
+///
 /// Bound: the window holds whole periods of the mode only up to the stored states' spacing,
 /// and the mean of cos^2 over T_w differs from 1/2 by at most 1 / (2 omega T_w) relative;
 /// Newmark's period elongation changes omega by (omega h)^2 / 12, the power by twice that;
@@ -49,7 +58,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
                 friction = { law = \"coulomb\", mu = 0.0, slip_speed = 1.0e-3 }\n\
                 [contact.sticking]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
                 friction = { law = \"none\" }\n\
-                [statics]\n[real_modes]\ncount = 40\n[reduction]\n";
+                [statics]\nreuse_contraction = 0.0\n[real_modes]\ncount = 40\n[reduction]\n";
     let scene = Scene::parse(text, "loudness test").map_err(|e| e.to_string())?;
     let mut timings = Timings::default();
     let (model, _, ops) =
