@@ -307,7 +307,7 @@ impl<'s> TransientFiles<'s> {
 /// Runs the transient. A step that fails ends the run: the signals up to the last converged
 /// step come back with the error, so the caller can write them before reporting it.
 ///
-/// Long (~245 lines): the step callback, the log, the factorization and elimination
+/// Long (~255 lines): the step callback, the log, the factorization and elimination
 /// closures share the recorder, the Jacobian builder and the last contact state of this one
 /// run; apart, they would need a struct of RefCells to say the same.
 ///
