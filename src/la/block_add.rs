@@ -89,7 +89,7 @@ fn position(block: &Block, r: usize, column: ffi::PetscInt) -> Option<usize> {
     (lo < range.end && block.column(lo) == column).then_some(lo)
 }
 
-fn communicator(m: ffi::Mat) -> Result<ffi::mpi_sys::MPI_Comm> {
+pub(super) fn communicator(m: ffi::Mat) -> Result<ffi::mpi_sys::MPI_Comm> {
     let mut comm = ffi::mpi_sys::MPI_Comm(std::ptr::null_mut());
     call!(PetscObjectGetComm(m as ffi::PetscObject, &mut comm))?;
     Ok(comm)

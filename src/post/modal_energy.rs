@@ -12,7 +12,7 @@ use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
 use super::states::nearest;
-use crate::la::{LaError, SparseMatrix, Vector};
+use crate::la::{LaError, Petsc, SparseMatrix, Vector};
 
 /// `[post.modal_energy]`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -70,12 +70,19 @@ impl ModalEnergySettings {
 }
 
 /// The real modes as sensors, in the integrated unknowns: M x_k (x_k the mode's coordinates)
-/// and omega_k^2. The transient takes a sample at every stored state.
+/// and omega_k^2. The transient takes a sample at every stored state, in blocks: the shapes
+/// are kept as one dense block of this rank's rows, so a block of states reads them once (one
+/// GEMM) instead of three times per state (at 600k, 250 shapes of 35,237 unknowns are 70 MB).
 pub struct ModalSensors<'a, 'p> {
-    pub mass_shapes: &'a [Vector<'p>],
+    /// This rank's rows of M x_k, column-major: `rows` x `count`.
+    shapes: Vec<f64>,
+    rows: usize,
+    count: usize,
+    /// (M x_k)' q_static, over all ranks.
+    at_rest: Vec<f64>,
     pub omega2: &'a [f64],
-    pub mass: &'a SparseMatrix<'p>,
-    pub q_static: &'a Vector<'p>,
+    mass: &'a SparseMatrix<'p>,
+    petsc: &'p Petsc<'p>,
 }
 
 /// The modal coordinates and velocities of one state, and its kinetic energy v'Mv/2.
@@ -86,22 +93,80 @@ pub struct ModalSample {
     pub kinetic: f64,
 }
 
-impl ModalSensors<'_, '_> {
-    /// eta_k = (M x_k)'(q - q_static), etadot_k = (M x_k)'v, and v'Mv/2.
+impl<'a, 'p> ModalSensors<'a, 'p> {
+    /// `mass_shapes`: M x_k of the modes, in the layout of the states to be sampled.
     ///
     /// # Collective
-    pub fn sample(&self, q: &Vector, v: &Vector) -> Result<ModalSample, LaError> {
-        let shapes: Vec<&Vector> = self.mass_shapes.iter().collect();
-        let at_rest = self.q_static.mdot(&shapes)?;
-        let eta = q.mdot(&shapes)?;
-        let eta_dot = v.mdot(&shapes)?;
-        let mut mv = v.duplicate()?;
-        self.mass.mult(v, &mut mv)?;
-        Ok(ModalSample {
-            eta: eta.iter().zip(&at_rest).map(|(e, r)| e - r).collect(),
-            eta_dot,
-            kinetic: 0.5 * v.dot(&mv)?,
+    pub fn new(
+        petsc: &'p Petsc<'p>,
+        mass_shapes: &[Vector<'p>],
+        omega2: &'a [f64],
+        mass: &'a SparseMatrix<'p>,
+        q_static: &Vector<'p>,
+    ) -> Result<Self, LaError> {
+        let shapes: Vec<&Vector> = mass_shapes.iter().collect();
+        let at_rest = q_static.mdot(&shapes)?;
+        let rows = q_static.ownership().len();
+        let mut block = Vec::with_capacity(rows * shapes.len());
+        for shape in &shapes {
+            block.extend_from_slice(&shape.local()?);
+        }
+        Ok(Self {
+            shapes: block,
+            rows,
+            count: shapes.len(),
+            at_rest,
+            omega2,
+            mass,
+            petsc,
         })
+    }
+
+    /// The number of modes sampled.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// eta_k = (M x_k)'(q - q_static), etadot_k = (M x_k)'v, and v'Mv/2 of
+    /// `states` states given by this rank's rows: `displacements` and
+    /// `velocities` hold one state's rows after the other (as the recorder buffers them).
+    ///
+    /// # Collective
+    pub fn sample_block(
+        &self,
+        displacements: &[f64],
+        velocities: &[f64],
+        states: usize,
+    ) -> Result<Vec<ModalSample>, LaError> {
+        let (rows, count) = (self.rows, self.count);
+        assert!(
+            displacements.len() == rows * states && velocities.len() == rows * states,
+            "sample_block: {states} states of {rows} rows"
+        );
+        // [S'Q | S'V | this rank's v'Mv], summed over the ranks at once.
+        let mut sums = crate::la::lapack::gemm_tn(rows, count, states, &self.shapes, displacements);
+        sums.extend(crate::la::lapack::gemm_tn(
+            rows,
+            count,
+            states,
+            &self.shapes,
+            velocities,
+        ));
+        sums.extend(self.mass.local_quadratic_forms(velocities, states)?);
+        crate::parallel::sum_in_place(self.petsc.world(), &mut sums);
+        let (eta, rest) = sums.split_at(count * states);
+        let (eta_dot, vmv) = rest.split_at(count * states);
+        Ok((0..states)
+            .map(|j| ModalSample {
+                eta: eta[j * count..(j + 1) * count]
+                    .iter()
+                    .zip(&self.at_rest)
+                    .map(|(e, r)| e - r)
+                    .collect(),
+                eta_dot: eta_dot[j * count..(j + 1) * count].to_vec(),
+                kinetic: 0.5 * vmv[j],
+            })
+            .collect())
     }
 }
 

@@ -157,12 +157,18 @@ pub fn transient<'p>(
     } else {
         Vec::new()
     };
-    let modal_sensors = ModalSensors {
-        mass_shapes: &mass_shapes,
-        omega2: &modes.eigenvalues,
-        mass: m,
-        q_static,
+    let modal_sensors = if mass_shapes.is_empty() {
+        None
+    } else {
+        Some(ModalSensors::new(
+            petsc,
+            &mass_shapes,
+            &modes.eigenvalues,
+            m,
+            q_static,
+        )?)
     };
+    drop(mass_shapes);
     let (signals, failure) = crate::time::transient::run(
         petsc,
         settings,
@@ -181,7 +187,7 @@ pub fn transient<'p>(
             sensors: sensors.as_ref(),
             modal_damping: modal.as_ref(),
             reduction,
-            modal_sensors: Some(&modal_sensors).filter(|s| !s.mass_shapes.is_empty()),
+            modal_sensors: modal_sensors.as_ref(),
         },
         files,
     )?;

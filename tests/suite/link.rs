@@ -215,12 +215,8 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     let shapes: Vec<&Vector> = modes.shapes.iter().collect();
     let mut q = q_static.duplicate().map_err(e)?;
     let mut v = q_static.duplicate().map_err(e)?;
-    let sensors = ModalSensors {
-        mass_shapes: &mass_shapes,
-        omega2: &modes.eigenvalues,
-        mass: m,
-        q_static: &q_static,
-    };
+    let sensors =
+        ModalSensors::new(petsc, &mass_shapes, &modes.eigenvalues, m, &q_static).map_err(e)?;
     // The states at `times`, as the transient samples them.
     let state_at = |t: f64, q: &mut Vector, v: &mut Vector| -> Result<(), String> {
         let c: Vec<f64> = (0..n).map(|k| a[k] * (omega[k] * t + p[k]).cos()).collect();
@@ -232,11 +228,14 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
         v.set_all(0.0).map_err(e)?;
         v.maxpy(&cd, &shapes).map_err(e)
     };
-    let mut samples = Vec::new();
+    // Sampled in one block, as the transient's recorder samples its buffered states.
+    let (mut qs, mut vs) = (Vec::new(), Vec::new());
     for &t in &times {
         state_at(t, &mut q, &mut v)?;
-        samples.push(sensors.sample(&q, &v).map_err(e)?);
+        qs.extend_from_slice(&q.local().map_err(e)?);
+        vs.extend_from_slice(&v.local().map_err(e)?);
     }
+    let samples = sensors.sample_block(&qs, &vs, times.len()).map_err(e)?;
     let settings = ModalEnergySettings::default();
     let out = modal_energy(&times, &samples, &modes.eigenvalues, &settings, 1e-3);
     // The reference at every time: closed-form E_k, and the energy from the matrices.

@@ -92,7 +92,6 @@ struct PendingStates {
     time: Vec<f64>,
     displacement: Vec<f64>,
     velocity: Vec<f64>,
-    modal: [Vec<f64>; 3],
 }
 
 impl<'a, 'p> Recorder<'a, 'p> {
@@ -132,7 +131,7 @@ impl<'a, 'p> Recorder<'a, 'p> {
             r.stream.create_series(path, width, units)?;
         }
         if let Some(modal) = r.modal {
-            let m = modal.mass_shapes.len();
+            let m = modal.count();
             for (path, width, units) in MODAL_PATHS
                 .iter()
                 .zip([m, m, 1])
@@ -317,12 +316,6 @@ file: files.stream.clone(),
         p.time.push(s.time);
         p.displacement.extend_from_slice(&s.q.local()?);
         p.velocity.extend_from_slice(&s.v.local()?);
-        if let Some(modal) = self.modal {
-            let sample = modal.sample(&s.q, &s.v)?;
-            p.modal[0].extend_from_slice(&sample.eta);
-            p.modal[1].extend_from_slice(&sample.eta_dot);
-            p.modal[2].push(sample.kinetic);
-        }
         p.rows += 1;
         if p.rows >= FLUSH_STATES {
             self.write_pending_states()?;
@@ -348,9 +341,17 @@ file: files.stream.clone(),
             columns.clone(),
         )?;
         stream.append_distributed("states/velocity", &p.velocity, p.rows, columns)?;
-        if self.modal.is_some() {
-            for (path, values) in MODAL_PATHS.iter().zip(&p.modal) {
-                stream.append(path, values)?;
+        if let Some(modal) = self.modal {
+            // The modal samples of the whole block at once: the shapes are read once.
+            let samples = modal.sample_block(&p.displacement, &p.velocity, p.rows)?;
+            let eta: Vec<f64> = samples.iter().flat_map(|x| x.eta.iter().copied()).collect();
+            let eta_dot: Vec<f64> = samples
+                .iter()
+                .flat_map(|x| x.eta_dot.iter().copied())
+                .collect();
+            let kinetic: Vec<f64> = samples.iter().map(|x| x.kinetic).collect();
+            for (path, values) in MODAL_PATHS.iter().zip([eta, eta_dot, kinetic]) {
+                stream.append(path, &values)?;
             }
         }
         Ok(())
