@@ -2,9 +2,9 @@
 //! k of the basis, the modal coordinate eta_k(t) = phi_k^T M (q(t) - q_static) and its energy
 //! E_k = (etadot_k^2 + omega_k^2 eta_k^2) / 2 at every stored state; the modes that hold the
 //! most energy before a chosen time, their share and how much it oscillates over the last
-//! cycles. The transient takes the samples as it runs (with every stored state): a restart
-//! may recompute a reduction basis rotated, which the stored states' coordinates are on, but
-//! not the modes' own coordinates.
+//! cycles. The transient takes the samples as it runs (its stored states, a block of them at
+//! a time, before they are written): a restart may recompute a reduction basis rotated, which
+//! the stored states' coordinates are on, but not the modes' own coordinates.
 //! On a reduced model phi_k is the mode's exact reduced representation (the modes lie in the
 //! reduction's span) and M the reduced mass, so eta_k is the same number as on the full model.
 
