@@ -537,18 +537,23 @@ impl<'p> SparseMatrix<'p> {
         let mut ptr = std::ptr::null();
         call!(MatDenseGetArrayRead(c.0, &mut ptr))?;
         let lda = lda as usize;
-        // SAFETY: C holds this rank's `rows` rows of `count` columns with leading dimension
-        // lda; the array stays valid until it is restored below.
-        let ax = unsafe { std::slice::from_raw_parts(ptr, lda * (count - 1) + rows) };
-        let forms = (0..count)
-            .map(|j| {
-                let x = &columns[j * rows..(j + 1) * rows];
-                x.iter()
-                    .zip(&ax[j * lda..j * lda + rows])
-                    .map(|(a, b)| a * b)
-                    .sum()
-            })
-            .collect();
+        // A rank without rows has no share (and PETSc's array may then be empty or null).
+        let forms = if rows == 0 {
+            vec![0.0; count]
+        } else {
+            // SAFETY: C holds this rank's `rows` rows of `count` columns with leading
+            // dimension lda >= rows; the array stays valid until it is restored below.
+            let ax = unsafe { std::slice::from_raw_parts(ptr, lda * (count - 1) + rows) };
+            (0..count)
+                .map(|j| {
+                    let x = &columns[j * rows..(j + 1) * rows];
+                    x.iter()
+                        .zip(&ax[j * lda..j * lda + rows])
+                        .map(|(a, b)| a * b)
+                        .sum()
+                })
+                .collect()
+        };
         call!(MatDenseRestoreArrayRead(c.0, &mut ptr))?;
         drop(c);
         drop(b);
