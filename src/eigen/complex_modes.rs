@@ -205,6 +205,9 @@ pub struct ComplexMode {
     pub unstable: bool,
     /// Index (0-based) of the real mode with the largest participation, when known.
     pub dominant_real_mode: Option<usize>,
+    /// Of an unstable mode on a mesh model: each element block's share of its kinetic
+    /// energy, largest first (`stages::motion`); empty otherwise.
+    pub motion: Vec<(String, f64)>,
 }
 
 /// Complex modes of one route, ascending in frequency.
@@ -322,6 +325,7 @@ fn mode(s: (f64, f64), backward_error: f64, dominant: Option<usize>) -> ComplexM
         backward_error,
         unstable: false,
         dominant_real_mode: dominant,
+        motion: Vec::new(),
     }
 }
 

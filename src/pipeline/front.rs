@@ -89,7 +89,20 @@ pub fn analyses<'p>(
     let complex = match &scene.complex_modes {
         Some(settings) => {
             let (p, m) = (preload.as_ref(), modes.as_ref());
-            complex::complex_modes(petsc, settings, &damping, &ops, p, m, timings)?
+            let mut routes =
+                complex::complex_modes(petsc, settings, &damping, &ops, p, m, timings)?;
+            if let (Some(model), Some(dofs)) = (&model, &ops.dofs) {
+                timings.stage("mode motion", || {
+                    crate::stages::motion::unstable_mode_motion(
+                        petsc,
+                        &model.mesh,
+                        dofs,
+                        &ops.m,
+                        &mut routes,
+                    )
+                })?;
+            }
+            routes
         }
         None => Vec::new(),
     };

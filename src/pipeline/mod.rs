@@ -195,13 +195,18 @@ pub fn run_with(
     let link = link?;
     let pseudo = pseudo?;
     let loudness = loudness?;
+    let mut notes = Vec::new();
     let signals = trajectory.map(|t| {
         failure = failure.take().or(t.failure.map(RunError::Time));
+        notes = t.notes;
         t.signals
     });
 
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
     let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
+    if let Some(t) = summary.transient.as_mut() {
+        t.notes = notes;
+    }
     summary.limit_cycle = limit_cycle;
     summary.link = link;
     summary.pseudo = pseudo;
@@ -264,6 +269,10 @@ fn write_report(
     if petsc.rank() == 0 {
         let path = output.join("report.html");
         let written = report::html::write_report(summary, scene_text, output);
+        checked(written.map_err(|source| RunError::Io { path, source }))?;
+        // The console's summary, answer first, kept beside results.h5.
+        let path = output.join("summary.txt");
+        let written = std::fs::write(&path, summary.to_string());
         checked(written.map_err(|source| RunError::Io { path, source }))?;
     }
     Ok(())

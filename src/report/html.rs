@@ -21,7 +21,7 @@ pub struct Section {
 }
 
 /// The report's section anchors, in order (tests compare them with the stages that ran).
-pub const SECTION_IDS: [&str; 16] = [
+pub const SECTION_IDS: [&str; 17] = [
     "answer",
     "model",
     "static-state",
@@ -36,6 +36,7 @@ pub const SECTION_IDS: [&str; 16] = [
     "dynamic-stability",
     "pseudo-trajectories",
     "how-loud",
+    "diagnostics",
     "run",
     "scene",
 ];
@@ -43,9 +44,9 @@ pub const SECTION_IDS: [&str; 16] = [
 const STYLE: &str = "body{font-family:sans-serif;max-width:1250px;margin:2em auto;padding:0 1em;color:#222;line-height:1.4}\
 h1{border-bottom:3px solid #c0392b}h2{border-bottom:1px solid #ccc;margin-top:2em}\
 nav a{margin-right:1em}figure{margin:1em 0}img{max-width:100%;border:1px solid #ddd}\
-figcaption{font-size:90%;color:#555}pre{background:#f6f6f6;padding:.7em;overflow-x:auto;font-size:85%}\
+figcaption{font-size:90%;color:#555}pre{background:#f6f6f6;padding:.7em;white-space:pre-wrap;overflow-wrap:anywhere;font-size:85%}\
 table{border-collapse:collapse;font-size:90%;margin:.5em 0}td,th{border:1px solid #ccc;padding:2px 8px;text-align:right}\
-th{background:#eee}td:first-child,th:first-child{text-align:left}.answer li{margin:.3em 0}\
+th{background:#eee}td:first-child,th:first-child{text-align:left}.answer li{margin:.3em 0}.verdict{font-size:125%;font-weight:bold}dt{font-weight:bold;margin-top:.4em}\
 .unstable{color:#c0392b;font-weight:bold}details{margin:.5em 0}summary{cursor:pointer}\
 .maps figure{display:inline-block;width:49%;vertical-align:top;margin:.3em 0}\
 #model img{max-width:760px}.run td:nth-child(3){text-align:left}";
@@ -109,15 +110,7 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
             body,
         })
     };
-    let items: String = answer_lines(s)
-        .iter()
-        .map(|l| format!("<li>{}</li>", escape(l)))
-        .collect();
-    add(
-        "answer",
-        "The answer",
-        format!("<ul class=\"answer\">{items}</ul>"),
-    );
+    add("answer", "The answer", answer_section(s));
 
     let mut body = figure(output, "model.png", "The model (components coloured).")?;
     body += &text(s, Part::Model);
@@ -183,7 +176,10 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
         add("reduction", "Reduction", text(s, Part::Reduction));
     }
     time_sections(s, output, &mut out)?;
-    let scene = format!("<pre>{}</pre>", escape(scene_text));
+    let scene = format!(
+        "<p>The scene as run, without its comments (the file itself keeps them).</p><pre>{}</pre>",
+        escape(&without_comments(scene_text))
+    );
     for (id, title, body) in [
         ("run", "Speed against accuracy", run_table(s)),
         ("scene", "Scene", scene),
@@ -272,7 +268,97 @@ fn time_sections(s: &RunSummary, output: &Path, out: &mut Vec<Section>) -> std::
     if let Some(l) = &s.loudness {
         add("how-loud", "How loud", loudness_section(s, l, output)?);
     }
+    if s.transient.is_some() {
+        add(
+            "diagnostics",
+            "Solver diagnostics",
+            diagnostics(&output.join("transient.log"))?,
+        );
+    }
     Ok(())
+}
+
+/// The answer: the verdict, its detail (without the line that points at this report), and a
+/// glossary of the words it uses.
+fn answer_section(s: &RunSummary) -> String {
+    let lines = answer_lines(s);
+    let verdict = crate::report::answer::verdict(s);
+    let items: String = lines
+        .iter()
+        .filter(|l| Some(*l) != verdict.as_ref() && !l.starts_with("files:"))
+        .map(|l| format!("<li>{}</li>", escape(l)))
+        .collect();
+    let verdict = verdict.map_or(String::new(), |v| {
+        format!("<p class=\"verdict\">{}</p>", escape(&v))
+    });
+    format!("{verdict}<ul class=\"answer\">{items}</ul>{GLOSSARY}")
+}
+
+/// The words of the answer, for a reader who does not solve eigenproblems every day.
+const GLOSSARY: &str = "<details><summary>Glossary</summary><dl>\
+<dt>complex mode</dt><dd>A vibration shape of the brake with friction, at the static state: \
+its eigenvalue s = Re(s) + i 2 pi f gives its frequency f and how fast it grows (Re(s) > 0) \
+or decays. Friction couples modes, so a mode can draw energy from the sliding: it is \
+unstable. Complex modes over-predict squeal; the transient says which unstable modes really \
+grow and where they saturate.</dd>\
+<dt>growth rate, damping ratio</dt><dd>Re(s) in 1/s: the amplitude of an unstable mode grows \
+as exp(Re(s) t) while the vibration is small. The damping ratio is zeta = -Re(s)/|s|: \
+negative for an unstable mode.</dd>\
+<dt>moving most</dt><dd>The components holding the largest shares of the mode's kinetic \
+energy.</dd>\
+<dt>transient, saturation</dt><dd>The nonlinear time response from the static state plus a \
+small kick: an unstable mode grows until contact opening, stick-slip and the friction \
+limit bound it (saturation); a limit cycle is a saturated vibration that repeats itself.</dd>\
+<dt>alpha_sat, saturation amplitude</dt><dd>The relative displacement at the contact (gap \
+and slip, m) at which the mode, followed over its own period (pseudo trajectory), is stable \
+on average: the amplitude the complex mode alone predicts for its saturation.</dd>\
+<dt>sound power, dB(A)</dt><dd>The power radiated by the components of [post.loudness] (default: the disc and the backplates) as an \
+equivalent radiated power (every face radiating as a piston: an upper bound), \
+L_W = 10 log10(P / 1 pW), A-weighted for the ear. A level at a microphone (sound pressure, \
+dB re 20 uPa) is a different quantity: it falls with distance.</dd>\
+</dl></details>";
+
+/// The step control's changes during the transient (transient.log), at most 200 lines.
+fn diagnostics(log: &Path) -> std::io::Result<String> {
+    const SHOWN: usize = 200;
+    let text = match std::fs::read_to_string(log) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
+        Err(e) => return Err(e),
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    if lines.is_empty() {
+        return Ok(
+            "<p>No step of the transient stalled: the fixed Jacobian converged every step.</p>"
+                .into(),
+        );
+    }
+    let more = lines.len().saturating_sub(SHOWN);
+    let shown = lines[..lines.len().min(SHOWN)].join("\n");
+    Ok(format!(
+        "<p>Where the transient's fixed-Jacobian iterations stalled and how the step control \
+         recovered (retried with an updated factor, refactorized, or cut the step): {} lines \
+         of transient.log{}. These are solver events, not results: the answer holds only \
+         converged steps.</p><details><summary>transient.log</summary><pre>{}</pre></details>",
+        lines.len(),
+        if more > 0 {
+            format!(", the first {SHOWN} shown")
+        } else {
+            String::new()
+        },
+        escape(&shown)
+    ))
+}
+
+/// The scene's text without its comment lines (the header's description is the file's).
+fn without_comments(scene: &str) -> String {
+    scene
+        .lines()
+        .filter(|l| !l.trim_start().starts_with('#'))
+        .collect::<Vec<_>>()
+        .join("\n")
+        .trim()
+        .to_string()
 }
 
 /// A figure of the results folder embedded as a data URI, or nothing when the run did not

@@ -231,6 +231,14 @@ impl RunSummary {
             if let Some(at) = t.stopped_at_saturation {
                 writeln!(f, "    stopped at t = {at:.4e} s: the torque had saturated transient.stop_after_saturation cycles before")?;
             }
+            if t.cuts + t.refreshes + t.updated_retries + t.krylov_retries + t.full_newton_retries
+                > 0
+            {
+                writeln!(f, "    each change of the step control above (a step whose iterations stalled, then retried, refactorized or cut) has its line in transient.log")?;
+            }
+            for note in &t.notes {
+                writeln!(f, "    {note}")?;
+            }
         }
         Ok(())
     }

@@ -154,6 +154,8 @@ pub struct TransientSummary {
     pub static_residual: f64,
     pub stopped_at_saturation: Option<f64>,
     pub cost: StepCost,
+    /// Where the sensors and the impulse landed.
+    pub notes: Vec<String>,
 }
 
 /// What a step's parts stream and how long they took: the cost model of benches/transient.rs
@@ -440,6 +442,7 @@ impl TransientSummary {
             static_residual: t.static_residual,
             stopped_at_saturation: t.stopped_at_saturation,
             cost: StepCost::of(t),
+            notes: Vec::new(),
         }
     }
 }

@@ -19,6 +19,7 @@ mod matrix_lining;
 mod matrix_share;
 pub mod model;
 pub mod modes;
+pub mod motion;
 pub mod operators;
 pub mod parameter_shapes;
 pub mod post;

@@ -66,6 +66,8 @@ pub struct Trajectory {
     /// none stored).
     pub step: f64,
     pub state_interval: f64,
+    /// Where the sensors and the impulse landed (the nearest nodes), for the summary.
+    pub notes: Vec<String>,
 }
 
 /// Runs the transient from the preloaded state; `files`: where transient.h5 and the
@@ -86,13 +88,20 @@ pub fn transient<'p>(
 ) -> Result<Trajectory, RunError> {
     let dofs = ops.dofs.as_ref().ok_or(TransientSetupError::NoMesh)?;
     let reduction = reduced.map(|r| &r.model.reduction);
+    let mut notes = Vec::new();
     let sensors = match model {
-        Some(model) if !settings.sensors.is_empty() => {
-            Some(sensor_rows(petsc, settings, &model.mesh, dofs, reduction)?)
-        }
+        Some(model) if !settings.sensors.is_empty() => Some(sensor_rows(
+            petsc,
+            settings,
+            &model.mesh,
+            dofs,
+            reduction,
+            &mut notes,
+        )?),
         _ => None,
     };
-    let mut kick_full = kick(petsc, settings, modes, model.map(|m| &m.mesh), dofs)?;
+    let mesh = model.map(|m| &m.mesh);
+    let mut kick_full = kick(settings, modes, mesh, dofs, &mut notes)?;
     if crate::fault::poisoned("transient") {
         if let Some(x) = kick_full.local_mut()?.first_mut() {
             *x = f64::NAN;
@@ -196,6 +205,7 @@ pub fn transient<'p>(
         failure,
         step: settings.step,
         state_interval: settings.state_interval,
+        notes,
     })
 }
 
@@ -216,11 +226,11 @@ fn nearest_node(mesh: &Mesh, p: &[f64; 3]) -> Option<(usize, f64)> {
 ///
 /// # Collective
 pub fn kick<'p>(
-    petsc: &'p Petsc,
     settings: &TransientSettings,
     modes: &RealModes<'p>,
     mesh: Option<&Mesh>,
     dofs: &crate::fem::dofmap::DofMap,
+    notes: &mut Vec<String>,
 ) -> Result<Vector<'p>, TransientSetupError> {
     let first = modes
         .shapes
@@ -282,13 +292,11 @@ pub fn kick<'p>(
             };
             let (node, distance) =
                 nearest_node(mesh, &impulse.point).ok_or(TransientSetupError::ImpulseNeedsMesh)?;
-            if petsc.rank() == 0 {
-                let c = mesh.coords[node];
-                println!(
-                    "  impulse ({:.3e}, {:.3e}, {:.3e}) N s at node {node} ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
-                    impulse.value[0], impulse.value[1], impulse.value[2], c[0], c[1], c[2]
-                );
-            }
+            let c = mesh.coords[node];
+            notes.push(format!(
+                "impulse ({:.3e}, {:.3e}, {:.3e}) N s at node {node} ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
+                impulse.value[0], impulse.value[1], impulse.value[2], c[0], c[1], c[2]
+            ));
             let mut force = first.duplicate()?;
             force.set_all(0.0)?;
             if dofs.owner_of_node(node) == dofs.rank {
@@ -319,6 +327,7 @@ pub fn sensor_rows<'p>(
     mesh: &Mesh,
     dofs: &crate::fem::dofmap::DofMap,
     reduction: Option<&crate::reduce::Reduction>,
+    notes: &mut Vec<String>,
 ) -> Result<Sensors<'p>, TransientSetupError> {
     let mut names = Vec::new();
     let mut rows = Vec::new();
@@ -326,13 +335,11 @@ pub fn sensor_rows<'p>(
     let mut owners = Vec::new();
     for (name, p) in &settings.sensors {
         let (node, distance) = nearest_node(mesh, p).ok_or(TransientSetupError::SensorsNeedMesh)?;
-        if petsc.rank() == 0 {
-            let c = mesh.coords[node];
-            println!(
-                "  sensor '{name}': node {node} at ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
-                c[0], c[1], c[2]
-            );
-        }
+        let c = mesh.coords[node];
+        notes.push(format!(
+            "sensor '{name}': node {node} at ({:.4}, {:.4}, {:.4}) m, {distance:.2e} m from the position asked",
+            c[0], c[1], c[2]
+        ));
         let owner = dofs.owner_of_node(node);
         owners.push(owner);
         if owner < dofs.rank {

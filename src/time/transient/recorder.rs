@@ -433,9 +433,6 @@ pub(super) struct StepLog {
 }
 
 impl StepLog {
-    /// Lines of the log shown on stdout.
-    const SHOWN: usize = 3;
-
     pub(super) fn new(rank0: bool, path: PathBuf, append: bool) -> Self {
         let open = || {
             std::fs::OpenOptions::new()
@@ -454,6 +451,8 @@ impl StepLog {
         }
     }
 
+    /// A change of the step control: into transient.log (solver diagnostics stay off the
+    /// console, which leads with the answer); on stdout only when the log cannot be written.
     pub(super) fn write(&mut self, line: &str) {
         use std::io::Write as _;
         if !self.rank0 {
@@ -463,13 +462,8 @@ impl StepLog {
             .file
             .as_mut()
             .is_some_and(|f| writeln!(f, "{line}").is_ok());
-        if self.written < Self::SHOWN || !in_file {
-            println!("  transient: {line}");
-        } else if self.written == Self::SHOWN {
-            println!(
-                "  transient: further changes of the step control in {} (counted in the summary)",
-                self.path.display()
-            );
+        if !in_file {
+            println!("  transient ({} not writable): {line}", self.path.display());
         }
         self.written += 1;
     }
