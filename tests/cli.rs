@@ -76,7 +76,7 @@ fn default_scene_runs_end_to_end_on_two_ranks_with_its_report_and_labelled_figur
         .skip(1)
         .take_while(|l| l.starts_with("    "))
         .collect();
-    check_verdict(answer[0]);
+    check_verdict(answer[0].trim());
     assert!(
         answer.iter().any(|l| l.contains("unstable complex modes")),
         "{answer:?}"
