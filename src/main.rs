@@ -111,7 +111,11 @@ fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
     let whole = squeal::matrix::sample::Slice::WHOLE;
     match squeal::pipeline::merge::merge(&world, slices, output, whole) {
         Ok(report) => {
-            println!("answer:\n    {}", report.answer_line());
+            println!(
+                "answer:\n    {}\n    {}",
+                squeal::report::answer::matrix_verdict(&report),
+                report.answer_line()
+            );
             print!("{}", report.text());
             println!("merged into {}", output.display());
             ExitCode::SUCCESS
@@ -232,7 +236,11 @@ fn run_command(
             // Every group done (a failed one ended the run through fault::agree), rank 0 merges.
             squeal::parallel::barrier(&world);
             if rank == 0 {
-                print!("{summary}");
+                // The group's own summary is a part of the whole: in its folder, not here.
+                println!(
+                    "group 1 of {groups} done: its summary in {}",
+                    summary.output.join("summary.txt").display()
+                );
                 let dirs: Vec<PathBuf> = (0..groups)
                     .map(|g| groups::group_dir(&output, g, groups))
                     .collect();
@@ -244,8 +252,9 @@ fn run_command(
                 match squeal::pipeline::merge::merge(&own, &dirs, &output, whole_slice) {
                     Ok(report) => {
                         println!(
-                            "groups merged into {}:\n    {}",
+                            "groups merged into {}\nanswer:\n    {}\n    {}",
                             output.display(),
+                            squeal::report::answer::matrix_verdict(&report),
                             report.answer_line()
                         );
                         print!("{}", report.text());

@@ -155,8 +155,9 @@ fn real_modes_scene_reports_only_its_stages() {
 }
 
 /// The default scene's verdict names whether it squeals, the frequency, the mode, the
-/// components that move most and the level: "squeals: yes, 2.91 kHz, mode C35, disc, piston
-/// and inner backplate moving most, 124.5 dB(A) sound power from the saturated vibration".
+/// components that move most and the level: "squeals: yes, 2.91 kHz, mode C35 (the most
+/// unstable of 4), disc, piston and inner backplate moving most, 124.5 dB(A) sound power from
+/// the saturated vibration".
 /// The numbers are the growth check's (C35 grows in the transient) and the loudness suite's
 /// business; here the line must carry each part, in an engineer's units.
 fn check_verdict(verdict: &str) {

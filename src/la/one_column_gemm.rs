@@ -8,7 +8,7 @@
 //! n = 1. OpenBLAS before 0.3.28 (Debian ships 0.3.21) packs the panel into a buffer before it
 //! multiplies, so the factor is read, written and read again instead of streamed once: on the
 //! 600k brake's growth step its packing routines took 26 % of the samples, TRSM's another 3 %
-//! (benches/transient-results.md, eighteenth session). GEMV and TRSV stream the panel once.
+//! (benches/transient-results.md). GEMV and TRSV stream the panel once.
 //!
 //! Every other call goes on to the library's own routine (the next definition of the symbol:
 //! `dlsym(RTLD_NEXT)`). The forwarding can be switched off (`set_forwarding`) to measure it.

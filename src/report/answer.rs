@@ -15,6 +15,8 @@ const NAMED: usize = 6;
 
 /// A frequency as an engineer says it: "2.91 kHz", "520 Hz".
 pub fn hz(f: f64) -> String {
+    // A rigid-body mode's round-off ("-0 Hz") reads as 0.
+    let f = if f.abs() < 0.5 { 0.0 } else { f };
     if f >= 1000.0 {
         format!("{:.2} kHz", f / 1000.0)
     } else {
@@ -100,16 +102,21 @@ fn verdict_level(l: Option<&LoudnessReport>, mode: &str) -> Option<String> {
     ))
 }
 
+/// The verdict of a noise matrix: at how many of its operating points it squeals.
+pub fn matrix_verdict(m: &crate::report::matrix::MatrixReport) -> String {
+    let a = &m.analysis;
+    let yes = if a.squealing > 0 { "yes" } else { "no" };
+    format!(
+        "squeals: {yes}, at {} of {} operating points of the noise matrix",
+        a.squealing, a.solved
+    )
+}
+
 /// The verdict: one line, "squeals: yes/likely/no, ..." (None when the scene asked no
 /// stability question: real modes alone).
 pub fn verdict(s: &RunSummary) -> Option<String> {
     if let Some(m) = &s.matrix {
-        let a = &m.analysis;
-        let yes = if a.squealing > 0 { "yes" } else { "no" };
-        return Some(format!(
-            "squeals: {yes}, at {} of {} operating points of the noise matrix",
-            a.squealing, a.solved
-        ));
+        return Some(matrix_verdict(m));
     }
     let route = s.complex.first()?;
     let unstable = unstable_of(route);
@@ -138,11 +145,15 @@ pub fn verdict(s: &RunSummary) -> Option<String> {
     };
     let level =
         verdict_level(s.loudness.as_ref(), &named.name).map_or(String::new(), |l| format!(", {l}"));
-    let at = format!("{}, mode {}{moving}", hz(named.frequency_hz), named.name);
     let others = match unstable.len() {
         1 => String::new(),
-        n => format!(" ({} of {n} unstable modes)", ordinal_of(&unstable, named)),
+        n => format!(" ({} of {n})", ordinal_of(&unstable, named)),
     };
+    let at = format!(
+        "{}, mode {}{others}{moving}",
+        hz(named.frequency_hz),
+        named.name
+    );
     Some(match &s.limit_cycle {
         Some(r) => {
             let c = &r.cycle;
@@ -161,7 +172,7 @@ pub fn verdict(s: &RunSummary) -> Option<String> {
                     "squeals: yes, {at}: still growing at the end of the transient{level}"
                 ),
                 _ => format!(
-                    "squeals: not in this transient: {at} is unstable at rest{others}, but the vibration did not grow from its start"
+                    "squeals: not in this transient: {at} is unstable at rest, but the vibration did not grow from its start"
                 ),
             }
         }
@@ -171,7 +182,7 @@ pub fn verdict(s: &RunSummary) -> Option<String> {
             } else {
                 "the complex modes over-predict: a transient decides"
             };
-            format!("squeals: likely, {at}{others}{level} ({how})")
+            format!("squeals: likely, {at}{level}; {how}")
         }
     })
 }
@@ -338,9 +349,11 @@ fn pseudo_lines(s: &RunSummary, lines: &mut Vec<String>) {
     for study in &p.studies {
         let t = &study.trajectory;
         let predicted = match &t.alpha_sat {
-            Found::At { alpha, .. } => um(*alpha),
-            Found::BelowRange => "below the swept range".into(),
-            Found::AboveRange => "above the swept range (not reached)".into(),
+            Found::At { alpha, .. } => format!("{} of relative contact displacement", um(*alpha)),
+            Found::BelowRange => "below the smallest swept amplitude".into(),
+            Found::AboveRange => {
+                "none within the swept amplitudes (unstable on average up to the largest)".into()
+            }
         };
         let against = match (&study.transient, &t.alpha_sat) {
             (Some(tr), Found::At { alpha, .. }) => format!(
@@ -358,7 +371,7 @@ fn pseudo_lines(s: &RunSummary, lines: &mut Vec<String>) {
             _ => String::new(),
         };
         lines.push(format!(
-            "saturation amplitude predicted from {} alone (pseudo trajectory): {predicted} of relative contact displacement{against}",
+            "saturation amplitude predicted from {} alone (pseudo trajectory): {predicted}{against}",
             t.name
         ));
     }
@@ -430,7 +443,8 @@ mod tests {
     #[test]
     fn frequencies_read_as_an_engineer_says_them() {
         assert_eq!(hz(2910.55), "2.91 kHz");
-        assert_eq!(hz(520.5), "520 Hz");
+        assert_eq!(hz(520.4), "520 Hz");
+        assert_eq!(hz(-1e-9), "0 Hz");
         assert_eq!(um(2.148e-5), "21.5 um");
     }
 

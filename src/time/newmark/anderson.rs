@@ -7,13 +7,13 @@
 //! remaining unknowns is smooth (the contact switches are solved locally) but can still be
 //! slow: on the small brake's first saturated steps its residual fell 1.7 % per iteration,
 //! with every contact DOF eliminated, along a few directions where the consistent tangent is
-//! far softer than the factored J (benches/transient-results.md, seventeenth session). A slow
+//! far softer than the factored J (benches/transient-results.md). A slow
 //! linear rate along a few directions is what a secant method over the last iterates removes.
 //! Anderson's step takes the affine combination of the last plain-update targets
 //! g_i = q_i - J^-1 R_i whose residuals combine to the smallest norm: for a linear problem it
 //! is GMRES on J(q) preconditioned by J^-1, without the tangent ever being formed. It costs
-//! no solve: dot products over `depth` stored vectors. Without the elimination it did not
-//! pay (sixteenth session): iterates whose contact points switch state make the secant model
+//! no solve: dot products over `depth` stored vectors. Without the elimination it does not
+//! pay: iterates whose contact points switch state make the secant model
 //! point the wrong way.
 //!
 //! The linear force z = M a + C v + K q is affine in q within a step, so the same combination

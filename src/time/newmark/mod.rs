@@ -500,8 +500,7 @@ impl<'a, 'p> Newmark<'a, 'p> {
             // Stalled: less than a halving over the last four iterations after eight; at that
             // rate the tolerance is out of reach within the limit, and the caller has better
             // corrections to try (a patient rule that let such attempts go on while their rate
-            // reached the target was neutral at 600k: benches/transient-results.md, twentieth
-            // session).
+            // reached the target was neutral at 600k: benches/transient-results.md).
             let k = history.len();
             let stalled = k > 8 && r > 0.5 * history[k - 5];
             if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {

@@ -4,8 +4,8 @@
 //! rows b vanish with the other unknowns held, solving the small nonlinear system
 //! R_b(q + delta) = 0 by Newton with its exact tangent. b falls into independent parts
 //! (`parts.rs`), each solved on one rank (`local_newton.rs`), their moves summed over the
-//! ranks (before, every rank solved all of b: an elimination at 600k took 1.6x as long on
-//! 2 ranks, benches/transient-results.md, twenty-sixth session). A part that recurs keeps
+//! ranks (every rank solving all of b makes an elimination at 600k take 1.6x as long on
+//! 2 ranks, benches/transient-results.md). A part that recurs keeps
 //! its rank and its factor. The
 //! fixed factor's correction then acts on a residual whose stiff, switching local laws (the
 //! friction band's mu p / slip_speed through gamma / (beta h), the exponential contact of a

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 const FLUSH_ROWS: usize = 1000;
 /// Stored states buffered before they are appended (at most; every flush of the signals
 /// takes them too): five appends per state each cost more than the small brake's state
-/// (0.11 of its 1.05 ms per step went to writing states one by one, twenty-seventh session),
+/// (written one by one, they took 0.11 of its 1.05 ms per step),
 /// and 64 of the 600k model's reduced states are ~18 MB per rank.
 const FLUSH_STATES: usize = 64;
 const STATE_PATHS: [&str; 3] = ["states/time", "states/displacement", "states/velocity"];

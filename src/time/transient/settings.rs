@@ -107,7 +107,7 @@ pub struct TransientSettings {
     /// gamma / (beta h); unsymmetric, LU; the tangent the complex modes see, so in the growth
     /// the residual after one correction is of second order in the amplitude) or `"mock"`
     /// (the normal and stick stiffness alone, the paper's mock contact stiffness: symmetric,
-    /// Cholesky; the default before 2026-12-01). (Not written when "consistent": restart
+    /// Cholesky). (Not written when "consistent": restart
     /// fingerprints stay the same.)
     #[serde(default, skip_serializing_if = "FirstJacobian::is_consistent")]
     pub first_jacobian: FirstJacobian,
