@@ -61,6 +61,13 @@ pub struct SweepSettings {
 
 impl SweepSettings {
     pub fn validate(&self) -> Result<(), InvalidSetting> {
+        // Checked before the values are made: a huge count would be allocated first.
+        if let Some(n) = self.points.filter(|&n| n > MAX_SWEEP_POINTS) {
+            return Err(InvalidSetting::new(
+                "sweep.points",
+                format!(" = {n}: at most {MAX_SWEEP_POINTS} (each point re-solves the preload)"),
+            ));
+        }
         let values = self.values();
         if values.is_empty() {
             return Err(InvalidSetting::new(
@@ -102,6 +109,9 @@ impl SweepSettings {
         listed_or_spaced(&self.values, self.from, self.to, self.points)
     }
 }
+
+/// The most points a sweep takes from `from`/`to`/`points`.
+pub const MAX_SWEEP_POINTS: usize = 1 << 16;
 
 /// The values of a swept axis: the list when given, else `points` evenly spaced from `from`
 /// to `to` (one point when from = to); empty when neither is complete.
@@ -199,6 +209,19 @@ pub fn apply_to_laws(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_huge_point_count_is_refused_before_it_is_allocated() {
+        let s = SweepSettings {
+            parameter: SweepParameter::Mu,
+            values: Vec::new(),
+            from: Some(0.0),
+            to: Some(0.5),
+            points: Some(1 << 40),
+        };
+        let e = s.validate().unwrap_err();
+        assert_eq!(e.key, "sweep.points");
+    }
 
     #[test]
     fn values_from_range_and_validation_names_the_key() {

@@ -355,10 +355,14 @@ impl MatrixSettings {
                 return Err(InvalidSetting::new("matrix.points", detail));
             }
             (Sampling::Grid, None) => {
+                // Counted without making the values: a huge `points` would be allocated.
                 let count: f64 = self
                     .axes
                     .values()
-                    .map(|r| r.values().len() as f64)
+                    .map(|r| match r.values.len() {
+                        0 => r.points.unwrap_or(0) as f64,
+                        n => n as f64,
+                    })
                     .product();
                 if count > MAX_POINTS as f64 {
                     let detail = format!(
@@ -418,6 +422,10 @@ impl MatrixSettings {
             let detail =
                 ": give either 'values' or 'from'/'to' (and 'points' for a grid), not both";
             return Err(InvalidSetting::new(key, detail));
+        }
+        if let Some(n) = range.points.filter(|&n| n > MAX_POINTS) {
+            let detail = format!(" = {n}: at most {MAX_POINTS}");
+            return Err(InvalidSetting::new(format!("{key}.points"), detail));
         }
         let usable = match self.sampling {
             Sampling::Grid => !range.values().is_empty(),
