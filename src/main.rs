@@ -111,12 +111,7 @@ fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
     let whole = squeal::matrix::sample::Slice::WHOLE;
     match squeal::pipeline::merge::merge(&world, slices, output, whole) {
         Ok(report) => {
-            println!(
-                "answer:\n    {}\n    {}",
-                squeal::report::answer::matrix_verdict(&report),
-                report.answer_line()
-            );
-            print!("{}", report.text());
+            print_merged(&report);
             println!("merged into {}", output.display());
             ExitCode::SUCCESS
         }
@@ -125,6 +120,16 @@ fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A merged noise matrix' answer (its verdict first) and its summary.
+fn print_merged(report: &squeal::report::matrix::MatrixReport) {
+    println!(
+        "answer:\n    {}\n    {}",
+        squeal::report::answer::matrix_verdict(report),
+        report.answer_line()
+    );
+    print!("{}", report.text());
 }
 
 fn run_command(
@@ -251,13 +256,8 @@ fn run_command(
                 let own = mpi::topology::SimpleCommunicator::self_comm();
                 match squeal::pipeline::merge::merge(&own, &dirs, &output, whole_slice) {
                     Ok(report) => {
-                        println!(
-                            "groups merged into {}\nanswer:\n    {}\n    {}",
-                            output.display(),
-                            squeal::report::answer::matrix_verdict(&report),
-                            report.answer_line()
-                        );
-                        print!("{}", report.text());
+                        println!("groups merged into {}", output.display());
+                        print_merged(&report);
                     }
                     Err(e) => return fail(format!("merging the groups: {e}")),
                 }

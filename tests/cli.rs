@@ -162,11 +162,12 @@ fn real_modes_scene_reports_only_its_stages() {
 /// business; here the line must carry each part, in an engineer's units.
 fn check_verdict(verdict: &str) {
     assert!(verdict.starts_with("squeals: yes, "), "{verdict}");
-    let kilohertz = verdict
-        .split(" kHz")
-        .next()
-        .and_then(|h| h.rsplit(' ').next())
-        .and_then(|x| x.parse::<f64>().ok());
+    // The number written just before a unit ("2.91 kHz").
+    let before = |unit: &str| -> Option<f64> {
+        let head = verdict.split(unit).next()?;
+        head.rsplit(' ').next()?.parse().ok()
+    };
+    let kilohertz = before(" kHz");
     assert!(
         kilohertz.is_some_and(|f| (0.5..20.0).contains(&f)),
         "no frequency in kHz: {verdict}"
@@ -176,11 +177,7 @@ fn check_verdict(verdict: &str) {
         verdict.contains("disc") && verdict.contains("moving most"),
         "no components: {verdict}"
     );
-    let level = verdict
-        .split(" dB(A)")
-        .next()
-        .and_then(|h| h.rsplit(' ').next())
-        .and_then(|x| x.parse::<f64>().ok());
+    let level = before(" dB(A)");
     assert!(
         level.is_some_and(|l| l.is_finite() && (60.0..160.0).contains(&l)),
         "no level in dB(A): {verdict}"

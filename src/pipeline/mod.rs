@@ -195,11 +195,9 @@ pub fn run_with(
     let link = link?;
     let pseudo = pseudo?;
     let loudness = loudness?;
-    let mut notes = Vec::new();
-    let signals = trajectory.map(|t| {
+    let (signals, notes) = trajectory.map_or((None, Vec::new()), |t| {
         failure = failure.take().or(t.failure.map(RunError::Time));
-        notes = t.notes;
-        t.signals
+        (Some(t.signals), t.notes)
     });
 
     let peak = crate::parallel::max(petsc.world(), petsc.peak_memory());
