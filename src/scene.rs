@@ -156,6 +156,21 @@ pub struct Output {
     /// Also write the model as an Abaqus input file (`model.inp`), to open it in other tools.
     #[serde(default)]
     pub write_inp: bool,
+    /// The transient's vibration on the mesh (vibration.xdmf): the stored states of the last
+    /// `frame_periods` periods of the vibration (0: none), thinned to about
+    /// `frames_per_period` a period (every stored state when they are fewer).
+    #[serde(default = "default_frame_periods")]
+    pub frame_periods: f64,
+    #[serde(default = "default_frames_per_period")]
+    pub frames_per_period: usize,
+}
+
+fn default_frame_periods() -> f64 {
+    4.0
+}
+
+fn default_frames_per_period() -> usize {
+    24
 }
 
 fn default_directory() -> PathBuf {
@@ -168,6 +183,8 @@ impl Default for Output {
             directory: default_directory(),
             export_matrices: Vec::new(),
             write_inp: false,
+            frame_periods: default_frame_periods(),
+            frames_per_period: default_frames_per_period(),
         }
     }
 }
@@ -556,6 +573,22 @@ impl Scene {
             if post.uses_states() && (self.statics.is_none() || self.real_modes.is_none()) {
                 return Err(InvalidSetting::new("post", ": modal_energy, dynamic_stability and contact_cycle work on the preloaded model and its real modes: they need [statics] and [real_modes]"));
             }
+        }
+        let periods = self.output.frame_periods;
+        if !(periods.is_finite() && (0.0..=1e4).contains(&periods)) {
+            return Err(InvalidSetting::new(
+                "output.frame_periods",
+                format!(" = {periods}: must be in [0, 1e4] (0 writes no vibration frames)"),
+            ));
+        }
+        if self.output.frames_per_period == 0 || self.output.frames_per_period > 1000 {
+            return Err(InvalidSetting::new(
+                "output.frames_per_period",
+                format!(
+                    " = {}: must be in [1, 1000] (frame_periods = 0 writes none)",
+                    self.output.frames_per_period
+                ),
+            ));
         }
         for e in &self.output.export_matrices {
             if e != "mtx" && e != "petsc" {

@@ -194,6 +194,24 @@ impl ResultsFile {
                 &mesh.materials[block.material].name,
             )?;
         }
+        // Every element in one XDMF "Mixed" topology (type code, then its nodes), in global
+        // element order: readers that take one grid per file (meshio) see the whole brake.
+        let topology: Vec<u64> = mesh
+            .blocks
+            .iter()
+            .flat_map(|block| {
+                let code = crate::io::xdmf::mixed_code(block.kind);
+                let nn = block.kind.nodes();
+                block
+                    .connectivity
+                    .chunks(nn)
+                    .flat_map(move |e| std::iter::once(code).chain(e.iter().map(|&v| v as u64)))
+            })
+            .collect();
+        let ds = self.dataset::<u64>("model/topology", &[topology.len()], "1")?;
+        if self.rank == 0 && !topology.is_empty() {
+            ds.write(&Array1::from(topology)).map_err(self.err())?;
+        }
         // Component id (block index) of every element, in global element order.
         let ids: Vec<u64> = mesh
             .blocks

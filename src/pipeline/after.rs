@@ -5,10 +5,13 @@
 use std::path::{Path, PathBuf};
 
 use crate::eigen::complex_modes::ComplexModeSettings;
+use crate::fault::end_on_write_failure;
+use crate::io::results::ResultsFile;
 use crate::io::series::SeriesFile;
 use crate::la::Petsc;
 use crate::post::limit_cycle::LimitCycle;
-use crate::post::states::StoredStates;
+use crate::post::states::{Lift, StoredStates};
+use crate::report::vibration::{self, Frames};
 use crate::scene::Scene;
 use crate::stages::link::{self, LinearizationSettings, Link, Nominal};
 use crate::stages::loudness::{self, LoudnessReport, StoredRun};
@@ -114,6 +117,63 @@ impl AfterTransient<'_, '_> {
             pseudo,
             loudness,
         }
+    }
+
+    /// The transient's vibration on the mesh (`[output] frame_periods`, `frames_per_period`)
+    /// written into `file`: None when the run stored no states, has no mesh, or no frame is
+    /// asked for. A read failure is returned; a failed write ends the run (the shared file
+    /// cannot be closed after it).
+    ///
+    /// # Collective
+    pub fn write_frames(
+        &self,
+        file: &ResultsFile,
+        timings: &mut Timings,
+    ) -> Result<Option<Frames>, RunError> {
+        let output = &self.scene.output;
+        let stored = self.trajectory.is_some_and(|t| t.state_interval > 0.0);
+        let (Some(nominal), Some(dofs), Some(cycle), true) =
+            (self.nominal, self.dofs, &self.cycle, stored)
+        else {
+            return Ok(None);
+        };
+        if output.frame_periods <= 0.0 {
+            return Ok(None);
+        }
+        timings.stage(
+            "vibration frames",
+            || -> Result<Option<Frames>, RunError> {
+                let states = self.open_states()?;
+                let period = link::period_of(cycle);
+                let (periods, per_period) = (output.frame_periods, output.frames_per_period);
+                let Some(frames) = Frames::choose(&states.times, period, periods, per_period)
+                else {
+                    return Ok(None);
+                };
+                let at = nominal.contact_at(self.petsc);
+                let mut x = at.state_template.duplicate()?;
+                let mut xv = at.state_template.duplicate()?;
+                let mut q = at.full_template.duplicate()?;
+                let q_static = at.full_template.local()?.to_vec();
+                for (k, &i) in frames.states.iter().enumerate() {
+                    states.read(i, &mut x, &mut xv)?;
+                    let full = match at.lift {
+                        Lift::Full => &x,
+                        Lift::Reduced(r) => {
+                            r.recover(self.petsc, &x, &mut q)?;
+                            &q
+                        }
+                    };
+                    let local: Vec<f64> = (full.local()?.iter().zip(&q_static))
+                        .map(|(a, b)| a - b)
+                        .collect();
+                    let written = vibration::write_frame(file, k, dofs, &local);
+                    end_on_write_failure(written, "results.h5");
+                }
+                end_on_write_failure(vibration::write_times(file, &frames), "results.h5");
+                Ok(Some(frames))
+            },
+        )
     }
 
     /// # Collective

@@ -151,8 +151,8 @@ pub fn run_with(
         }),
         _ => None,
     };
-    let after = after_transient(petsc, scene, &a, trajectory.as_ref(), &limit_cycle, output);
-    let after = after.run(&mut timings);
+    let stage = after_transient(petsc, scene, &a, trajectory.as_ref(), &limit_cycle, output);
+    let after = stage.run(&mut timings);
     let (link, pseudo, loudness) = (after.link, after.pseudo, after.loudness);
     let start = Instant::now();
     if let (Some(t), Some(settings)) = (&trajectory, &scene.transient) {
@@ -179,14 +179,10 @@ pub fn run_with(
         let written = report::loudness::write_loudness(petsc, &file, l, output);
         end_on_write_failure(written, RESULTS);
     }
-    if let (Some(model), 0) = (&a.model, petsc.rank()) {
-        let shapes = link
-            .as_ref()
-            .map_or(Vec::new(), report::link::tracked_shape_fields);
-        let (modes, complex) = (a.modes.as_ref(), &a.complex);
-        let written = report::write_xdmf_and_preview(output, model, modes, complex, shapes);
-        checked(written)?;
-    }
+    let frames = stage.write_frames(&file, &mut timings);
+    let frames = frames.map_err(|e| failure = failure.take().or(Some(e)));
+    let frames = frames.ok().flatten();
+    write_views(petsc, &a, link.as_ref().ok(), frames.as_ref(), output)?;
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
     timings.stages.push(("output".into(), seconds_output));
     end_on_write_failure(report::write_timings(&file, &timings), RESULTS);
@@ -204,6 +200,10 @@ pub fn run_with(
     let mut summary = RunSummary::of(petsc, a, signals.as_ref(), timings, peak, output)?;
     if let Some(t) = summary.transient.as_mut() {
         t.notes = notes;
+        if let Some(frames) = &frames {
+            t.notes
+                .push(format!("vibration.xdmf: {}", frames.describe()));
+        }
     }
     summary.limit_cycle = limit_cycle;
     summary.link = link;
@@ -216,6 +216,35 @@ pub fn run_with(
         Some(e) => Err(e),
         None => Ok(summary),
     }
+}
+
+/// results.xdmf, surfaces.xdmf and vibration.xdmf for ParaView, and model.png (rank 0 writes).
+///
+/// # Collective
+fn write_views(
+    petsc: &Petsc,
+    a: &stages::Analyses,
+    link: Option<&stages::link::Link>,
+    frames: Option<&report::vibration::Frames>,
+    output: &Path,
+) -> Result<(), RunError> {
+    let written = match (&a.model, petsc.rank()) {
+        (Some(model), 0) => {
+            let shapes = link.map_or(Vec::new(), report::link::tracked_shape_fields);
+            let (modes, complex) = (a.modes.as_ref(), &a.complex);
+            let with_contact = a.preload.is_some();
+            let views = report::Views {
+                modes,
+                complex,
+                more: shapes,
+                with_contact,
+                frames,
+            };
+            report::write_views_and_preview(output, model, views)
+        }
+        _ => Ok(()),
+    };
+    Ok(checked(written)?)
 }
 
 /// The transient stage, when the scene has one (timed).

@@ -444,9 +444,9 @@ pub fn tracked_shape_fields(link: &Link) -> Vec<crate::io::xdmf::NodalField> {
     r.shapes
         .iter()
         .flat_map(|s| {
-            ["re", "im"].map(|part| crate::io::xdmf::NodalField {
-                label: format!("{} {part}", s.label),
-                dataset: format!("{}_{part}", s.dataset),
+            ["re", "im"].map(|part| {
+                let label = format!("{} {part}", s.label);
+                crate::io::xdmf::NodalField::vector(&label, &format!("{}_{part}", s.dataset))
             })
         })
         .collect()

@@ -21,6 +21,7 @@ pub mod summary;
 pub mod sweep;
 pub mod text;
 pub mod transient;
+pub mod vibration;
 
 use std::path::Path;
 
@@ -147,51 +148,89 @@ pub fn write_inp(output: &Path, model: &Model) -> Result<(), WriteError> {
         .map_err(|source| WriteError::Io { path, source })
 }
 
-/// results.xdmf (the mesh with the real mode shapes, the first route's complex shapes as
-/// real and imaginary parts, and `more`) and model.png (rank 0 only).
-pub fn write_xdmf_and_preview(
+/// What the ParaView files show besides the mesh.
+pub struct Views<'a, 'p> {
+    pub modes: Option<&'a RealModes<'p>>,
+    /// The first route's complex shapes go in, as real and imaginary parts.
+    pub complex: &'a [ComplexModes<'p>],
+    /// More nodal vectors (the shapes the dynamic stability tracked).
+    pub more: Vec<NodalField>,
+    /// The static state was solved: its displacement and contact pressure go in.
+    pub with_contact: bool,
+    pub frames: Option<&'a crate::report::vibration::Frames>,
+}
+
+/// results.xdmf (the brake with the static state and the mode shapes), surfaces.xdmf (the
+/// named surfaces), vibration.xdmf (the transient's frames, when written) and model.png
+/// (rank 0 only).
+pub fn write_views_and_preview(
     output: &Path,
     model: &Model,
-    modes: Option<&RealModes>,
-    complex: &[ComplexModes],
-    more: Vec<NodalField>,
+    views: Views,
 ) -> Result<(), WriteError> {
-    let real = modes.iter().flat_map(|modes| {
-        modes
-            .frequencies_hz
-            .iter()
-            .enumerate()
-            .map(|(i, f)| NodalField {
-                label: format!("mode {:03} ({f:.1} Hz)", i + 1),
-                dataset: format!("/modes/real/shapes/mode_{:04}", i + 1),
-            })
-    });
-    let complex = complex.iter().take(1).flat_map(|c| {
-        c.modes
-            .iter()
-            .take(c.shapes.len())
-            .enumerate()
-            .flat_map(move |(i, mode)| {
-                ["re", "im"].map(|part| NodalField {
-                    label: format!(
-                        "{} {part} ({:.1} Hz, zeta {:.2e})",
+    let mut fields = Vec::new();
+    if views.with_contact {
+        fields.push(NodalField::vector(
+            "static displacement (m)",
+            "/static/displacement",
+        ));
+        fields.push(NodalField::scalar(
+            "static contact pressure (Pa)",
+            "/static/contact_pressure_at_nodes",
+        ));
+    }
+    if let Some(modes) = views.modes {
+        for (i, f) in modes.frequencies_hz.iter().enumerate() {
+            fields.push(NodalField::vector(
+                &format!("mode {:03} ({f:.1} Hz)", i + 1),
+                &format!("/modes/real/shapes/mode_{:04}", i + 1),
+            ));
+        }
+    }
+    for c in views.complex.iter().take(1) {
+        for (i, mode) in c.modes.iter().take(c.shapes.len()).enumerate() {
+            let state = if mode.unstable { ", unstable" } else { "" };
+            for part in ["re", "im"] {
+                fields.push(NodalField::vector(
+                    &format!(
+                        "{} {part} ({:.1} Hz, zeta {:.2e}{state})",
                         mode.name, mode.frequency_hz, mode.damping_ratio
                     ),
-                    dataset: format!(
+                    &format!(
                         "/modes/complex/{}/shapes/mode_{:04}_{part}",
                         route_name(c.route),
                         i + 1
                     ),
-                })
-            })
-    });
-    let fields: Vec<NodalField> = real.chain(complex).chain(more).collect();
+                ));
+            }
+        }
+    }
+    fields.extend(views.more);
+    let h5 = "results.h5";
+    let mesh = &model.mesh;
+    let io = |path: std::path::PathBuf, written: std::io::Result<()>| {
+        written.map_err(|source| WriteError::Io { path, source })
+    };
     let path = output.join("results.xdmf");
-    xdmf::write(&path, "results.h5", &model.mesh, &fields)
-        .map_err(|source| WriteError::Io { path, source })?;
+    io(path.clone(), xdmf::write_brake(&path, h5, mesh, &fields))?;
+    let path = output.join("surfaces.xdmf");
+    let pressure = views.with_contact;
+    io(
+        path.clone(),
+        xdmf::write_surfaces(&path, h5, mesh, pressure),
+    )?;
+    if let Some(frames) = views.frames {
+        let path = output.join("vibration.xdmf");
+        io(
+            path.clone(),
+            xdmf::write_frames(&path, h5, mesh, &frames.times),
+        )?;
+    }
     let path = output.join("model.png");
-    crate::io::preview::write_png(&path, &model.mesh, 1200, 900)
-        .map_err(|source| WriteError::Io { path, source })
+    io(
+        path.clone(),
+        crate::io::preview::write_png(&path, mesh, 1200, 900),
+    )
 }
 
 /// K.<format> and M.<format> (`mtx`: Matrix Market, else PETSc binary) of the stiffness the

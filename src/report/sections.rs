@@ -346,7 +346,7 @@ impl RunSummary {
         )?;
         writeln!(
             f,
-            "results: {0}/results.h5 (+ results.xdmf for ParaView, figures as PNG and SVG), report: {0}/report.html",
+            "results: {0}/results.h5 (+ results.xdmf and the other .xdmf files for ParaView, figures as PNG and SVG), report: {0}/report.html",
             s.output.display()
         )?;
         Ok(())

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use super::WriteError;
+use crate::contact::pairing::ContactPoint;
 use crate::fem::dofmap::DofMap;
 use crate::io::results::ResultsFile;
 use crate::la::Petsc;
@@ -51,6 +52,10 @@ pub fn write_static<'p>(
     for (name, local, units) in columns {
         let all = contact.gather(petsc, &local)?;
         file.write_table(&format!("static/contact/{name}"), &all, units)?;
+        if name == "pressure" {
+            let nodal = pressure_at_nodes(contact.points(), &all, model.mesh.node_count());
+            file.write_table("static/contact_pressure_at_nodes", &nodal, units)?;
+        }
         // Maps of the sliding interfaces (the pads) in the disc plane.
         if petsc.rank() == 0 && (name == "pressure" || name == "contact_stiffness") {
             for (i, itf) in contact.interfaces().iter().enumerate() {
@@ -144,4 +149,28 @@ pub fn write_static<'p>(
     let torque: f64 = state.summaries.iter().map(|s| s.torque).sum();
     file.set_number("static", "braking_torque_nm", torque)?;
     Ok(())
+}
+
+/// The contact pressure at the nodes of both faces of every interface (zero elsewhere), for
+/// ParaView: at each node the average of the points' pressures weighted by w |N| (a point's
+/// area times the node's shape function there). |N| keeps it an average where the corner
+/// functions of a quadratic face are negative.
+pub fn pressure_at_nodes(points: &[ContactPoint], pressure: &[f64], nodes: usize) -> Vec<f64> {
+    let (mut sum, mut weight) = (vec![0.0; nodes], vec![0.0; nodes]);
+    for (p, &value) in points.iter().zip(pressure) {
+        let sides = [
+            (&p.master_nodes, &p.master_shape),
+            (&p.slave_nodes, &p.slave_shape),
+        ];
+        for (ids, shape) in sides {
+            for (&node, &n) in ids.iter().zip(shape.iter()) {
+                sum[node] += p.weight * n.abs() * value;
+                weight[node] += p.weight * n.abs();
+            }
+        }
+    }
+    sum.iter()
+        .zip(&weight)
+        .map(|(&s, &w)| if w > 0.0 { s / w } else { 0.0 })
+        .collect()
 }
