@@ -147,6 +147,10 @@ pub fn sections(s: &RunSummary, scene_text: &str, output: &Path) -> std::io::Res
             );
             body += &figure(output, &file, &caption)?;
             body += &complex_table(c);
+            for m in c.modes.iter().filter(|m| m.unstable) {
+                let file = format!("mode_shape_{}_{}.png", c.route, m.name);
+                body += &figure(output, &file, &shape_caption(m))?;
+            }
         }
         add(
             "complex-modes",
@@ -415,6 +419,25 @@ fn real_modes_table(s: &RunSummary) -> String {
         );
     }
     t + "</table></details>"
+}
+
+/// The caption of an unstable mode's picture: what it shows and which components move.
+fn shape_caption(m: &crate::eigen::complex_modes::ComplexMode) -> String {
+    let moving: Vec<String> = crate::report::answer::moving_most(&m.motion)
+        .iter()
+        .map(|(name, share)| format!("{} {:.0} %", name.replace('_', " "), 100.0 * share))
+        .collect();
+    let moving = match moving.is_empty() {
+        true => String::new(),
+        false => format!(
+            " Moving most (share of its kinetic energy): {}.",
+            moving.join(", ")
+        ),
+    };
+    format!(
+        "{} at {:.1} Hz (damping ratio {:.2e}): the brake deformed by the mode's shape at the phase where it moves most (exaggerated), coloured by the displacement's size from dark blue (still) to yellow (the largest 5 % of the nodes).{moving}",
+        m.name, m.frequency_hz, m.damping_ratio
+    )
 }
 
 fn complex_table(c: &crate::report::summary::ComplexSummary) -> String {

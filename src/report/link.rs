@@ -238,7 +238,7 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
         (s.times[0], *s.times.last().unwrap_or(&s.times[0])),
     );
     fig.vline(0.0, RED, Some("stability boundary"));
-    for (k, t) in tracks.iter().enumerate() {
+    for t in &tracks {
         let (fr, zr) = (t.frequencies_hz(), t.damping_ratios());
         let points: Vec<(f64, f64)> = zr[1..]
             .iter()
@@ -246,6 +246,10 @@ fn plot_stability_diagram(r: &DynamicStabilityReport, output: &Path) -> Result<(
             .zip(fr[1..].iter().copied())
             .collect();
         fig.valued(points, s.times.clone(), 3);
+    }
+    // The nominal modes and their names over every track's points.
+    for (k, t) in tracks.iter().enumerate() {
+        let (fr, zr) = (t.frequencies_hz(), t.damping_ratios());
         fig.marker(zr[0], fr[0], BLACK, 5);
         fig.label(zr[0], fr[0], &t.name, BLACK, k % 2 == 1);
     }

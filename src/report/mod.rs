@@ -86,7 +86,8 @@ pub fn write_analyses<'p>(
         file.write_real_modes(modes, a.ops.dofs.as_ref())?;
     }
     for c in &a.complex {
-        modes::write_complex(petsc, file, c, a.ops.dofs.as_ref(), output)?;
+        let mesh = a.model.as_ref().map(|m| &m.mesh);
+        modes::write_complex(petsc, file, c, a.ops.dofs.as_ref(), mesh, output)?;
     }
     if let Some(sw) = &a.sweep {
         sweep::write_sweep(petsc, file, sw, output)?;

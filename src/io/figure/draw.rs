@@ -101,9 +101,10 @@ fn draw<DB: DrawingBackend<ErrorType: 'static>>(
         legend |= draw_layer(f, &mut chart, layer, (x, y))?;
     }
     if legend {
+        let corner = emptiest_corner(f, (x, y), (plot_w, plot_h));
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
+            .position(corner)
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(0, 0, 0))
             .label_font((FONT, 13))
@@ -114,6 +115,63 @@ fn draw<DB: DrawingBackend<ErrorType: 'static>>(
         draw_colour_bar(&bar, label, *range)?;
     }
     Ok(())
+}
+
+/// The corner of the axes where the legend hides the fewest data points (upper right on a
+/// tie): the legend's size is estimated from its labels' widths in the legend font.
+fn emptiest_corner(
+    f: &Figure,
+    (x, y): ((f64, f64), (f64, f64)),
+    (plot_w, plot_h): (f64, f64),
+) -> SeriesLabelPosition {
+    let font = (FONT, 13).into_font();
+    let labels: Vec<&str> = (f.layers.iter())
+        .filter_map(|l| match l {
+            Layer::Line(_, _, Some(s)) | Layer::VLine(_, _, Some(s)) => Some(s.as_str()),
+            Layer::Arrow(_, _, _, s) | Layer::Legend(s, _) => Some(s.as_str()),
+            _ => None,
+        })
+        .collect();
+    let widest = labels
+        .iter()
+        .map(|s| font.box_size(s).map_or(8 * s.len() as u32, |b| b.0))
+        .max()
+        .unwrap_or(0);
+    // The legend: its symbol area (30), margins (2 x 10) and one line of ~16 px per entry,
+    // as a fraction of the axes.
+    let fx = ((widest + 50) as f64 / plot_w.max(1.0)).min(1.0);
+    let fy = ((16 * labels.len() + 24) as f64 / plot_h.max(1.0)).min(1.0);
+    let inside = |p: &(f64, f64), right: bool, upper: bool| {
+        let u = (p.0 - x.0) / (x.1 - x.0);
+        let v = (p.1 - y.0) / (y.1 - y.0);
+        let in_x = if right { u >= 1.0 - fx } else { u <= fx };
+        let in_y = if upper { v >= 1.0 - fy } else { v <= fy };
+        in_x && in_y && u.is_finite() && v.is_finite()
+    };
+    let corners = [
+        (SeriesLabelPosition::UpperRight, true, true),
+        (SeriesLabelPosition::UpperLeft, false, true),
+        (SeriesLabelPosition::LowerRight, true, false),
+        (SeriesLabelPosition::LowerLeft, false, false),
+    ];
+    let hidden = |right: bool, upper: bool| -> usize {
+        (f.layers.iter())
+            .map(|l| match l {
+                Layer::Line(p, _, _) | Layer::Markers(p, _, _) | Layer::Valued(p, _, _) => {
+                    p.iter().filter(|p| inside(p, right, upper)).count()
+                }
+                _ => 0,
+            })
+            .sum()
+    };
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (corner, right, upper) in corners {
+        let n = hidden(right, upper);
+        if n < best.0 {
+            best = (n, corner);
+        }
+    }
+    best.1
 }
 
 type Chart<'a, DB> = ChartContext<
@@ -282,6 +340,16 @@ fn draw_text<DB: DrawingBackend<ErrorType: 'static>>(
         TextPlace::RightBelow => (style, (6, 4)),
         TextPlace::CentredAbove => (style.pos(Pos::new(HPos::Center, VPos::Bottom)), (0, -3)),
     };
+    // A label beside a point gets a white backing, so markers drawn under it do not hide it.
+    if place != TextPlace::CentredAbove {
+        let (w, h) = style.font.box_size(s).unwrap_or((8 * s.len() as u32, 13));
+        let corner = (offset.0 - 2, offset.1 - 1);
+        let far = (offset.0 + w as i32 + 2, offset.1 + h as i32 + 4);
+        let backing = EmptyElement::at(at) + Rectangle::new([corner, far], WHITE.mix(0.8).filled());
+        chart
+            .draw_series(std::iter::once(backing))
+            .map_err(text_error)?;
+    }
     let text = EmptyElement::at(at) + plotters::element::Text::new(s.to_string(), offset, style);
     chart
         .draw_series(std::iter::once(text))
