@@ -58,6 +58,16 @@ enum Command {
         #[arg(long, short)]
         output: PathBuf,
     },
+    /// Check a scene without solving: the scene's keys, the model files (deck, mesh or
+    /// matrices), mesh quality, clamps, loads, contact pairing and the memory a run takes per
+    /// rank. Exit 0 when a run can start; else the error names the file, key or line.
+    Check {
+        /// Scene file (TOML); the embedded default scene when none is given.
+        scene: Option<PathBuf>,
+        /// Ranks of the planned run, for the memory estimate.
+        #[arg(long, default_value_t = 2)]
+        ranks: usize,
+    },
     /// Scene utilities.
     Scene {
         /// Print the embedded default scene (a starting point for your own).
@@ -92,7 +102,64 @@ fn main() -> ExitCode {
             run_command(scene, output, options, groups.max(1), petsc_options)
         }
         Command::Merge { slices, output } => merge_command(&slices, &output),
+        Command::Check { scene, ranks } => check_command(scene.as_deref(), ranks),
     }
+}
+
+/// `squeal check`: rank 0 checks (the others wait for its verdict, so `mpirun squeal check`
+/// prints once and every rank exits alike).
+fn check_command(scene_path: Option<&Path>, ranks: usize) -> ExitCode {
+    let Some(universe) = mpi::initialize() else {
+        eprintln!("squeal: MPI was already initialized");
+        return ExitCode::FAILURE;
+    };
+    use mpi::traits::Communicator;
+    let world = universe.world();
+    let mut verdict = String::new();
+    if world.rank() == 0 {
+        verdict = match check_scene(scene_path, ranks) {
+            Ok(report) => {
+                print!("{report}");
+                String::new()
+            }
+            Err(e) => e,
+        };
+    }
+    squeal::parallel::broadcast_string(&world, 0, &mut verdict);
+    if verdict.is_empty() {
+        if world.rank() == 0 {
+            println!("ok: a run can start");
+        }
+        ExitCode::SUCCESS
+    } else {
+        if world.rank() == 0 {
+            eprintln!("squeal check: error: {verdict}");
+        }
+        ExitCode::FAILURE
+    }
+}
+
+fn check_scene(scene_path: Option<&Path>, ranks: usize) -> Result<String, String> {
+    let (text, name, dir) = match scene_path {
+        Some(p) => {
+            let text = std::fs::read_to_string(p)
+                .map_err(|e| format!("{}: cannot read the scene: {e}", p.display()))?;
+            let dir = p.parent().map(Path::to_path_buf).unwrap_or_default();
+            (text, p.display().to_string(), dir)
+        }
+        None => (
+            DEFAULT_SCENE.to_string(),
+            "default scene".into(),
+            ".".into(),
+        ),
+    };
+    let scene = Scene::parse(&text, &name).map_err(|e| e.to_string())?;
+    let report =
+        squeal::stages::check::check(&scene, &dir, ranks).map_err(|e| format!("{name}: {e}"))?;
+    let output = scene.output.directory.display();
+    Ok(format!(
+        "squeal check: {name}\n{report}output: {output} (or --output)\n"
+    ))
 }
 
 fn merge_command(slices: &[PathBuf], output: &Path) -> ExitCode {

@@ -66,7 +66,10 @@ pub fn broadcast_string(comm: &SimpleCommunicator, root: i32, text: &mut String)
     let mut len = bytes.len() as u64;
     comm.process_at_rank(root).broadcast_into(&mut len);
     bytes.resize(len as usize, 0);
-    comm.process_at_rank(root).broadcast_into(&mut bytes[..]);
+    // An empty buffer is refused by MPI_Bcast (a null pointer): nothing to send then.
+    if len > 0 {
+        comm.process_at_rank(root).broadcast_into(&mut bytes[..]);
+    }
     *text = String::from_utf8_lossy(&bytes).into_owned();
 }
 

@@ -387,3 +387,43 @@ fn mutated_matrix_market_files_are_refused_with_file_and_line_or_give_finite_ent
     });
     report("Matrix Market", CASES, errors, &bad);
 }
+
+/// `squeal check` on mutated scenes that validate: a model that cannot be built, paired or
+/// estimated is an error, never a panic. Small seeds only (a mutated target size up to 40k
+/// DOF), so that the cases build their models in a second.
+#[test]
+fn squeal_check_on_mutated_scenes_never_panics() {
+    let jobs = Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs");
+    let seeds = ["default.toml", "disc-and-pads.toml", "disc-ring-modes.toml"];
+    let (mut cases, mut errors, mut bad) = (0, 0, Vec::new());
+    for (k, name) in seeds.iter().enumerate() {
+        let text = std::fs::read_to_string(jobs.join(name)).unwrap();
+        let (e, b) = fuzz(
+            &format!("check-{name}"),
+            &text,
+            7000 + k as u64,
+            150,
+            &|path| {
+                let text = std::fs::read_to_string(path).map_err(|e| e.to_string())?;
+                let file = path.file_name().unwrap().to_string_lossy().to_string();
+                let scene = Scene::parse(&text, &file).map_err(|e| e.to_string())?;
+                let value = toml::Value::try_from(&scene).unwrap();
+                let dofs = value
+                    .get("model")
+                    .and_then(|m| m.get("target_dofs"))
+                    .and_then(toml::Value::as_integer);
+                if dofs.is_some_and(|d| d > 40_000) {
+                    return Ok(None);
+                }
+                // The check's errors name the scene file first, as `squeal check` prints them.
+                squeal::stages::check::check(&scene, &jobs, 2)
+                    .map(|_| None)
+                    .map_err(|e| format!("{file}: {e}"))
+            },
+        );
+        cases += 150;
+        errors += e;
+        bad.extend(b);
+    }
+    report("squeal check", cases, errors, &bad);
+}

@@ -126,6 +126,13 @@ fn default_scene_runs_end_to_end_on_two_ranks_with_its_report_and_labelled_figur
     }
     let results = dir.join("results");
     check_paraview(&results);
+    // The verdict's mode has its picture in the report.
+    let html = std::fs::read_to_string(results.join("report.html")).unwrap();
+    assert!(
+        results.join("mode_shape_projected_C35.png").is_file()
+            && html.contains("(mode_shape_projected_C35.png)"),
+        "no picture of C35's shape in the report"
+    );
     check_growth_into_saturation(&results);
     check_growing_mode_along_the_cycle(&results);
     check_report(&results, &default_scene());
@@ -433,13 +440,14 @@ fn font_size(attributes: &str) -> f64 {
 
 /// Every plot the run wrote (PNG) has an SVG twin with a title (its largest text), a
 /// horizontal and a vertical axis label with units in parentheses, and tick values. The
-/// exception is model.png, a picture of the model, not a plot.
+/// exceptions are pictures of the model, not plots: model.png and the mode shapes.
 fn check_figures(results: &Path, at_least: usize) {
     let mut plots = 0;
     for entry in std::fs::read_dir(results).unwrap() {
         let png = entry.unwrap().path();
         let name = png.file_name().unwrap().to_string_lossy().to_string();
-        if !name.ends_with(".png") || name == "model.png" {
+        let picture = name == "model.png" || name.starts_with("mode_shape_");
+        if !name.ends_with(".png") || picture {
             continue;
         }
         let svg = std::fs::read_to_string(png.with_extension("svg"))

@@ -5,6 +5,9 @@
 //! the run instead of hanging the others.
 
 use std::path::Path;
+
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::Communicator;
 use std::time::Instant;
 
 mod after;
@@ -99,17 +102,14 @@ pub fn run_with(
         let resumable = crate::time::transient::check_resumable(petsc, &files, settings, None);
         checked(resumable.map_err(RunError::from))?;
     }
-    if petsc.rank() == 0 {
-        checked(
-            std::fs::create_dir_all(output).map_err(|source| RunError::Io {
-                path: output.to_path_buf(),
-                source,
-            }),
-        )?;
-    }
-    crate::parallel::barrier(petsc.world());
+    let created = prepare_output(petsc.world(), output)?;
     let mut timings = Timings::default();
-    let a = front::analyses(petsc, scene, scene_dir, output, &mut timings)?;
+    let a = front::analyses(petsc, scene, scene_dir, output, &mut timings).inspect_err(|_| {
+        // A run that failed before writing leaves no empty folder behind.
+        if created && petsc.rank() == 0 {
+            let _ = std::fs::remove_dir(output);
+        }
+    })?;
 
     // What the stages before the transient found goes to results.h5 before it starts.
     let start = Instant::now();
@@ -216,6 +216,63 @@ pub fn run_with(
         Some(e) => Err(e),
         None => Ok(summary),
     }
+}
+
+/// The output folder, created when missing (its parent must exist: a typo'd path is not
+/// made silently); true when this call created it. Rank 0 decides and every rank returns
+/// the same answer at once, so a folder that cannot be made ends the run cleanly.
+///
+/// # Collective
+pub fn prepare_output(comm: &SimpleCommunicator, output: &Path) -> Result<bool, RunError> {
+    let mut answer = String::new();
+    if comm.rank() == 0 {
+        answer = match output_problem(output) {
+            Ok(true) => "created".into(),
+            Ok(false) => "exists".into(),
+            Err(problem) => problem,
+        };
+    }
+    crate::parallel::broadcast_string(comm, 0, &mut answer);
+    match answer.as_str() {
+        "created" => Ok(true),
+        "exists" => Ok(false),
+        problem => Err(RunError::Io {
+            path: output.to_path_buf(),
+            source: std::io::Error::other(problem.to_string()),
+        }),
+    }
+}
+
+/// Ok(true) when `output` was created, Ok(false) when it is a writable folder already, else
+/// what is wrong and what to do.
+fn output_problem(output: &Path) -> Result<bool, String> {
+    let what = "choose another folder with --output (or [output] directory)";
+    if output.exists() {
+        if !output.is_dir() {
+            return Err(format!("exists and is not a folder: {what}"));
+        }
+        let probe = output.join(".squeal-write-check");
+        return match std::fs::write(&probe, b"") {
+            Ok(()) => {
+                let _ = std::fs::remove_file(&probe);
+                Ok(false)
+            }
+            Err(e) => Err(format!("cannot write into this folder ({e}): {what}")),
+        };
+    }
+    let parent = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !parent.is_dir() {
+        return Err(format!(
+            "its parent folder {} does not exist: create it first, or {what}",
+            parent.display()
+        ));
+    }
+    std::fs::create_dir(output)
+        .map(|()| true)
+        .map_err(|e| format!("cannot be created ({e}): {what}"))
 }
 
 /// results.xdmf, surfaces.xdmf and vibration.xdmf for ParaView, and model.png (rank 0 writes).

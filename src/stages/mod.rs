@@ -11,6 +11,7 @@
 //! the writers of each stage's output, the run's summary and report.html are in
 //! `crate::report`.
 
+pub mod check;
 pub mod complex;
 pub mod link;
 pub mod loudness;
