@@ -124,3 +124,64 @@ fn a_run_that_fails_before_writing_leaves_no_empty_folder() {
     assert_eq!(code, 1);
     assert!(dir.join("kept").is_dir());
 }
+
+/// The README's commands as written: its first block is `scripts/run` and `scripts/test`
+/// (executable; `.ci/run` calls the second, the default-scene test runs the first's job),
+/// and every `squeal ...` line of its shell blocks runs: `scene` and `check` as they are, and
+/// each `run` as `check` of the same scene (a run's cost belongs to the tests of its scene).
+#[test]
+fn the_readme_commands_run_as_written() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let blocks: Vec<&str> = readme
+        .split("```sh\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap())
+        .collect();
+    let first: Vec<&str> = blocks[0]
+        .lines()
+        .map(|l| l.split_whitespace().next().unwrap_or(""))
+        .collect();
+    assert_eq!(first, ["scripts/run", "scripts/test"], "{}", blocks[0]);
+    use std::os::unix::fs::PermissionsExt;
+    for script in ["scripts/run", "scripts/test", ".ci/run"] {
+        let mode = std::fs::metadata(root.join(script))
+            .unwrap()
+            .permissions()
+            .mode();
+        assert!(mode & 0o111 != 0, "{script} is not executable");
+    }
+    let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
+    assert!(ci.contains("scripts/test"), "{ci}");
+
+    let dir = scratch("readme");
+    std::os::unix::fs::symlink(root.join("jobs"), dir.join("jobs")).unwrap();
+    // The README's own way to a scene of your own.
+    assert!(readme.contains("`squeal scene --print-default > my-brake.toml`"));
+    let (code, default, _) = run(1, &["scene", "--print-default"], &dir);
+    assert_eq!(code, 0);
+    std::fs::write(dir.join("my-brake.toml"), default).unwrap();
+    let mut ran = 0;
+    for line in blocks.iter().flat_map(|b| b.lines()) {
+        let command = line.split('#').next().unwrap();
+        let words: Vec<&str> = command.split_whitespace().collect();
+        let Some(at) = words
+            .iter()
+            .position(|w| w.ends_with("target/release/squeal"))
+        else {
+            continue;
+        };
+        let args = &words[at + 1..];
+        let args: Vec<&str> = match args.first() {
+            Some(&"run") => {
+                let scene = args.get(1).filter(|a| !a.starts_with('-'));
+                ["check"].into_iter().chain(scene.copied()).collect()
+            }
+            _ => args.iter().copied().take_while(|a| *a != ">").collect(),
+        };
+        let (code, stdout, stderr) = run(1, &args, &dir);
+        assert_eq!(code, 0, "README: {line}\n{stdout}\n{stderr}");
+        ran += 1;
+    }
+    assert!(ran >= 4, "{ran} squeal lines in the README");
+}
