@@ -72,10 +72,10 @@ fn errors(full: &[ComplexMode], projected: &[ComplexMode]) -> (f64, f64, f64) {
             return (f64::NAN, f64::NAN, f64::NAN);
         };
         all.push((p.frequency_hz - m.frequency_hz).abs() / m.frequency_hz);
-        worst.0 = worst
-            .0
-            .max((p.frequency_hz - m.frequency_hz).abs() / m.frequency_hz);
-        worst.1 = worst.1.max((p.damping_ratio - m.damping_ratio).abs());
+        let frequency_error = (p.frequency_hz - m.frequency_hz).abs() / m.frequency_hz;
+        worst.0 = squeal::measure::nan_max(worst.0, frequency_error);
+        let damping_error = (p.damping_ratio - m.damping_ratio).abs();
+        worst.1 = squeal::measure::nan_max(worst.1, damping_error);
     }
     all.sort_by(f64::total_cmp);
     let median = all.get(all.len() / 2).copied().unwrap_or(f64::NAN);

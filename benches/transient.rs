@@ -139,7 +139,7 @@ fn stream_bandwidth(petsc: &Petsc, n: usize) -> Bandwidth {
                 kernel();
             }
             let slowest = squeal::parallel::max(petsc.world(), t.elapsed().as_secs_f64());
-            best = best.min(slowest);
+            best = squeal::measure::nan_min(best, slowest);
         }
         best
     };
@@ -411,7 +411,7 @@ fn main() {
                 tr.steps,
                 tr.mean_iterations,
                 ev / vmax,
-                eq / qmax.max(f64::MIN_POSITIVE),
+                eq / squeal::measure::nan_max(qmax, f64::MIN_POSITIVE),
                 seconds,
                 tr.seconds_per_step * tr.steps as f64
             ));

@@ -54,12 +54,20 @@ fn run_with_fault(dir: &Path, fault: &str) -> launch::Outcome {
     launch::squeal_run(2, &["run", "scene.toml"], dir, &env, DEADLINE)
 }
 
+/// The run ended with the message and squeal's own exit status: 1 for an error (said by all
+/// ranks, or by one rank that ended the others), 70 for a panic (the hook's MPI_Abort). A
+/// crash after the message (a signal, another code) fails.
 fn assert_ends_with(out: &launch::Outcome, what: &str, needle: &str) {
     let log = format!("stdout:\n{}\nstderr:\n{}", out.stdout, out.stderr);
     let status = out
         .status
         .unwrap_or_else(|| panic!("{what}: hung ({DEADLINE:?})\n{log}"));
-    assert!(!status.success(), "{what}: exit code 0\n{log}");
+    let expected = if what == "panic" { 70 } else { 1 };
+    assert_eq!(
+        status.code(),
+        Some(expected),
+        "{what}: exit status {status}, not squeal's {expected}\n{log}"
+    );
     assert!(
         out.stderr.contains(needle),
         "{what}: '{needle}' not said\n{log}"

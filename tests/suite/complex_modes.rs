@@ -253,13 +253,13 @@ fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
                     d(a).total_cmp(&d(b))
                 })
                 .expect("projected modes");
-            worst.0 = worst.0.max(rel(p.frequency_hz, m.frequency_hz));
+            worst.0 = nan_max(worst.0, rel(p.frequency_hz, m.frequency_hz));
             errors.push(rel(p.frequency_hz, m.frequency_hz));
             let dz = (p.damping_ratio - m.damping_ratio).abs();
             if coalesced(m) {
-                worst.2 = worst.2.max(dz);
+                worst.2 = nan_max(worst.2, dz);
             } else {
-                worst.1 = worst.1.max(dz);
+                worst.1 = nan_max(worst.1, dz);
             }
             unstable_mismatch += usize::from(p.unstable != m.unstable);
         }

@@ -252,7 +252,7 @@ impl LimitCycle {
                 .iter()
                 .map(|q| q[1])
                 .fold(f64::INFINITY, nan_min);
-            amplitudes.push(r.q[lo][1].max(r.q[hi][1]) - min);
+            amplitudes.push(nan_max(r.q[lo][1], r.q[hi][1]) - min);
         }
         let max = amplitudes.iter().copied().fold(f64::NEG_INFINITY, nan_max);
         let min = amplitudes.iter().copied().fold(f64::INFINITY, nan_min);
@@ -264,7 +264,7 @@ impl LimitCycle {
         for i in first..end {
             // N is largest at the lower y of the step.
             let dy = (r.q[i + 1][1] - r.q[i][1]).abs();
-            let n_max = NORMAL.eval(r.q[i][1].min(r.q[i + 1][1])).pressure;
+            let n_max = NORMAL.eval(nan_min(r.q[i][1], r.q[i + 1][1])).pressure;
             quadrature_bound += dy.powi(3) / 12.0 * LAMBDA * LAMBDA * n_max;
             let dq = [r.q[i + 1][0] - r.q[i][0], r.q[i + 1][1] - r.q[i][1]];
             let fx = 0.5 * (friction(r.q[i], r.v[i]) + friction(r.q[i + 1], r.v[i + 1]));

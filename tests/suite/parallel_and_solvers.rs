@@ -255,7 +255,7 @@ fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Resu
             let ratio = if by_columns[i] == w[i] {
                 0.0
             } else {
-                (by_columns[i] - w[i]).abs() / (allowed * scale[i]).max(f64::MIN_POSITIVE)
+                (by_columns[i] - w[i]).abs() / nan_max(allowed * scale[i], f64::MIN_POSITIVE)
             };
             worst = nan_max(worst, ratio);
         }
@@ -463,7 +463,8 @@ fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), Str
         worst = nan_max(worst, d);
         // The conjugate must be there too.
         if !sol.values.iter().any(|&(r2, i2)| {
-            (r2 - re).abs() < 1e-9 * im.abs().max(1.0) && (i2 + im).abs() < 1e-9 * im.abs().max(1.0)
+            let tolerance = 1e-9 * nan_max(im.abs(), 1.0);
+            (r2 - re).abs() < tolerance && (i2 + im).abs() < tolerance
         }) {
             return Err(format!(
                 "eigenvalue {re} + {im}i has no conjugate in the result"

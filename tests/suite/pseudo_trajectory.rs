@@ -95,7 +95,7 @@ impl PseudoSystem for Hoffmann {
     /// its larger component.
     fn contact_normalization(&self, y: &[Complex]) -> Result<Complex, PseudoError> {
         let norm = y.iter().map(|&(r, i)| r * r + i * i).sum::<f64>().sqrt();
-        let larger = y[0].0.hypot(y[0].1).max(y[1].0.hypot(y[1].1));
+        let larger = nan_max(y[0].0.hypot(y[0].1), y[1].0.hypot(y[1].1));
         let at = y
             .iter()
             .find(|c| c.0.hypot(c.1) == larger)
@@ -145,7 +145,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         .eigenvalue
         .iter()
         .map(|s| (s.0 - exact.0).hypot(s.1 - exact.1) / exact.0.hypot(exact.1))
-        .fold(0.0f64, |a, b| if b.is_nan() { f64::NAN } else { a.max(b) });
+        .fold(0.0f64, nan_max);
     say(
         petsc,
         &format!("alpha = 1e-12: every phase's eigenvalue vs the closed form {worst:.1e} (asserted 1e-10)"),
@@ -237,7 +237,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     let share = fitted.iter().map(|f| f.share).sum::<f64>() / fitted.len() as f64;
     let mean = along.iter().sum::<f64>() / along.len() as f64;
     let (y_lo, y_hi) = (from..to).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), i| {
-        (a.min(record.q[i][1]), b.max(record.q[i][1]))
+        (nan_min(a, record.q[i][1]), nan_max(b, record.q[i][1]))
     });
     let open = (from..to)
         .filter(|&i| NORMAL.is_open(record.q[i][1]))
@@ -254,7 +254,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     let (lo, hi) = along
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
+            (nan_min(a, x), nan_max(b, x))
         });
     let ratio = sat / mean;
     say(

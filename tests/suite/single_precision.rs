@@ -159,7 +159,7 @@ fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> Result<Loa
                 state.time
             ));
         }
-        run.worst = run.worst.max(drift);
+        run.worst = squeal::measure::nan_max(run.worst, drift);
     }
     Ok(run)
 }

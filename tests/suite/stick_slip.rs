@@ -182,9 +182,9 @@ fn run(
         let (t0, x0, v0) = previous;
         if v0 > 0.0 && v <= 0.0 {
             maxima.push(t0 + (s.time - t0) * v0 / (v0 - v));
-            extremes.push(x.max(x0));
+            extremes.push(squeal::measure::nan_max(x, x0));
         } else if v0 < 0.0 && v >= 0.0 {
-            extremes.push(x.min(x0));
+            extremes.push(squeal::measure::nan_min(x, x0));
         }
         previous = (s.time, x, v);
         Ok(Flow::Continue)

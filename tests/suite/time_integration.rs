@@ -402,9 +402,9 @@ fn cut_and_restore(
     } else {
         (2e-3, 1e-3)
     };
-    if (state.time - 30.0).abs() > 0.2
-        || rel(period, 6.88757415) > period_bound
-        || energy_error > energy_bound
+    if exceeds((state.time - 30.0).abs(), 0.2)
+        || exceeds(rel(period, 6.88757415), period_bound)
+        || exceeds(energy_error, energy_bound)
     {
         return Err(format!(
             "refresh {refresh}: end time {}, period {period}, energy error {energy_error:e}",
@@ -444,7 +444,7 @@ fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
     }
     for s in &signals {
         let v = read(s)?;
-        let scale = v[0].abs().max(1.0);
+        let scale = nan_max(v[0].abs(), 1.0);
         worst = nan_max(
             worst,
             v.iter()
@@ -931,9 +931,8 @@ impl Oscillation {
     }
 
     fn observe(&mut self, time: f64, g: f64, v: f64) {
-        self.energy_error = self
-            .energy_error
-            .max(rel(0.5 * v * v + g + (-g).exp(), self.energy0));
+        let error = rel(0.5 * v * v + g + (-g).exp(), self.energy0);
+        self.energy_error = nan_max(self.energy_error, error);
         if let Some((t0, v0)) = self.previous {
             if v0 > 0.0 && v <= 0.0 {
                 self.maxima.push(t0 + (time - t0) * v0 / (v0 - v));
@@ -1157,11 +1156,10 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
                 b.len()
             ));
         }
-        let scale = a
-            .iter()
-            .map(|x| x.abs())
-            .fold(0.0, nan_max)
-            .max(f64::MIN_POSITIVE);
+        let scale = nan_max(
+            a.iter().map(|x| x.abs()).fold(0.0, nan_max),
+            f64::MIN_POSITIVE,
+        );
         let diff = a
             .iter()
             .zip(&b)

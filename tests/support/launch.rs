@@ -14,8 +14,9 @@ pub struct Outcome {
     pub stderr: String,
 }
 
-/// Runs `squeal args...` on `ranks` ranks (directly when mpirun is missing) in `cwd` with
-/// the extra environment `env`; kills it after `deadline`.
+/// Runs `squeal args...` on `ranks` ranks in `cwd` with the extra environment `env`; kills
+/// it after `deadline`. Without mpirun a 1-rank run starts squeal directly, and a run of more
+/// ranks fails the test saying so.
 pub fn squeal_run(
     ranks: usize,
     args: &[&str],
@@ -37,6 +38,11 @@ pub fn squeal_run(
             .env("OMPI_MCA_mpi_yield_when_idle", "1");
         c
     } else {
+        // A test of several ranks must not pass as a run on one.
+        assert!(
+            ranks == 1,
+            "mpirun not found: this test runs squeal on {ranks} ranks (scripts/setup installs openmpi-bin)"
+        );
         Command::new(squeal)
     };
     cmd.args(args)
