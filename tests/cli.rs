@@ -11,6 +11,8 @@ use std::time::Duration;
 mod launch;
 #[path = "support/paraview.rs"]
 mod paraview;
+#[path = "support/report_numbers.rs"]
+mod report_numbers;
 
 fn squeal() -> &'static str {
     env!("CARGO_BIN_EXE_squeal")
@@ -126,6 +128,10 @@ fn default_scene_runs_end_to_end_on_two_ranks_with_its_report_and_labelled_figur
     }
     let results = dir.join("results");
     check_paraview(&results);
+    // Every complex-mode row (60 modes and the 4 unstable again, 3 values each) and the
+    // verdict's three figures.
+    let compared = report_numbers::check_report_numbers(&results);
+    assert!(compared >= 3 * 64 + 3, "{compared} values compared");
     // The verdict's mode has its picture in the report.
     let html = std::fs::read_to_string(results.join("report.html")).unwrap();
     assert!(
