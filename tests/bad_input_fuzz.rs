@@ -427,3 +427,116 @@ fn squeal_check_on_mutated_scenes_never_panics() {
     }
     report("squeal check", cases, errors, &bad);
 }
+
+#[path = "support/launch.rs"]
+mod launch;
+
+/// Whole runs under mpirun of mutated small scenes (a brake of 3,000 DOF with its preload
+/// and complex modes, an annulus): each ends in squeal's error exit naming the scene, or in
+/// a run that wrote its results; never a panic, a signal or a hang. The seed changes each
+/// run and is printed (`SQUEAL_FUZZ_SEED=<seed>` replays it); cases run until 90 s have
+/// passed, at least 50 of them. A case that validated but asks for more than the seed's
+/// size (DOF, modes) is skipped: its cost is a benchmark's, not a test's.
+#[test]
+fn mutated_scenes_run_whole_under_mpirun_end_cleanly() {
+    let seed = std::env::var("SQUEAL_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| {
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap()
+                .as_secs()
+        });
+    println!("whole runs: seed {seed} (SQUEAL_FUZZ_SEED={seed} replays them)");
+    let brake = "[model]\nsource = \"brake\"\ntarget_dofs = 3000\npressure_bar = 20.0\n\
+                 [statics]\n[real_modes]\ncount = 12\n[complex_modes]\n";
+    let annulus = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("jobs/disc-ring-modes.toml"),
+    )
+    .unwrap();
+    let seeds = [brake.to_string(), annulus];
+    let dir = scratch("whole-runs");
+    let mut s = Stream(seed);
+    let start = std::time::Instant::now();
+    let (mut ran, mut refused, mut skipped, mut bad) = (0, 0, 0, Vec::new());
+    let mut case = 0;
+    while ran < 50 || start.elapsed().as_secs() < 90 {
+        assert!(start.elapsed().as_secs() < 900, "50 cases took over 900 s");
+        case += 1;
+        let text = mutate(&seeds[case % 2], &mut s);
+        if let Ok(scene) = Scene::parse(&text, "scene.toml") {
+            let value = toml::Value::try_from(&scene).unwrap();
+            let model = value.get("model");
+            let int = |t: Option<&toml::Value>, k: &str| {
+                t.and_then(|t| t.get(k)).and_then(toml::Value::as_integer)
+            };
+            let count = int(value.get("real_modes"), "count");
+            let too_big = int(model, "target_dofs").is_some_and(|d| d > 3000)
+                || count.is_some_and(|c| c > 30)
+                || scene
+                    .real_modes
+                    .as_ref()
+                    .is_some_and(|r| r.f_max_hz.is_some())
+                || model
+                    .and_then(|m| m.get("cells"))
+                    .and_then(toml::Value::as_array)
+                    .is_some_and(|c| {
+                        c.iter()
+                            .filter_map(toml::Value::as_integer)
+                            .product::<i64>()
+                            > 8 * 120 * 4
+                    });
+            if too_big {
+                skipped += 1;
+                continue;
+            }
+        }
+        let case_dir = dir.join(format!("case{case}"));
+        std::fs::create_dir_all(&case_dir).unwrap();
+        std::fs::write(case_dir.join("scene.toml"), &text).unwrap();
+        let deadline = std::time::Duration::from_secs(120);
+        let args = ["run", "scene.toml", "-o", "out"];
+        let env = [("SQUEAL_PROGRESS", "0")];
+        let out = launch::squeal_run(2, &args, &case_dir, &env, deadline);
+        ran += 1;
+        let what = format!("case {case} (seed {seed})");
+        match out.status.and_then(|s| s.code()) {
+            None => bad.push(format!(
+                "{what}: hung or killed by a signal\n{}",
+                out.stderr
+            )),
+            Some(0) => {
+                if !case_dir.join("out/results.h5").is_file() {
+                    bad.push(format!("{what}: exit 0 without results.h5"));
+                }
+            }
+            Some(1) if out.stderr.contains("scene.toml") || out.stderr.contains("error") => {
+                refused += 1;
+                // What was written before the error still opens.
+                let results = case_dir.join("out/results.h5");
+                if results.is_file() && hdf5::File::open(&results).is_err() {
+                    bad.push(format!("{what}: results.h5 left unreadable"));
+                }
+            }
+            Some(code) => bad.push(format!("{what}: exit {code}\n{}", out.stderr)),
+        }
+        if bad.last().is_some_and(|b| b.starts_with(&what)) {
+            std::fs::copy(
+                case_dir.join("scene.toml"),
+                dir.join(format!("case{case}.kept")),
+            )
+            .ok();
+        }
+    }
+    println!(
+        "whole runs: {ran} run ({refused} refused with an error), {skipped} skipped as too large, in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    assert!(
+        bad.is_empty(),
+        "{} of {ran} runs went wrong:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
+}
