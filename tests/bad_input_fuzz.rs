@@ -519,7 +519,10 @@ fn mutated_scenes_run_whole_under_mpirun_end_cleanly() {
                     bad.push(format!("{what}: results.h5 left unreadable"));
                 }
             }
-            Some(code) => bad.push(format!("{what}: exit {code}\n{}", out.stderr)),
+            Some(code) => bad.push(format!(
+                "{what}: exit {code}\n{}\n{}",
+                out.stdout, out.stderr
+            )),
         }
         if bad.last().is_some_and(|b| b.starts_with(&what)) {
             std::fs::copy(
