@@ -258,6 +258,12 @@ fn run_command(
         }
     }
     let output = output.unwrap_or_else(|| scene.output.directory.clone());
+    if groups > 1 {
+        // The groups' folders go inside it: made (or refused) once, before they start.
+        if let Err(e) = squeal::pipeline::prepare_output(&world, &output) {
+            return fail(e.to_string());
+        }
+    }
     let group = groups::group_of(rank as usize, size, groups);
     let color = mpi::topology::Color::with_value(group as i32);
     let communicator = world.split_by_color(color).expect("every rank has a color");
