@@ -200,6 +200,29 @@ fn print_merged(report: &squeal::report::matrix::MatrixReport) {
     print!("{}", report.text());
 }
 
+/// With `--groups G > 1`: the scene splits into groups, and the output folder that holds the
+/// groups' folders is made (or refused) once, before they start.
+///
+/// # Collective
+fn groups_can_start(
+    world: &mpi::topology::SimpleCommunicator,
+    scene: &Scene,
+    groups: usize,
+    output: &Path,
+) -> Result<(), String> {
+    use mpi::traits::Communicator;
+    if groups <= 1 {
+        return Ok(());
+    }
+    let size = world.size() as usize;
+    if let Some(why) = squeal::pipeline::groups::refusal(scene, groups, size) {
+        return Err(why);
+    }
+    squeal::pipeline::prepare_output(world, output)
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
 fn run_command(
     scene_path: Option<PathBuf>,
     output: Option<PathBuf>,
@@ -252,17 +275,9 @@ fn run_command(
     use squeal::pipeline::groups;
     let world = universe.world();
     let size = world.size() as usize;
-    if groups > 1 {
-        if let Some(why) = groups::refusal(&scene, groups, size) {
-            return fail(why);
-        }
-    }
     let output = output.unwrap_or_else(|| scene.output.directory.clone());
-    if groups > 1 {
-        // The groups' folders go inside it: made (or refused) once, before they start.
-        if let Err(e) = squeal::pipeline::prepare_output(&world, &output) {
-            return fail(e.to_string());
-        }
+    if let Err(why) = groups_can_start(&world, &scene, groups, &output) {
+        return fail(why);
     }
     let group = groups::group_of(rank as usize, size, groups);
     let color = mpi::topology::Color::with_value(group as i32);

@@ -308,7 +308,29 @@ impl Scene {
 
     fn validate(&self) -> Result<(), InvalidSetting> {
         self.validate_model()?;
-        self.validate_analyses()
+        self.validate_analyses()?;
+        self.validate_frames()
+    }
+
+    /// `[output]`'s vibration frames.
+    fn validate_frames(&self) -> Result<(), InvalidSetting> {
+        let periods = self.output.frame_periods;
+        if !(periods.is_finite() && (0.0..=1e4).contains(&periods)) {
+            return Err(InvalidSetting::new(
+                "output.frame_periods",
+                format!(" = {periods}: must be in [0, 1e4] (0 writes no vibration frames)"),
+            ));
+        }
+        if self.output.frames_per_period == 0 || self.output.frames_per_period > 1000 {
+            return Err(InvalidSetting::new(
+                "output.frames_per_period",
+                format!(
+                    " = {}: must be in [1, 1000] (frame_periods = 0 writes none)",
+                    self.output.frames_per_period
+                ),
+            ));
+        }
+        Ok(())
     }
 
     /// The `[model]` table: dimensions, cells, materials, files, matrix terms.
@@ -573,22 +595,6 @@ impl Scene {
             if post.uses_states() && (self.statics.is_none() || self.real_modes.is_none()) {
                 return Err(InvalidSetting::new("post", ": modal_energy, dynamic_stability and contact_cycle work on the preloaded model and its real modes: they need [statics] and [real_modes]"));
             }
-        }
-        let periods = self.output.frame_periods;
-        if !(periods.is_finite() && (0.0..=1e4).contains(&periods)) {
-            return Err(InvalidSetting::new(
-                "output.frame_periods",
-                format!(" = {periods}: must be in [0, 1e4] (0 writes no vibration frames)"),
-            ));
-        }
-        if self.output.frames_per_period == 0 || self.output.frames_per_period > 1000 {
-            return Err(InvalidSetting::new(
-                "output.frames_per_period",
-                format!(
-                    " = {}: must be in [1, 1000] (frame_periods = 0 writes none)",
-                    self.output.frames_per_period
-                ),
-            ));
         }
         for e in &self.output.export_matrices {
             if e != "mtx" && e != "petsc" {
