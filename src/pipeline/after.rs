@@ -85,7 +85,7 @@ impl AfterTransient<'_, '_> {
         let wants_link = post.is_some_and(|p| p.uses_states()) && self.trajectory.is_some();
         let stored = self
             .trajectory
-            .is_some_and(|t| t.state_interval > 0.0 && self.scene.transient.is_some());
+            .is_some_and(|t| t.signals.state_interval > 0.0 && self.scene.transient.is_some());
         let wants_pseudo = post.is_some_and(|p| p.pseudo_trajectory.is_some());
         let wants_loudness = post.is_some_and(|p| p.loudness.is_some());
         let compared = (wants_pseudo || wants_loudness) && stored;
@@ -131,7 +131,9 @@ impl AfterTransient<'_, '_> {
         timings: &mut Timings,
     ) -> Result<Option<Frames>, RunError> {
         let output = &self.scene.output;
-        let stored = self.trajectory.is_some_and(|t| t.state_interval > 0.0);
+        let stored = self
+            .trajectory
+            .is_some_and(|t| t.signals.state_interval > 0.0);
         let (Some(nominal), Some(dofs), Some(cycle), true) =
             (self.nominal, self.dofs, &self.cycle, stored)
         else {

@@ -85,13 +85,7 @@ pub struct ModalSensors<'a, 'p> {
     petsc: &'p Petsc<'p>,
 }
 
-/// The modal coordinates and velocities of one state, and its kinetic energy v'Mv/2.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModalSample {
-    pub eta: Vec<f64>,
-    pub eta_dot: Vec<f64>,
-    pub kinetic: f64,
-}
+pub use crate::time::transient::ModalSample;
 
 impl<'a, 'p> ModalSensors<'a, 'p> {
     /// `mass_shapes`: M x_k of the modes, in the layout of the states to be sampled.
@@ -167,6 +161,21 @@ impl<'a, 'p> ModalSensors<'a, 'p> {
                 kinetic: 0.5 * vmv[j],
             })
             .collect())
+    }
+}
+
+impl<'p> crate::time::transient::StateSampler<'p> for ModalSensors<'_, 'p> {
+    fn count(&self) -> usize {
+        ModalSensors::count(self)
+    }
+
+    fn sample_block(
+        &self,
+        displacements: &[f64],
+        velocities: &[f64],
+        states: usize,
+    ) -> Result<Vec<ModalSample>, LaError> {
+        ModalSensors::sample_block(self, displacements, velocities, states)
     }
 }
 

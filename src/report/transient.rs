@@ -172,7 +172,7 @@ fn write_spectrogram(
     let Some(s) = spectrogram_db(
         &tr.time,
         &signal,
-        settings.step,
+        tr.nominal_step,
         settings.spectrogram_max_hz,
     ) else {
         return Ok(());

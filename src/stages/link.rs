@@ -130,7 +130,7 @@ pub fn dynamic_stability_along<'p>(
             key,
             format!(
                 "no stored state in the last {} periods of {period:.4e} s (states every {:.1e} s); lower 'transient.state_interval'",
-                settings.periods, trajectory.state_interval
+                settings.periods, trajectory.signals.state_interval
             ),
         ));
     }
@@ -163,7 +163,7 @@ pub fn dynamic_stability_along<'p>(
         period,
         states_per_period: window,
         wanted_per_period: settings.per_period,
-        state_interval: trajectory.state_interval,
+        state_interval: trajectory.signals.state_interval,
         margin,
     })
 }
@@ -283,6 +283,6 @@ pub fn link<'p>(
 pub fn characterize(trajectory: &Trajectory) -> LimitCycle {
     let tr = &trajectory.signals;
     let settings = crate::post::limit_cycle::LimitCycleSettings::default();
-    let step = trajectory.step;
+    let step = trajectory.signals.nominal_step;
     crate::post::limit_cycle::characterize(&tr.time, &tr.braking_torque(), step, &settings)
 }

@@ -46,7 +46,7 @@ pub fn limit_cycle(
     interfaces: &[String],
 ) -> LimitCycleReport {
     let tr = &trajectory.signals;
-    let cycle = characterize(&tr.time, &tr.braking_torque(), trajectory.step, settings);
+    let cycle = characterize(&tr.time, &tr.braking_torque(), tr.nominal_step, settings);
     let predicted = complex
         .iter()
         .flat_map(|c| {

@@ -16,6 +16,7 @@ use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{Damping, ModalDamping, TimeError};
 use crate::time::transient::{
     Kick, Sensors, Start, Transient, TransientFiles, TransientInputs, TransientSettings,
+    SATURATION_CHECK_EVERY,
 };
 
 /// Why the transient could not start.
@@ -62,10 +63,6 @@ pub enum TransientSetupError {
 pub struct Trajectory {
     pub signals: Transient,
     pub failure: Option<TimeError>,
-    /// The nominal step it was run with (s) and the interval of its stored states (s; 0:
-    /// none stored).
-    pub step: f64,
-    pub state_interval: f64,
     /// Where the sensors and the impulse landed (the nearest nodes), for the summary.
     pub notes: Vec<String>,
 }
@@ -196,15 +193,19 @@ pub fn transient<'p>(
             sensors: sensors.as_ref(),
             modal_damping: modal.as_ref(),
             reduction,
-            modal_sensors: modal_sensors.as_ref(),
+            modal_sensors: modal_sensors
+                .as_ref()
+                .map(|m| m as &dyn crate::time::transient::StateSampler),
         },
         files,
+        &mut SaturationStop {
+            cycles: settings.stop_after_saturation,
+            world: petsc.world(),
+        },
     )?;
     Ok(Trajectory {
         signals,
         failure,
-        step: settings.step,
-        state_interval: settings.state_interval,
         notes,
     })
 }
@@ -426,4 +427,33 @@ pub fn mass_shape<'p>(
     let mut out = x.duplicate()?;
     m.mult(&x, &mut out)?;
     Ok(out)
+}
+
+/// The transient's monitor: ends the run once the braking torque has saturated and run
+/// `cycles` cycles since (`transient.stop_after_saturation`), checked every
+/// [`SATURATION_CHECK_EVERY`] steps (the detector reads the whole record).
+struct SaturationStop<'w> {
+    cycles: Option<usize>,
+    world: &'w mpi::topology::SimpleCommunicator,
+}
+
+impl crate::time::transient::Monitor for SaturationStop<'_> {
+    /// Every rank decides alike (the record is the same on each), and the verdict is agreed
+    /// on anyway.
+    fn stop(&mut self, steps: usize, record: &Transient) -> bool {
+        let Some(cycles) = self.cycles else {
+            return false;
+        };
+        if !steps.is_multiple_of(SATURATION_CHECK_EVERY) {
+            return false;
+        }
+        let torque = record.braking_torque();
+        let saturated = crate::post::limit_cycle::saturated_for(
+            &record.time,
+            &torque,
+            record.nominal_step,
+            cycles,
+        );
+        crate::parallel::any_rank(self.world, saturated)
+    }
 }

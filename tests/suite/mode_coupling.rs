@@ -37,7 +37,7 @@ use squeal::la::{
     DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };
 use squeal::measure::{nan_max, nan_min};
-use squeal::time::adaptive::{integrate_adaptive, Adaptivity, Flow, StepControl};
+use squeal::time::adaptive::{AdaptiveNewmark, Adaptivity, Closures, Flow, StepControl};
 use squeal::time::newmark::{
     initial_acceleration, jacobian, Damping, Jacobian, NewmarkSettings, State, StepReport,
     TimeError,
@@ -423,36 +423,40 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
     record.t.push(0.0);
     record.q.push(q);
     record.v.push(v);
-    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<Flow, TimeError> {
-        let (q, v) = pair(s)?;
-        record.t.push(s.time);
-        record.q.push(q);
-        record.v.push(v);
-        Ok(Flow::Continue)
-    };
+    let mut on_step =
+        |s: &State, _r: &StepReport, _c: &StepControl, _h: f64| -> Result<Flow, TimeError> {
+            let (q, v) = pair(s)?;
+            record.t.push(s.time);
+            record.q.push(q);
+            record.v.push(v);
+            Ok(Flow::Continue)
+        };
     let mut control = StepControl::default();
-    integrate_adaptive(
+    AdaptiveNewmark {
         settings,
-        &m,
-        damping,
-        &k,
-        &mut factorize,
-        Some(&mut linearize),
-        None,
-        &mut state,
-        &mut forces,
-        None,
-        end,
-        Adaptivity {
+        m: &m,
+        c: damping,
+        k: &k,
+        equilibrium: None,
+        adaptivity: Adaptivity {
             max_cuts: 6,
             restore_after: 100,
             refresh: true,
             full_newton: false,
             update: true,
         },
+    }
+    .integrate(
+        &mut Closures {
+            forces: &mut forces,
+            factorize: &mut factorize,
+            linearize: Some(&mut linearize),
+            on_step: &mut on_step,
+            log: &mut |_: &str| {},
+        },
+        &mut state,
+        end,
         &mut control,
-        &mut on_step,
-        &mut |_: &str| {},
     )
     .map_err(|e| format!("h = {step}: {e}"))?;
     record.control = control;

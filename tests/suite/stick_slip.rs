@@ -21,7 +21,7 @@
 
 use squeal::contact::law::FrictionLaw;
 use squeal::la::{DirectSolver, Factorization, Petsc, Vector};
-use squeal::time::adaptive::{integrate_adaptive, Adaptivity, Flow, StepControl};
+use squeal::time::adaptive::{AdaptiveNewmark, Adaptivity, Closures, Flow, StepControl};
 use squeal::time::newmark::{
     initial_acceleration, Damping, NewmarkSettings, State, StepReport, TimeError,
 };
@@ -176,44 +176,48 @@ fn run(
     let mut maxima = Vec::new();
     let mut extremes: Vec<f64> = Vec::new();
     let mut previous = (0.0, 0.0, 0.0);
-    let mut on_step = |s: &State, _r: &StepReport, _c: &StepControl| -> Result<Flow, TimeError> {
-        let x = s.q.gather_all().map_err(TimeError::La)?[0];
-        let v = s.v.gather_all().map_err(TimeError::La)?[0];
-        let (t0, x0, v0) = previous;
-        if v0 > 0.0 && v <= 0.0 {
-            maxima.push(t0 + (s.time - t0) * v0 / (v0 - v));
-            extremes.push(squeal::measure::nan_max(x, x0));
-        } else if v0 < 0.0 && v >= 0.0 {
-            extremes.push(squeal::measure::nan_min(x, x0));
-        }
-        previous = (s.time, x, v);
-        Ok(Flow::Continue)
-    };
+    let mut on_step =
+        |s: &State, _r: &StepReport, _c: &StepControl, _h: f64| -> Result<Flow, TimeError> {
+            let x = s.q.gather_all().map_err(TimeError::La)?[0];
+            let v = s.v.gather_all().map_err(TimeError::La)?[0];
+            let (t0, x0, v0) = previous;
+            if v0 > 0.0 && v <= 0.0 {
+                maxima.push(t0 + (s.time - t0) * v0 / (v0 - v));
+                extremes.push(squeal::measure::nan_max(x, x0));
+            } else if v0 < 0.0 && v >= 0.0 {
+                extremes.push(squeal::measure::nan_min(x, x0));
+            }
+            previous = (s.time, x, v);
+            Ok(Flow::Continue)
+        };
     let mut log = |_: &str| {};
     let mut control = StepControl::default();
     let (period, _) = closed_form();
-    integrate_adaptive(
+    AdaptiveNewmark {
         settings,
-        &m,
-        Damping::None,
-        &k,
-        &mut factorize,
-        Some(&mut linearize),
-        None,
-        &mut state,
-        &mut forces,
-        None,
-        5.2 * period,
-        Adaptivity {
+        m: &m,
+        c: Damping::None,
+        k: &k,
+        equilibrium: None,
+        adaptivity: Adaptivity {
             max_cuts: 6,
             restore_after: 100,
             refresh: true,
             full_newton: false,
             update: true,
         },
+    }
+    .integrate(
+        &mut Closures {
+            forces: &mut forces,
+            factorize: &mut factorize,
+            linearize: Some(&mut linearize),
+            on_step: &mut on_step,
+            log: &mut log,
+        },
+        &mut state,
+        5.2 * period,
         &mut control,
-        &mut on_step,
-        &mut log,
     )
     .map_err(|e| e.to_string())?;
     let n = maxima.len();

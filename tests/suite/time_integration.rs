@@ -184,7 +184,7 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
 /// TimeError::NotFinite, naming that step and time, and without refreshes, retries or cuts
 /// (no smaller step can make a NaN finite). The steps before it are accepted as usual.
 fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
-    use squeal::time::adaptive::{integrate_adaptive, Adaptivity, StepControl};
+    use squeal::time::adaptive::{AdaptiveNewmark, Adaptivity, Closures, StepControl};
     use squeal::time::newmark::TimeError;
     let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
@@ -209,10 +209,11 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
         one_dof_jacobian(petsc, ns, &m, &k, 1.0, false)
     };
     let mut accepted = 0;
-    let mut on_step = |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl| {
-        accepted += 1;
-        Ok(squeal::time::adaptive::Flow::Continue)
-    };
+    let mut on_step =
+        |_: &State, _: &squeal::time::newmark::StepReport, _: &StepControl, _: f64| {
+            accepted += 1;
+            Ok(squeal::time::adaptive::Flow::Continue)
+        };
     let mut control = StepControl::default();
     let adaptivity = Adaptivity {
         max_cuts: 8,
@@ -221,22 +222,25 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
         full_newton: false,
         update: false,
     };
-    let result = integrate_adaptive(
+    let result = AdaptiveNewmark {
         settings,
-        &m,
-        Damping::None,
-        &k,
-        &mut factorize,
-        None,
-        None,
-        &mut state,
-        &mut forces,
-        None,
-        30.0,
+        m: &m,
+        c: Damping::None,
+        k: &k,
+        equilibrium: None,
         adaptivity,
+    }
+    .integrate(
+        &mut Closures {
+            forces: &mut forces,
+            factorize: &mut factorize,
+            linearize: None,
+            on_step: &mut on_step,
+            log: &mut |_| {},
+        },
+        &mut state,
+        30.0,
         &mut control,
-        &mut on_step,
-        &mut |_| {},
     );
     say(
         petsc,
@@ -308,7 +312,7 @@ fn cut_and_restore(
     refresh: bool,
     krylov: bool,
 ) -> Result<squeal::time::adaptive::StepControl, String> {
-    use squeal::time::adaptive::integrate_adaptive;
+    use squeal::time::adaptive::{AdaptiveNewmark, Closures};
     let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
@@ -343,7 +347,8 @@ fn cut_and_restore(
     let mut oscillation = Oscillation::released_at(g0);
     let mut on_step = |s: &State,
                        _r: &squeal::time::newmark::StepReport,
-                       _c: &squeal::time::adaptive::StepControl| {
+                       _c: &squeal::time::adaptive::StepControl,
+                       _h: f64| {
         let (g, v) = (
             s.q.gather_all()
                 .map_err(squeal::time::newmark::TimeError::La)?[0],
@@ -356,28 +361,31 @@ fn cut_and_restore(
     let mut lines = Vec::new();
     let mut log = |line: &str| lines.push(line.to_string());
     let mut control = squeal::time::adaptive::StepControl::default();
-    integrate_adaptive(
+    AdaptiveNewmark {
         settings,
-        &m,
-        Damping::None,
-        &k,
-        &mut factorize,
-        krylov.then_some(&mut linearize as &mut squeal::time::newmark::Linearize),
-        None,
-        &mut state,
-        &mut forces,
-        None,
-        30.0,
-        squeal::time::adaptive::Adaptivity {
+        m: &m,
+        c: Damping::None,
+        k: &k,
+        equilibrium: None,
+        adaptivity: squeal::time::adaptive::Adaptivity {
             max_cuts: 8,
             restore_after: 20,
             refresh,
             full_newton: false,
             update: false,
         },
+    }
+    .integrate(
+        &mut Closures {
+            forces: &mut forces,
+            factorize: &mut factorize,
+            linearize: krylov.then_some(&mut linearize as &mut squeal::time::newmark::Linearize),
+            on_step: &mut on_step,
+            log: &mut log,
+        },
+        &mut state,
+        30.0,
         &mut control,
-        &mut on_step,
-        &mut log,
     )
     .map_err(|e| e.to_string())?;
     let period = oscillation.period().ok_or("fewer than two maxima")?;

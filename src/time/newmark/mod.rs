@@ -319,6 +319,11 @@ impl<'a, 'p> Newmark<'a, 'p> {
         })
     }
 
+    /// The step size h of every step this integrator takes.
+    pub fn step_size(&self) -> f64 {
+        self.settings.step
+    }
+
     /// Judges the residual against the forces' departure from the static equilibrium's
     /// force `equilibrium` (K q_s = f(q_s, 0)) instead of the whole force.
     pub fn judge_against_equilibrium(&mut self, equilibrium: &Vector<'p>) -> Result<(), LaError> {

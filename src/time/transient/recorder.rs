@@ -3,10 +3,10 @@
 //! the states every `state_interval` of simulated time.
 
 use super::checkpoint::Checkpoint;
+use super::hooks::StateSampler;
 use super::{Sensors, Transient, TransientFiles, TransientInputs};
 use crate::contact::{ContactModel, ContactState, InterfaceSummary};
 use crate::la::{LaError, Petsc, Vector};
-use crate::post::modal_energy::ModalSensors;
 use crate::time::newmark::{State, TimeError};
 use crate::time::store::Series;
 use std::path::PathBuf;
@@ -70,7 +70,7 @@ pub(super) struct Recorder<'a, 'p> {
     petsc: &'p Petsc<'p>,
     contact: &'a ContactModel<'p>,
     sensors: Option<&'a Sensors<'p>>,
-    modal: Option<&'a ModalSensors<'a, 'p>>,
+    modal: Option<&'a dyn StateSampler<'p>>,
     sensor_buffer: Option<Vector<'p>>,
     stream: Box<dyn Series>,
     names: Vec<String>,
