@@ -1,9 +1,9 @@
 //! GMRES (right-preconditioned, no restart) over PETSc vectors, for a system given by its
-//! products: the static Newton's correction with a stale LU factor as preconditioner.
+//! products: the static Newton's correction with a stale LU factor as preconditioner, and
+//! the transient's Newton-Krylov on the consistent tangent (the step's factor with its
+//! low-rank update as preconditioner).
 //!
-//! No `unsafe` here; it lives in `la/` beside the vectors it works on. The transient's
-//! Newton-Krylov keeps its own loop (its preconditioner carries a low-rank update whose
-//! bookkeeping is fused with the iteration).
+//! No `unsafe` here; it lives in `la/` beside the vectors it works on.
 
 use super::{LaError, Vector};
 

@@ -1,8 +1,10 @@
 //! Newton-Krylov: GMRES on the consistent tangent at the iterate, right-preconditioned by the
 //! step's factor updated by a low-rank (Woodbury) correction where the contact tangent changed.
 
+use super::correction::SolveCount;
 use super::{Jacobian, Newmark, KRYLOV_MAX};
-use crate::la::{LaError, Operator, TangentChange, Vector};
+use crate::la::gmres::{gmres, Preconditioned};
+use crate::la::{LaError, LowRankUpdate, Operator, TangentChange, Vector};
 
 impl<'p> Newmark<'_, 'p> {
     /// Whether a Newton-Krylov correction of the last step attempt was inexact (GMRES ended
@@ -26,7 +28,8 @@ impl<'p> Newmark<'_, 'p> {
         self.dz.scale(-1.0)
     }
 
-    /// GMRES on J(state) dq = R, right-preconditioned by the step's factor, from dq = 0, to a
+    /// GMRES (`la::gmres`) on J(state) dq = R, right-preconditioned by the step's factor
+    /// with its low-rank update, from dq = 0, to a
     /// relative residual of 1e-4 (an inexact Newton step: the outer iteration converges
     /// linearly at that rate), or to `floor` (a tenth of the step's residual target: a
     /// smaller linear residual cannot make the Newton step better than converged), or
@@ -39,98 +42,56 @@ impl<'p> Newmark<'_, 'p> {
         tangent: &dyn TangentChange<'p>,
         floor: f64,
     ) -> Result<usize, LaError> {
-        let enough = |beta0: f64| (1e-4 * beta0).max(floor);
-        let m = KRYLOV_MAX;
         let t = std::time::Instant::now();
         self.solves.solves += self
             .low_rank
             .prepare(&self.jacobian.factor, tangent, &self.q1)?;
         self.solves.seconds += t.elapsed().as_secs_f64();
-        while self.basis.len() < m + 1 {
-            self.basis.push(self.q1.duplicate()?);
-        }
         let beta0 = self.r.norm2()?;
-        self.dq.set_all(0.0)?;
-        if beta0 == 0.0 {
-            return Ok(0);
-        }
-        self.basis[0].copy_from(&self.r)?;
-        self.basis[0].scale(1.0 / beta0)?;
-        // Hessenberg columns, Givens rotations, and the rotated right-hand side.
-        let mut h = vec![vec![0.0; m + 1]; m];
-        let (mut cs, mut sn) = (vec![0.0; m], vec![0.0; m]);
-        let mut g = vec![0.0; m + 1];
-        g[0] = beta0;
-        let mut k = 0;
-        while k < m {
-            // w = J(state) P^-1 v_k, into basis[k + 1].
-            self.solves.precondition(
-                &self.low_rank,
-                &self.jacobian.factor,
-                &self.basis[k],
-                &mut self.dz,
-            )?;
-            let (head, tail) = self.basis.split_at_mut(k + 1);
-            let w = &mut tail[0];
-            apply_consistent(self.jacobian, tangent, &self.dz, w)?;
-            // Classical Gram-Schmidt twice (CGS2: as orthogonal as modified Gram-Schmidt, in
-            // two reductions over the ranks instead of k + 1).
-            let previous: Vec<&Vector<'p>> = head.iter().collect();
-            for _ in 0..2 {
-                let coefficients = w.mdot(&previous)?;
-                let negated: Vec<f64> = coefficients.iter().map(|c| -c).collect();
-                w.maxpy(&negated, &previous)?;
-                for (hi, c) in h[k].iter_mut().zip(&coefficients) {
-                    *hi += c;
-                }
-            }
-            h[k][k + 1] = w.norm2()?;
-            if h[k][k + 1] > 0.0 {
-                w.scale(1.0 / h[k][k + 1])?;
-            }
-            for i in 0..k {
-                let t = cs[i] * h[k][i] + sn[i] * h[k][i + 1];
-                h[k][i + 1] = -sn[i] * h[k][i] + cs[i] * h[k][i + 1];
-                h[k][i] = t;
-            }
-            let d = h[k][k].hypot(h[k][k + 1]);
-            (cs[k], sn[k]) = if d > 0.0 {
-                (h[k][k] / d, h[k][k + 1] / d)
-            } else {
-                (1.0, 0.0)
-            };
-            h[k][k] = d;
-            h[k][k + 1] = 0.0;
-            g[k + 1] = -sn[k] * g[k];
-            g[k] *= cs[k];
-            k += 1;
-            if g[k].abs() <= enough(beta0) || !g[k].is_finite() {
-                break;
-            }
-        }
-        // (A NaN counts as inexact.)
-        let reached = g[k].abs() <= enough(beta0);
-        self.krylov_exhausted |= !reached;
-        // y from the triangular system, then dq = P^-1 (V y).
-        let mut y = vec![0.0; k];
-        for i in (0..k).rev() {
-            let mut t = g[i];
-            for j in i + 1..k {
-                t -= h[j][i] * y[j];
-            }
-            y[i] = t / h[i][i];
-        }
-        self.tmp.set_all(0.0)?;
-        for (i, yi) in y.iter().enumerate() {
-            self.tmp.axpy(*yi, &self.basis[i])?;
-        }
-        self.solves.precondition(
-            &self.low_rank,
-            &self.jacobian.factor,
-            &self.tmp,
+        let enough = (1e-4 * beta0).max(floor);
+        let mut system = ConsistentTangent {
+            jacobian: self.jacobian,
+            low_rank: &self.low_rank,
+            tangent,
+            solves: &mut self.solves,
+            preconditioned: &mut self.dz,
+        };
+        let outcome = gmres(
+            &mut system,
+            &self.r,
             &mut self.dq,
+            &mut self.basis,
+            enough,
+            KRYLOV_MAX,
         )?;
-        Ok(k)
+        // (A NaN counts as inexact.)
+        self.krylov_exhausted |= !outcome.converged;
+        Ok(outcome.iterations)
+    }
+}
+
+/// J(state) right-preconditioned by the step's factor with its low-rank update, the
+/// preconditioner's solves counted.
+struct ConsistentTangent<'s, 'p> {
+    jacobian: &'s Jacobian<'s, 'p>,
+    low_rank: &'s LowRankUpdate<'p>,
+    tangent: &'s dyn TangentChange<'p>,
+    solves: &'s mut SolveCount,
+    /// P^-1 v of the last product.
+    preconditioned: &'s mut Vector<'p>,
+}
+
+impl<'p> Preconditioned<'p> for ConsistentTangent<'_, 'p> {
+    fn apply(&mut self, v: &Vector<'p>, w: &mut Vector<'p>) -> Result<(), LaError> {
+        let factor = &self.jacobian.factor;
+        self.solves
+            .precondition(self.low_rank, factor, v, self.preconditioned)?;
+        apply_consistent(self.jacobian, self.tangent, self.preconditioned, w)
+    }
+
+    fn precondition(&mut self, v: &Vector<'p>, x: &mut Vector<'p>) -> Result<(), LaError> {
+        let factor = &self.jacobian.factor;
+        self.solves.precondition(self.low_rank, factor, v, x)
     }
 }
 

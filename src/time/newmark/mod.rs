@@ -37,7 +37,6 @@
 //! of one `Newmark`. The adaptive control around the step is in `super::adaptive`.
 
 use crate::la::{DirectSolver, LaError, LowRankUpdate, Operator, SparseMatrix, Vector};
-use crate::measure::nan_max;
 
 /// Newmark parameters and the Newton tolerance.
 #[derive(Debug, Clone, Copy)]
@@ -73,7 +72,7 @@ impl Default for NewmarkSettings {
 }
 
 /// What one step took.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepReport {
     pub iterations: usize,
     /// Final residual and the reference it was compared with.
@@ -207,6 +206,7 @@ mod anderson;
 mod carried;
 mod correction;
 mod damping;
+mod iteration;
 mod krylov;
 mod line_search;
 mod step_error;
@@ -398,173 +398,6 @@ impl<'a, 'p> Newmark<'a, 'p> {
             c.mult_add(&self.tmp, &mut self.z)?;
         }
         Ok(())
-    }
-
-    /// Advances `state` by one step.
-    ///
-    /// # Collective
-    pub fn step(
-        &mut self,
-        state: &mut State<'p>,
-        forces: &mut Forces<'_, 'p>,
-    ) -> Result<StepReport, TimeError> {
-        self.step_with(state, forces, Correction::Fixed, false)
-    }
-
-    /// [`Newmark::step`], or with `retangent` a full Newton: J rebuilt and factorized at every
-    /// iterate (the consistent tangent, for the steps the fixed Jacobian cannot do), and with
-    /// `line_search` each correction backtracked on |R| (Armijo): where a contact point crosses
-    /// the friction law's regularization band or opens, a full Newton step can overshoot and
-    /// cycle, and no step size removes that; a shorter step along the same direction does.
-    ///
-    /// # Collective
-    pub fn step_with(
-        &mut self,
-        state: &mut State<'p>,
-        forces: &mut Forces<'_, 'p>,
-        mut correction: Correction<'_, '_, 'p>,
-        line_search: bool,
-    ) -> Result<StepReport, TimeError> {
-        let started = std::time::Instant::now();
-        let h = self.settings.step;
-        let t1 = state.time + h;
-        // Anderson's combination redirects the fixed factor's corrections after an
-        // elimination (alone, it did not pay: `anderson.rs`).
-        let accelerate =
-            self.anderson.depth() > 0 && matches!(correction, Correction::Eliminated(_));
-        self.krylov_exhausted = false;
-        self.solves = SolveCount::default();
-        self.anderson.clear();
-        // Predictor: constant acceleration, q1 = q0 + h v0 + h^2/2 a0.
-        self.q1.copy_from(&state.q)?;
-        self.q1.axpy(h, &state.v)?;
-        self.q1.axpy(0.5 * h * h, &state.a)?;
-        self.kinematics(state)?;
-        let clock = std::time::Instant::now();
-        match &state.linear {
-            Some(z_n) if !state.step.is_multiple_of(LINEAR_FORCE_REFRESH) => {
-                self.predicted_linear_force(state, z_n)?
-            }
-            _ => {
-                self.linear_force()?;
-                self.drift.exact();
-            }
-        }
-        let inexact = self.jacobian.factor.is_single();
-        // A failed attempt leaves the state's z as it was: its solves do not count.
-        let drift_at_start = self.drift;
-        let pred_exact = self.drift.is_exact();
-        if inexact {
-            self.q_pred.copy_from(&self.q1)?;
-            self.z_pred.copy_from(&self.z)?;
-        }
-        let mut report = StepReport {
-            iterations: 0,
-            residual: 0.0,
-            reference: 0.0,
-            solve_seconds: 0.0,
-            force_seconds: 0.0,
-            linear_force_seconds: clock.elapsed().as_secs_f64(),
-            product_seconds: 0.0,
-            force_calls: 0,
-            product_calls: 0,
-            linear_force_calls: 1,
-            forces_current: true,
-            krylov_iterations: 0,
-            factor_solves: 0,
-            factor_solve_seconds: 0.0,
-            elimination_mismatch: 0.0,
-            on_step_error: false,
-        };
-        // R = z - f at the predictor; later iterates come evaluated from the correction.
-        let (mut r, mut reference) = self.residual(t1, forces, &mut report)?;
-        if !(r.is_finite() && reference.is_finite()) {
-            // The predictor is built from the last accepted state alone: no smaller step or
-            // better Jacobian can help.
-            return Err(TimeError::NotFinite {
-                step: state.step + 1,
-                time: t1,
-                what: "the residual at the predictor (from the last accepted state and the forces)",
-            });
-        }
-        let mut history = Vec::new();
-        let judge_step_error = self.settings.step_error_fraction > 0.0;
-        self.contraction.new_step();
-        loop {
-            let mut target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
-            if r <= target && inexact && self.drift.due(Some(r), target) {
-                (r, reference) = self.residual_with_exact_z(pred_exact, &mut report)?;
-                target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
-            }
-            report.residual = r;
-            report.reference = reference;
-            if r <= target {
-                return self.finish(state, t1, report);
-            }
-            history.push(r);
-            // Stalled: less than a halving over the last four iterations after eight; at that
-            // rate the tolerance is out of reach within the limit, and the caller has better
-            // corrections to try (a patient rule that let such attempts go on while their rate
-            // reached the target was neutral at 600k: benches/transient-results.md).
-            let k = history.len();
-            let stalled = k > 8 && r > 0.5 * history[k - 5];
-            if report.iterations >= self.settings.max_iterations || !r.is_finite() || stalled {
-                self.fail(report.iterations, started, history, drift_at_start);
-                return Err(TimeError::NotConverged {
-                    step: state.step + 1,
-                    time: t1,
-                    iterations: report.iterations,
-                    residual: r,
-                    target,
-                });
-            }
-            if judge_step_error {
-                self.q_before.copy_from(&self.q1)?;
-            }
-            if let Correction::Eliminated(eliminate) = &mut correction {
-                let at = (t1, state.step + 1);
-                if self.eliminate(&mut **eliminate, at, target)? {
-                    (r, reference) = self.residual(t1, forces, &mut report)?;
-                    let mismatch = self.residual_where_moved()? / target;
-                    report.elimination_mismatch = nan_max(report.elimination_mismatch, mismatch);
-                    let target = self.settings.tolerance * reference.max(f64::MIN_POSITIVE);
-                    if r <= target {
-                        // Accepted at the loop's head (where the carried z is judged).
-                        continue;
-                    }
-                }
-            }
-            let t = std::time::Instant::now();
-            if inexact && !matches!(correction, Correction::Krylov(_)) {
-                // (Newton-Krylov updates z by products.)
-                self.drift.solved(r);
-            }
-            self.correction(&mut correction, (t1, state.step + 1), target, &mut report)?;
-            report.solve_seconds += t.elapsed().as_secs_f64();
-            report.iterations += 1;
-            if accelerate {
-                self.accelerate(inexact)?;
-            }
-            let alpha = if line_search {
-                let (alpha, evaluated) = self.backtrack(t1, r, forces, &mut report)?;
-                (r, reference) = evaluated;
-                alpha
-            } else {
-                self.correct(1.0)?;
-                1.0
-            };
-            if let Some(on_step_error) = self.accepted_on_moves(state, alpha, judge_step_error)? {
-                if inexact && self.drift.due(None, self.settings.tolerance * reference) {
-                    self.exact_linear_force(pred_exact, &mut report)?;
-                }
-                report.forces_current = line_search;
-                report.on_step_error = on_step_error;
-                return self.finish(state, t1, report);
-            }
-            if !line_search {
-                (r, reference) = self.residual(t1, forces, &mut report)?;
-            }
-        }
     }
 
     /// Whether the iterate, after a move by `alpha` of the correction, is accepted without

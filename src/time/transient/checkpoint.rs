@@ -166,33 +166,7 @@ impl<'p> Checkpoint<'p> {
             let [k, m] = operator_fingerprint(input, &s.q)?;
             f.set_number("operators_k", k)?;
             f.set_number("operators_m", m)?;
-            // The full-model state as well: what the reduced coordinates mean.
-            if let Some(r) = input.reduction {
-                let mut states = vec![("full_q", &s.q), ("full_v", &s.v), ("full_a", &s.a)];
-                if let Some((q, v)) = jacobian_at {
-                    states.push(("full_jacobian_q", q));
-                    states.push(("full_jacobian_v", v));
-                }
-                let mut full = r.full_vector(petsc)?;
-                for (name, x) in states {
-                    r.recover(petsc, x, &mut full)?;
-                    let (range, n) = (full.ownership(), full.global_len());
-                    f.write_vector(name, &full.local()?, range, n)?;
-                }
-            }
-            let n = s.q.global_len();
-            let range = s.q.ownership();
-            let mut vectors = vec![("q", &s.q), ("v", &s.v), ("a", &s.a)];
-            if let Some(z) = &s.linear {
-                vectors.push(("linear", z));
-            }
-            if let Some((q, v)) = jacobian_at {
-                vectors.push(("jacobian_q", q));
-                vectors.push(("jacobian_v", v));
-            }
-            for (name, x) in vectors {
-                f.write_vector(name, &x.local()?, range.clone(), n)?;
-            }
+            write_states(petsc, &*f, input, s, jacobian_at)?;
             f.flush()?;
         }
         crate::parallel::barrier(world);
@@ -352,4 +326,44 @@ impl<'p> Checkpoint<'p> {
             now[0], stored[0], now[1], stored[1]
         ))
     }
+}
+
+/// The state (and the state J was built at) into a checkpoint, and on a reduced run the
+/// full-model state as well: what the reduced coordinates mean.
+///
+/// # Collective
+fn write_states<'p>(
+    petsc: &'p Petsc,
+    f: &dyn Series,
+    input: &TransientInputs<'_, 'p>,
+    s: &State<'p>,
+    jacobian_at: Option<&(Vector<'p>, Vector<'p>)>,
+) -> Result<(), TimeError> {
+    if let Some(r) = input.reduction {
+        let mut states = vec![("full_q", &s.q), ("full_v", &s.v), ("full_a", &s.a)];
+        if let Some((q, v)) = jacobian_at {
+            states.push(("full_jacobian_q", q));
+            states.push(("full_jacobian_v", v));
+        }
+        let mut full = r.full_vector(petsc)?;
+        for (name, x) in states {
+            r.recover(petsc, x, &mut full)?;
+            let (range, n) = (full.ownership(), full.global_len());
+            f.write_vector(name, &full.local()?, range, n)?;
+        }
+    }
+    let n = s.q.global_len();
+    let range = s.q.ownership();
+    let mut vectors = vec![("q", &s.q), ("v", &s.v), ("a", &s.a)];
+    if let Some(z) = &s.linear {
+        vectors.push(("linear", z));
+    }
+    if let Some((q, v)) = jacobian_at {
+        vectors.push(("jacobian_q", q));
+        vectors.push(("jacobian_v", v));
+    }
+    for (name, x) in vectors {
+        f.write_vector(name, &x.local()?, range.clone(), n)?;
+    }
+    Ok(())
 }

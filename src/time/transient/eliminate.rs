@@ -263,9 +263,56 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         target: f64,
     ) -> Result<Option<Elimination<'p>>, LaError> {
         let clock = std::time::Instant::now();
-        // The `max_points` largest changes, however small the rest: a point left out with a
-        // tangent far from J's stalls the global iteration (measured: keeping 99.99 % of the
-        // change's norm instead, ~30 points on the small brake, refreshed J 6x as often).
+        let Some(Chosen {
+            points,
+            unknowns: b,
+            touching,
+        }) = self.choose(tangent)?
+        else {
+            return Ok(None);
+        };
+        if self.gather.is_none() {
+            self.gather = Some(Selection::new(r, &self.zone.unknowns)?);
+        }
+        let gather = self.gather.as_ref().expect("built above");
+        let zone = ZoneValues {
+            q: gather.gather(&at.q)?,
+            v: gather.gather(&at.v)?,
+            residual: gather.gather(r)?,
+        };
+        let c1 = ns.gamma / (ns.beta * ns.step);
+        // (Every rank holds the same b: the same branch everywhere, collective or not.)
+        let blocks = std::time::Instant::now();
+        let mut kept = match self.kept.take() {
+            Some(k) if k.b == b && k.c1 == c1 => k,
+            Some(k) if k.c1 == c1 => self.split(ns, b, &touching, c1, Some(k)),
+            _ => self.split(ns, b, &touching, c1, None),
+        };
+        self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
+        let combined = self.solve_parts(&mut kept, &zone, c1, target)?;
+        self.count(&combined, points, &kept);
+        let solved_delta = &combined[..kept.b.len()];
+        let delta = scattered(r, &kept.b, solved_delta)?;
+        let change = std::time::Instant::now();
+        let linear_change = self.linear_change(ns, &kept.b, solved_delta, r)?;
+        self.counts.seconds_linear_change += change.elapsed().as_secs_f64();
+        self.kept = Some(kept);
+        self.counts.seconds += clock.elapsed().as_secs_f64();
+        Ok(Some(Elimination {
+            delta,
+            linear_change,
+        }))
+    }
+
+    /// The points to eliminate, the `max_points` largest changes, however small the rest
+    /// (a point left out with a tangent far from J's stalls the global iteration; measured:
+    /// keeping 99.99 % of the change's norm instead, ~30 points on the small brake, refreshed
+    /// J 6x as often): how many, their distinct unknowns b and the points touching b. None:
+    /// no point, or none with an unknown.
+    ///
+    /// # Collective
+    fn choose(&mut self, tangent: &dyn TangentChange<'p>) -> Result<Option<Chosen>, LaError> {
+        let clock = std::time::Instant::now();
         let dominant = tangent.dominant_points(self.max_points)?;
         self.counts.seconds_ranking += clock.elapsed().as_secs_f64();
         let Some(dominant) = dominant else {
@@ -293,29 +340,27 @@ impl<'a, 'p> Eliminator<'a, 'p> {
             .flat_map(|&d| self.points_of[d].iter().map(|&p| p as usize));
         self.point_marker.push_row(points, &mut touching);
         self.point_marker.clear(&touching);
-        if self.gather.is_none() {
-            self.gather = Some(Selection::new(r, &self.zone.unknowns)?);
-        }
-        let gather = self.gather.as_ref().expect("built above");
-        let (q, v, residual) = (
-            gather.gather(&at.q)?,
-            gather.gather(&at.v)?,
-            gather.gather(r)?,
-        );
-        let c1 = ns.gamma / (ns.beta * ns.step);
-        // (Every rank holds the same b: the same branch everywhere, collective or not.)
-        let blocks = std::time::Instant::now();
-        let mut kept = match self.kept.take() {
-            Some(k) if k.b == b && k.c1 == c1 => k,
-            Some(k) if k.c1 == c1 => self.split(ns, b, &touching, c1, Some(k)),
-            _ => self.split(ns, b, &touching, c1, None),
-        };
-        self.counts.seconds_blocks += blocks.elapsed().as_secs_f64();
+        Ok(Some(Chosen {
+            points: chosen.len(),
+            unknowns: b,
+            touching,
+        }))
+    }
+
+    /// This rank's parts solved by their local Newton: their moves in place in b, then the
+    /// counters, then each rank's deepest local Newton and its time; zero elsewhere, summed
+    /// over the ranks so every rank holds all of delta (a sum with zeros is exact).
+    ///
+    /// # Collective
+    fn solve_parts(
+        &mut self,
+        kept: &mut Kept<'p>,
+        zone: &ZoneValues,
+        c1: f64,
+        target: f64,
+    ) -> Result<Vec<f64>, LaError> {
         let n = kept.b.len();
-        // This rank's parts' moves in place in b, then the counters; zero elsewhere, so one
-        // sum over the ranks gives every rank all of delta (a sum with zeros is exact).
         let ranks = self.petsc.size() as usize;
-        // After the counters: each rank's deepest local Newton, then its time.
         let mut combined = vec![0.0; n + SUMMED + 2 * ranks];
         let newton = std::time::Instant::now();
         let mut deepest = 0usize;
@@ -327,15 +372,15 @@ impl<'a, 'p> Eliminator<'a, 'p> {
                 &self.rows,
                 &self.zone_dofs,
                 &own.unknowns,
-                &q,
-                &v,
+                &zone.q,
+                &zone.v,
                 c1,
             );
             let rb: Vec<f64> = own
                 .unknowns
                 .b
                 .iter()
-                .map(|&i| residual[self.zone.position[i] as usize])
+                .map(|&i| zone.residual[self.zone.position[i] as usize])
                 .collect();
             // |R_b| <= 0.1 target over all parts when each part's share is held to its
             // share of the unknowns.
@@ -364,10 +409,16 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         let waiting = std::time::Instant::now();
         sum_in_place(self.petsc.world(), &mut combined);
         self.counts.seconds_combining += waiting.elapsed().as_secs_f64();
+        Ok(combined)
+    }
+
+    /// Adds one elimination of `points` points to the counts, from its summed counters.
+    fn count(&mut self, combined: &[f64], points: usize, kept: &Kept<'p>) {
+        let (n, ranks) = (kept.b.len(), self.petsc.size() as usize);
         let summed = &combined[n..n + SUMMED];
         let c = &mut self.counts;
         c.eliminations += 1;
-        c.points += chosen.len();
+        c.points += points;
         c.unknowns += n;
         c.parts += kept.parts.len();
         c.parts_on_kept_factors += summed[5] as usize;
@@ -380,28 +431,6 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         c.numeric_refactorizations += summed[2] as usize;
         c.factor_entries += summed[3];
         c.unconverged += usize::from(summed[4] > 0.0);
-        let solved_delta = &combined[..n];
-        let b = &kept.b;
-        let mut delta = r.duplicate()?;
-        delta.set_all(0.0)?;
-        let own = delta.ownership();
-        {
-            let mut local = delta.local_mut()?;
-            for (&i, &d) in b.iter().zip(solved_delta) {
-                if own.contains(&i) {
-                    local[i - own.start] = d;
-                }
-            }
-        }
-        let change = std::time::Instant::now();
-        let linear_change = self.linear_change(ns, b, solved_delta, r)?;
-        self.counts.seconds_linear_change += change.elapsed().as_secs_f64();
-        self.kept = Some(kept);
-        self.counts.seconds += clock.elapsed().as_secs_f64();
-        Ok(Some(Elimination {
-            delta,
-            linear_change,
-        }))
     }
 
     /// b's parts, and this rank's with their L_bb and local Jacobian's pattern; a part on the
@@ -554,4 +583,35 @@ impl<'a, 'p> Eliminator<'a, 'p> {
         }
         Csr::from_triplets(b.len(), entries)
     }
+}
+
+/// The points an elimination moves: how many, their distinct unknowns b, and the points
+/// touching b.
+struct Chosen {
+    points: usize,
+    unknowns: Vec<usize>,
+    touching: Vec<usize>,
+}
+
+/// The zone's entries of the iterate's q, v and residual.
+struct ZoneValues {
+    q: Vec<f64>,
+    v: Vec<f64>,
+    residual: Vec<f64>,
+}
+
+/// A vector like `like`, `values` at the unknowns `at` and zero elsewhere.
+fn scattered<'p>(like: &Vector<'p>, at: &[usize], values: &[f64]) -> Result<Vector<'p>, LaError> {
+    let mut v = like.duplicate()?;
+    v.set_all(0.0)?;
+    let own = v.ownership();
+    {
+        let mut local = v.local_mut()?;
+        for (&i, &d) in at.iter().zip(values) {
+            if own.contains(&i) {
+                local[i - own.start] = d;
+            }
+        }
+    }
+    Ok(v)
 }

@@ -300,6 +300,12 @@ pub const SATURATION_CHECK_EVERY: usize = 500;
 
 impl TransientSettings {
     pub fn validate(&self) -> Result<(), InvalidSetting> {
+        self.validate_stepping()?;
+        self.validate_start_and_signals()
+    }
+
+    /// The step, its iterations and its end.
+    fn validate_stepping(&self) -> Result<(), InvalidSetting> {
         if self.stop_after_saturation.is_some_and(|c| c < 2) {
             return Err(InvalidSetting::new(
                 "transient.stop_after_saturation",
@@ -352,6 +358,11 @@ impl TransientSettings {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// The start (mode, amplitude, impulse) and what is recorded.
+    fn validate_start_and_signals(&self) -> Result<(), InvalidSetting> {
         if self.mode == 0 {
             return Err(InvalidSetting::new(
                 "transient.mode",
