@@ -16,7 +16,7 @@ use squeal::contact::ContactModel;
 use squeal::eigen::complex_modes::{full, projected, ComplexMode, ComplexModeSettings, Operators};
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
 use squeal::eigen::stability::ModalProjection;
-use squeal::la::fem_assembly::assemble_system_as;
+use squeal::fem::petsc::assemble_system_as;
 use squeal::la::{MatrixFormat, Petsc};
 use squeal::pipeline::build_model;
 use squeal::scene::Scene;

@@ -10,12 +10,12 @@ use std::time::Instant;
 
 use clap::Parser;
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
-use squeal::fem::material::Material;
-use squeal::fem::shape::ElementKind;
-use squeal::la::fem_assembly::assemble_system;
+use squeal::fem::petsc::assemble_system;
 use squeal::la::{DirectSolver, Factorization, Petsc};
+use squeal::mesh::material::Material;
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 use squeal::parallel;
 
 #[derive(Parser)]

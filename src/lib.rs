@@ -10,6 +10,7 @@
 #![allow(clippy::disallowed_methods)]
 
 pub mod contact;
+pub mod dense;
 pub mod eigen;
 pub mod fault;
 pub mod fem;

@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::eigen::real_modes::RealModeRequest;
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
 use crate::io::user_matrices::MatrixTerm;
 use crate::mesh::brake::BrakeSpec;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 /// The scene `squeal run` uses when given none.
 pub const DEFAULT_SCENE: &str = include_str!("../jobs/default.toml");

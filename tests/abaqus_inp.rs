@@ -7,10 +7,10 @@ use std::path::PathBuf;
 
 use squeal::fem::assembly::{assemble, DenseSink};
 use squeal::fem::dofmap::DofMap;
-use squeal::fem::material::{Elasticity, Material};
-use squeal::fem::shape::ElementKind;
 use squeal::mesh::abaqus_inp::{read, write};
+use squeal::mesh::material::{Elasticity, Material};
 use squeal::mesh::structured::{annulus, block};
+use squeal::mesh::ElementKind;
 use squeal::mesh::Mesh;
 
 #[path = "support/materials.rs"]

@@ -13,7 +13,7 @@ use std::collections::BTreeMap;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
-use squeal::fem::material::Material;
+use squeal::mesh::material::Material;
 use squeal::scene::Scene;
 
 /// Cases per seed file.
@@ -286,7 +286,7 @@ fn import_checks(
     path: &Path,
 ) -> Result<Option<String>, String> {
     let mesh = mesh?;
-    squeal::mesh::quality::check(&mesh).map_err(|e| format!("{}: {e}", path.display()))?;
+    squeal::fem::quality::check(&mesh).map_err(|e| format!("{}: {e}", path.display()))?;
     if let Some(x) = mesh.coords.iter().flatten().find(|x| !x.is_finite()) {
         return Ok(Some(format!("coordinate {x}")));
     }

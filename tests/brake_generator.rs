@@ -7,13 +7,13 @@
 //! of the exact sector: the relative volume deficit is at most dtheta_max^2 / 6.
 
 use squeal::fem::element::ElementKernel;
-use squeal::fem::shape::ElementKind;
+use squeal::fem::quality;
 use squeal::measure::nan_max;
 use squeal::mesh::brake::{
     anchor, caliper, disc, element_size_for, generate, generate_with_size, pad, piston, BrakeSpec,
     Component, Side,
 };
-use squeal::mesh::quality;
+use squeal::mesh::ElementKind;
 use squeal::mesh::Mesh;
 
 fn block_volume(mesh: &Mesh, name: &str) -> f64 {

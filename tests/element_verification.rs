@@ -8,13 +8,13 @@
 //! - Rigid-body modes: the free element stiffness has exactly six zero eigenvalues.
 //! - Symmetry of element stiffness and mass; mass sums to rho x volume.
 
+use squeal::dense::{cholesky, cholesky_solve, symmetric_eigenvalues};
 use squeal::fem::assembly::{assemble, DenseSink};
-use squeal::fem::dense::{cholesky, cholesky_solve, symmetric_eigenvalues};
 use squeal::fem::dofmap::DofMap;
 use squeal::fem::element::ElementKernel;
-use squeal::fem::material::Material;
-use squeal::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
 use squeal::measure::nan_max;
+use squeal::mesh::element::{ElementKind, HEX_EDGES, TET_EDGES};
+use squeal::mesh::material::Material;
 use squeal::mesh::structured::block;
 use squeal::mesh::Mesh;
 

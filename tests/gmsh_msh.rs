@@ -8,11 +8,12 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use squeal::fem::element::ElementKernel;
-use squeal::fem::material::Material;
-use squeal::fem::shape::ElementKind;
+use squeal::fem::quality;
 use squeal::mesh::gmsh_msh::read;
+use squeal::mesh::material::Material;
 use squeal::mesh::structured::block;
-use squeal::mesh::{quality, Mesh};
+use squeal::mesh::ElementKind;
+use squeal::mesh::Mesh;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("squeal-msh-{}", std::process::id()));
@@ -89,7 +90,7 @@ fn write_msh(
 
 #[test]
 fn quadratic_node_orders_are_converted() {
-    use squeal::fem::shape::{HEX_EDGES, TET_EDGES};
+    use squeal::mesh::element::{HEX_EDGES, TET_EDGES};
     let gmsh_hex: [[usize; 2]; 12] = [
         [0, 1],
         [0, 3],

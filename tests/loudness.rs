@@ -15,9 +15,9 @@
 
 use std::f64::consts::PI;
 
-use squeal::fem::material::Material;
-use squeal::fem::shape::ElementKind;
+use squeal::mesh::material::Material;
 use squeal::mesh::structured::block;
+use squeal::mesh::ElementKind;
 use squeal::post::loudness::{
     a_weighting, erp_harmonic, exterior_faces, normal_velocity, power_level, radiating_points,
     rayleigh_pressure, third_octave_bands, Air, RadiatingPoint,

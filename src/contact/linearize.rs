@@ -8,7 +8,7 @@ use std::collections::HashMap;
 
 use super::kernel::{self, Channel, Part};
 use super::{ContactModel, ContactState};
-use crate::fem::assembly::Preallocation;
+use crate::la::Preallocation;
 use crate::la::{
     BlockAddPlan, ColumnKey, Dominant, LaError, MatrixFormat, Petsc, SparseMatrix, TangentChange,
     Vector,

@@ -353,9 +353,9 @@ impl BoxTree {
 mod tests {
     use super::*;
     use crate::contact::law::{FrictionLaw, NormalLaw};
-    use crate::fem::material::Material;
-    use crate::fem::shape::ElementKind;
+    use crate::mesh::material::Material;
     use crate::mesh::structured::block;
+    use crate::mesh::ElementKind;
 
     fn faces_at(mesh: &Mesh, elements: std::ops::Range<usize>, z0: f64) -> Vec<(usize, u8)> {
         elements

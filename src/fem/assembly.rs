@@ -3,18 +3,8 @@
 
 use super::dofmap::DofMap;
 use super::element::{ElementKernel, JacobianError};
+use crate::la::Preallocation;
 use crate::mesh::Mesh;
-
-/// Exact preallocation: per local block row, the number of nonzero blocks whose column is
-/// owned by this rank (`diag`) and by other ranks (`off`); `diag_upper`/`off_upper` count only
-/// the blocks on or above the diagonal (used by SBAIJ).
-#[derive(Debug, Clone, Default)]
-pub struct Preallocation {
-    pub diag: Vec<i32>,
-    pub off: Vec<i32>,
-    pub diag_upper: Vec<i32>,
-    pub off_upper: Vec<i32>,
-}
 
 /// Receives element matrices at global DOFs (negative = eliminated, skipped).
 pub trait MatrixSink {

@@ -4,10 +4,10 @@
 //! xx, yy, zz, xy, yz, zx). Mass: M_e = sum_gp rho N^T N det(J) w (consistent). Matrices are
 //! row-major of order 3n, DOF 3a + i for component i of node a.
 
-use super::dense::{cholesky, cholesky_solve, inverse3};
-use super::material::Material;
 use super::quadrature::Rule;
-use super::shape::ElementKind;
+use crate::dense::{cholesky, cholesky_solve, inverse3};
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("element {element}: Jacobian determinant {det:.3e} <= 0 at integration point {point} (inverted or degenerate element: check its node order and coordinates)")]

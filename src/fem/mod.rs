@@ -2,9 +2,9 @@
 //! generic assembly. Pure Rust: no MPI, no PETSc.
 
 pub mod assembly;
-pub mod dense;
 pub mod dofmap;
 pub mod element;
-pub mod material;
+pub mod petsc;
 pub mod quadrature;
+pub mod quality;
 pub mod shape;

@@ -5,7 +5,7 @@
 //! diagonals), reported per element block.
 
 use crate::fem::element::jacobian;
-use crate::fem::shape::{ElementKind, HEX_EDGES, HEX_FACES, TET_EDGES};
+use crate::mesh::element::{ElementKind, HEX_EDGES, HEX_FACES, TET_EDGES};
 use crate::mesh::Mesh;
 
 /// Quality statistics of one element block.
@@ -100,7 +100,7 @@ pub fn check(mesh: &Mesh) -> Result<Vec<BlockQuality>, QualityError> {
             for (p, dn) in tabulated.iter().enumerate() {
                 let j = jacobian(&x, dn);
                 let col = |c: usize| [j[0][c], j[1][c], j[2][c]];
-                let det = crate::fem::dense::inverse3(&j).1;
+                let det = crate::dense::inverse3(&j).1;
                 if det <= 0.0 || !det.is_finite() {
                     let mut at = [0.0; 3];
                     kind.eval(rule.points[p], &mut n, &mut vec![[0.0; 3]; nn]);
@@ -165,7 +165,7 @@ pub fn table(stats: &[BlockQuality]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::material::Material;
+    use crate::mesh::material::Material;
     use crate::mesh::structured::block;
 
     #[test]

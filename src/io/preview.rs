@@ -300,9 +300,9 @@ pub fn save(path: &Path, rgb: &[u8], width: usize, height: usize) -> std::io::Re
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::material::Material;
-    use crate::fem::shape::ElementKind;
+    use crate::mesh::material::Material;
     use crate::mesh::structured::block;
+    use crate::mesh::ElementKind;
 
     #[test]
     fn a_block_has_its_surface_and_is_drawn() {

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::matrix_market::{read, MatrixMarketError};
-use crate::fem::assembly::Preallocation;
+use crate::la::Preallocation;
 use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
 
 /// One term `coefficient x file` of an operator.

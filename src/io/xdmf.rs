@@ -13,7 +13,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::fem::shape::ElementKind;
+use crate::mesh::ElementKind;
 use crate::mesh::Mesh;
 
 /// The element's type code in an XDMF mixed topology (XdmfTopologyType's ids; the node

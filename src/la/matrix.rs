@@ -1,6 +1,5 @@
 //! Distributed sparse matrices (PETSc `Mat`): AIJ, and BAIJ/SBAIJ assembled blockwise.
 
-use crate::fem::assembly::Preallocation;
 use std::marker::PhantomData;
 use std::path::Path;
 
@@ -43,6 +42,16 @@ pub struct SparseMatrix<'p> {
     format: MatrixFormat,
     block_size: usize,
     _petsc: PhantomData<&'p Petsc<'p>>,
+}
+
+/// Exact preallocation of a matrix: stored entries per local (block) row in the diagonal and
+/// off-diagonal parts, and of their upper triangles (for symmetric storage).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Preallocation {
+    pub diag: Vec<i32>,
+    pub off: Vec<i32>,
+    pub diag_upper: Vec<i32>,
+    pub off_upper: Vec<i32>,
 }
 
 impl<'p> SparseMatrix<'p> {
@@ -579,24 +588,6 @@ impl<'p> SparseMatrix<'p> {
 impl Drop for SparseMatrix<'_> {
     fn drop(&mut self) {
         report_destroy(call!(MatDestroy(&mut self.raw)));
-    }
-}
-
-impl crate::fem::assembly::MatrixSink for SparseMatrix<'_> {
-    type Error = LaError;
-
-    /// Element matrices at scalar DOFs; in block mode (block size 3, every node fully free or
-    /// fully eliminated) inserted blockwise, which SBAIJ assembles several times faster.
-    fn add(&mut self, dofs: &[i32], values: &[f64]) -> Result<()> {
-        if self.block_size == 3 {
-            let blocks: Vec<i32> = dofs
-                .chunks(3)
-                .map(|d| if d[0] < 0 { -1 } else { d[0] / 3 })
-                .collect();
-            self.add_blocked(&blocks, &blocks, values)
-        } else {
-            self.add_values(dofs, dofs, values)
-        }
     }
 }
 

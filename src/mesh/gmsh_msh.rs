@@ -12,8 +12,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use super::{ElementBlock, Mesh};
-use crate::fem::material::Material;
-use crate::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
+use crate::mesh::element::{ElementKind, HEX_EDGES, TET_EDGES};
+use crate::mesh::material::Material;
 
 /// Gmsh's edge order of the 20-node hexahedron (mid-edge nodes 8..19).
 const GMSH_HEX_EDGES: [[usize; 2]; 12] = [

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::dense::invert_spd;
+use crate::dense::invert_spd;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "lowercase", deny_unknown_fields)]

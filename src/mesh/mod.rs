@@ -4,12 +4,14 @@
 pub mod abaqus_inp;
 pub mod brake;
 pub mod clamp;
+pub mod element;
 pub mod gmsh_msh;
+pub mod material;
 pub mod partition;
-pub mod quality;
 pub mod structured;
 
 pub use clamp::Clamp;
+pub use element::ElementKind;
 
 use std::collections::BTreeMap;
 
@@ -32,8 +34,7 @@ pub enum MeshError {
 
 use serde::{Deserialize, Serialize};
 
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
 
 /// Elements of one type and one material (a component, or part of one).
 #[derive(Debug, Clone)]

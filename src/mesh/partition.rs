@@ -140,10 +140,10 @@ pub fn unsupported_parts(mesh: &Mesh, fixed: &[[bool; 3]]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fem::material::Material;
-    use crate::fem::shape::ElementKind;
     use crate::measure::nan_max;
+    use crate::mesh::material::Material;
     use crate::mesh::structured::block;
+    use crate::mesh::ElementKind;
 
     #[test]
     fn halves_of_the_order_are_the_halves_of_a_bar() {

@@ -5,8 +5,8 @@
 use std::collections::HashMap;
 
 use super::{ElementBlock, Mesh};
-use crate::fem::material::Material;
-use crate::fem::shape::{ElementKind, HEX_EDGES, TET_EDGES};
+use crate::mesh::element::{ElementKind, HEX_EDGES, TET_EDGES};
+use crate::mesh::material::Material;
 
 /// Six tetrahedra of a hexahedron around its diagonal 0-6; conforming between translated
 /// hexahedra (each face is cut along the same diagonal from both sides).

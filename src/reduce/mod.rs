@@ -27,8 +27,8 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use crate::fem::assembly::Preallocation;
 use crate::fem::dofmap::DofMap;
+use crate::la::Preallocation;
 use crate::la::{lapack, LaError, MatrixFormat, Petsc, SparseMatrix, Vector};
 use crate::mesh::Mesh;
 

@@ -27,10 +27,10 @@ use std::path::Path;
 
 use crate::eigen::complex_modes::ComplexModes;
 use crate::eigen::real_modes::RealModes;
+use crate::fem::quality::BlockQuality;
 use crate::io::results::ResultsFile;
 use crate::io::xdmf::{self, NodalField};
 pub use crate::io::WriteError;
-use crate::mesh::quality::BlockQuality;
 use crate::report::summary::ReductionSummary;
 use crate::stages::complex::route_name;
 use crate::stages::model::Model;

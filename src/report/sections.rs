@@ -14,7 +14,7 @@ impl RunSummary {
         writeln!(f, "model: {} DOF", s.dofs)?;
         if !s.quality.is_empty() {
             writeln!(f, "mesh quality (sJ: scaled Jacobian, AR: aspect ratio):")?;
-            for line in crate::mesh::quality::table(&s.quality).lines() {
+            for line in crate::fem::quality::table(&s.quality).lines() {
                 writeln!(f, "    {line}")?;
             }
         }

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 
 use crate::eigen::complex_modes::{ComplexMode, ComplexModes};
 use crate::eigen::real_modes::RealModes;
+use crate::fem::quality::BlockQuality;
 use crate::la::{LaError, Petsc};
-use crate::mesh::quality::BlockQuality;
 use crate::stages::complex::route_name;
 use crate::stages::model::Model;
 use crate::stages::operators::{LoadBalance, Operators};

@@ -9,7 +9,7 @@ use std::path::Path;
 
 use super::RunError;
 use super::SystemError;
-use crate::mesh::quality::BlockQuality;
+use crate::fem::quality::BlockQuality;
 use crate::mesh::{Mesh, MeshError};
 use crate::scene::{ModelSource, Scene};
 
@@ -125,7 +125,7 @@ pub fn check(scene: &Scene, scene_dir: &Path, ranks: usize) -> Result<CheckRepor
     let model = super::model::build_model(&scene.model, scene_dir)?
         .ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
     let mesh = &model.mesh;
-    let quality = crate::mesh::quality::check(mesh).map_err(|source| match &scene.model {
+    let quality = crate::fem::quality::check(mesh).map_err(|source| match &scene.model {
         ModelSource::Abaqus { file } | ModelSource::Gmsh { file, .. } => {
             RunError::ImportedQuality {
                 file: scene_dir.join(file),
@@ -262,11 +262,11 @@ mod tests {
 
     #[test]
     fn sparsity_of_one_hexahedron_couples_every_node() {
-        let steel = crate::fem::material::Material::isotropic("steel", 210e9, 0.3, 7850.0);
+        let steel = crate::mesh::material::Material::isotropic("steel", 210e9, 0.3, 7850.0);
         let mesh = crate::mesh::structured::block(
             [1.0; 3],
             [1, 1, 1],
-            crate::fem::shape::ElementKind::Hex8,
+            crate::mesh::ElementKind::Hex8,
             steel,
         );
         let mut fixed = vec![[false; 3]; 8];

@@ -66,7 +66,6 @@ pub fn lining_stiffness<'p>(
         }
     }
     let mesh = &model.mesh;
-    let k_l =
-        crate::la::fem_assembly::assemble_block_stiffness(petsc, mesh, dofs, &include, format)?;
+    let k_l = crate::fem::petsc::assemble_block_stiffness(petsc, mesh, dofs, &include, format)?;
     Ok(k_l)
 }

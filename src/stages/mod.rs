@@ -33,9 +33,9 @@ pub mod transient;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use crate::fem::petsc::SystemError;
 use crate::io::matrix_market::MatrixMarketError;
 use crate::io::results::ResultsError;
-use crate::la::fem_assembly::SystemError;
 use crate::la::LaError;
 
 /// Why a run stopped; every variant names the stage (and the key or file where one applies).
@@ -54,12 +54,12 @@ pub enum RunError {
     #[error("mesh: {0}")]
     Msh(#[from] crate::mesh::gmsh_msh::MshError),
     #[error("{0}")]
-    Quality(#[from] crate::mesh::quality::QualityError),
+    Quality(#[from] crate::fem::quality::QualityError),
     /// An imported mesh with an inverted or degenerate element: the file to fix comes first.
     #[error("{}: {source} (elements counted from 0 in the order of the file)", file.display())]
     ImportedQuality {
         file: std::path::PathBuf,
-        source: crate::mesh::quality::QualityError,
+        source: crate::fem::quality::QualityError,
     },
     #[error("brake model: {0}")]
     Brake(crate::invalid::InvalidSetting),
@@ -110,14 +110,14 @@ impl RunError {
 /// The model (None for user matrices), its mesh quality per block, and its operators.
 pub type ModelAndOperators<'p> = (
     Option<model::Model>,
-    Vec<crate::mesh::quality::BlockQuality>,
+    Vec<crate::fem::quality::BlockQuality>,
     operators::Operators<'p>,
 );
 
 /// What the stages before the transient produced (each None / empty when not asked for).
 pub struct Analyses<'p> {
     pub model: Option<model::Model>,
-    pub quality: Vec<crate::mesh::quality::BlockQuality>,
+    pub quality: Vec<crate::fem::quality::BlockQuality>,
     pub ops: operators::Operators<'p>,
     pub preload: Option<statics::Preloaded<'p>>,
     pub modes: Option<crate::eigen::real_modes::RealModes<'p>>,

@@ -6,8 +6,8 @@ use std::path::Path;
 use super::model::Model;
 use super::{RunError, Timings};
 use crate::fem::dofmap::DofMap;
+use crate::fem::petsc::{assemble_system_as, AssembledSystem};
 use crate::io::user_matrices::{load_sum, MatrixTerm};
-use crate::la::fem_assembly::{assemble_system_as, AssembledSystem};
 use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
 use crate::mesh::partition;
 use crate::scene::{ModelSource, Scene};
@@ -175,7 +175,7 @@ pub fn from_scene<'p>(
         _ => None,
     };
     let quality = timings.stage("mesh quality", || {
-        crate::mesh::quality::check(&model.mesh).map_err(|source| match &imported_from {
+        crate::fem::quality::check(&model.mesh).map_err(|source| match &imported_from {
             Some(file) => RunError::ImportedQuality {
                 file: file.clone(),
                 source,

@@ -1,10 +1,10 @@
 //! Helpers shared by the MPI suite.
 
 use squeal::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
-use squeal::fem::material::Material;
-use squeal::la::fem_assembly::{assemble_system, AssembledSystem};
+use squeal::fem::petsc::{assemble_system, AssembledSystem};
 use squeal::la::Petsc;
 use squeal::measure::{largest_abs, max_abs_difference};
+use squeal::mesh::material::Material;
 use squeal::mesh::Clamp;
 use squeal::mesh::Mesh;
 

@@ -17,7 +17,7 @@ use squeal::contact::kernel::{self, Channel, Observed, Part, PointRows};
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::eigen::complex_modes::{full, solve_dense, ComplexModeSettings, Operators};
 use squeal::eigen::stability::ModalProjection;
-use squeal::fem::assembly::Preallocation;
+use squeal::la::Preallocation;
 use squeal::la::{MatrixFormat, Petsc, SparseMatrix};
 use squeal::measure::{exceeds, nan_max, nan_min};
 

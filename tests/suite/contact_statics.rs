@@ -23,12 +23,12 @@
 use squeal::contact::kernel::Part;
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
-use squeal::fem::shape::ElementKind;
-use squeal::la::fem_assembly::{assemble_system_as, AssembledSystem};
+use squeal::fem::petsc::{assemble_system_as, AssembledSystem};
 use squeal::la::{DirectSolver, Factorization, MatrixFormat, Petsc};
 use squeal::measure::{exceeds, nan_max};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 use squeal::mesh::{Interface, InterfaceKind, Mesh, PressureLoad};
 use squeal::statics::{pressure_load, solve, StaticFactor, StaticSettings};
 

@@ -10,10 +10,10 @@
 //! beam's eigenfunction is smooth. The six rigid-body modes come first (shift below zero).
 
 use squeal::eigen::real_modes::RealModeRequest;
-use squeal::fem::shape::ElementKind;
 use squeal::la::Petsc;
 use squeal::measure::exceeds;
 use squeal::mesh::structured::block;
+use squeal::mesh::ElementKind;
 
 use super::common::{say, solve_modes, steel};
 

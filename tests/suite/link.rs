@@ -30,11 +30,11 @@
 //!   mean over the phases of its (closed-form, as above) damping ratios, to round-off.
 
 use squeal::eigen::real_modes::RealModeRequest;
-use squeal::fem::shape::ElementKind;
 use squeal::la::{Petsc, Vector};
 use squeal::measure::{nan_max, nan_min};
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 use squeal::post::modal_energy::{modal_energy, ModalEnergySettings, ModalSensors};
 
 use super::common::{one_rank_values, say, solve_modes, steel, suite_dir};

@@ -32,7 +32,7 @@
 //!   converge at second order (the differences of successive halvings shrink by at least 3).
 
 use squeal::contact::law::{FrictionLaw, NormalLaw};
-use squeal::fem::assembly::Preallocation;
+use squeal::la::Preallocation;
 use squeal::la::{
     DirectSolver, Factorization, LaError, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };

@@ -27,18 +27,18 @@ use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use std::path::{Path, PathBuf};
 
 use squeal::eigen::real_modes::{real_modes, RealModeRequest};
-use squeal::fem::assembly::Preallocation;
-use squeal::fem::shape::ElementKind;
+use squeal::fem::petsc::assemble_system;
 use squeal::io::matrix_market;
 use squeal::io::user_matrices::{load_sum, MatrixTerm};
-use squeal::la::fem_assembly::assemble_system;
 use squeal::la::one_column_gemm;
+use squeal::la::Preallocation;
 use squeal::la::{
     solve_quadratic, BlockAddPlan, DirectSolver, Factorization, MatrixFormat, Petsc,
     QuadraticOptions, Selection, SparseMatrix, Vector,
 };
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 
 use squeal::measure::{exceeds, nan_max, nan_min};
 

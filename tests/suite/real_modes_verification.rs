@@ -10,11 +10,11 @@
 //! n = 0..4 nodal diameters, D = E h^3 / (12 (1 - nu^2)).
 
 use squeal::eigen::real_modes::RealModeRequest;
-use squeal::fem::shape::ElementKind;
 use squeal::la::Petsc;
 use squeal::measure::{exceeds, nan_max, nan_min};
 use squeal::mesh::structured::{annulus, block};
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 
 use super::common::{rel, say, solve_modes, steel};
 

@@ -12,12 +12,12 @@
 //! - the discretization, estimated by Richardson from the mesh twice as coarse with order 2
 //!   (trilinear elements): |delta(2h) - delta(h)| / 3.
 
-use squeal::fem::shape::ElementKind;
-use squeal::la::fem_assembly::assemble_system_as;
+use squeal::fem::petsc::assemble_system_as;
 use squeal::la::{DirectSolver, Factorization, MatrixFormat, Petsc};
 use squeal::measure::exceeds;
 use squeal::mesh::structured::block;
 use squeal::mesh::Clamp;
+use squeal::mesh::ElementKind;
 
 use super::common::{rel, say, steel};
 

@@ -18,7 +18,7 @@
 //!   h = 1e-3), energy stays within 1e-5 of its initial value (measured <= 7e-7), at most 2
 //!   fixed-Jacobian iterations per step.
 
-use squeal::fem::assembly::Preallocation;
+use squeal::la::Preallocation;
 use squeal::la::{
     DirectSolver, Factorization, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
 };

@@ -1,6 +1,6 @@
 //! Materials shared by the pure-Rust test binaries.
 
-use squeal::fem::material::{Elasticity, Material};
+use squeal::mesh::material::{Elasticity, Material};
 
 /// A brake-pad lining: transversely isotropic, soft through the thickness (z).
 pub fn pad_lining() -> Material {

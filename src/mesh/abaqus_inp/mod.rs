@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use super::Mesh;
-use crate::fem::shape::ElementKind;
+use crate::mesh::ElementKind;
 pub use write::write;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -7,8 +7,8 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 
 use super::{element_kind, parse_keyword, InpError, Keyword, SAFE_TO_SKIP};
-use crate::fem::material::Elasticity;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Elasticity;
+use crate::mesh::ElementKind;
 
 /// An *ELEMENT block as read: kind, its ELSET, connectivity by Abaqus node ids, element ids.
 pub(super) struct RawBlock {

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::raw::{RawBlock, RawInp};
 use super::{ContactPair, InpError, InpModel};
-use crate::fem::material::Material;
+use crate::mesh::material::Material;
 use crate::mesh::ElementBlock;
 
 /// The resolution's state: the model so far and the maps from Abaqus ids.

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::abaqus_type;
-use crate::fem::material::Elasticity;
+use crate::mesh::material::Elasticity;
 use crate::mesh::Mesh;
 
 /// Writes a mesh (with clamps and surfaces) as an Abaqus input file; ids are 1-based

@@ -15,8 +15,8 @@
 
 use super::grid::{revolved_volume, Axis, CellFace, Frame, Grid, GridMesh};
 use super::{BrakeGeometry, Selector};
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 /// Angular width of each arm.
 const ARM_DEG: f64 = 6.0;

@@ -15,8 +15,8 @@
 
 use super::grid::{revolved_volume, Axis, CellFace, Frame, Grid, GridMesh};
 use super::{piston, BrakeGeometry, Selector};
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 /// Radial clearance between piston and bore.
 pub const BORE_CLEARANCE: f64 = 0.002;

@@ -16,8 +16,8 @@ use std::f64::consts::TAU;
 
 use super::grid::{Axis, CellFace, Frame, Grading, Grid, GridMesh};
 use super::{cells, BrakeGeometry, Selector};
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 /// Radial half-width of the clamped annulus around the bolt circle (the hub's face).
 pub const BOLT_HALF_WIDTH: f64 = 0.006;

@@ -8,8 +8,8 @@
 //! quadratic elements get their mid-edge nodes in the parameter space of the frame, so arcs
 //! are followed exactly at the nodes.
 
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 use crate::mesh::{ElementBlock, Mesh};
 
 /// How the cells of one segment are sized.
@@ -308,7 +308,7 @@ impl Grid {
         ];
         let mut nodes = corners.to_vec();
         if quadratic {
-            for [a, b] in crate::fem::shape::HEX_EDGES {
+            for [a, b] in crate::mesh::element::HEX_EDGES {
                 let (p, q) = (corners[a], corners[b]);
                 nodes.push([(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2]);
             }

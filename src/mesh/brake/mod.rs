@@ -17,9 +17,9 @@ pub mod piston;
 use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
-use crate::fem::material::{Elasticity, Material};
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::{Elasticity, Material};
 use crate::mesh::Clamp;
+use crate::mesh::ElementKind;
 use crate::mesh::Mesh;
 pub use crate::mesh::{Interface, InterfaceKind, PressureLoad};
 use grid::{Grid, GridMesh};

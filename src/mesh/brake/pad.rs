@@ -11,8 +11,8 @@
 
 use super::grid::{Axis, CellFace, Frame, Grid, GridMesh};
 use super::{cells, BrakeGeometry, Selector, Side};
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 const R_LINING: usize = 1;
 const T_LINING: usize = 1;

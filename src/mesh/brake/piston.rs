@@ -7,8 +7,8 @@ use std::f64::consts::{PI, TAU};
 
 use super::grid::{Axis, CellFace, Frame, Grid, GridMesh};
 use super::{cells, BrakeGeometry, Selector};
-use crate::fem::material::Material;
-use crate::fem::shape::ElementKind;
+use crate::mesh::material::Material;
+use crate::mesh::ElementKind;
 
 /// Radius of the vent hole in the piston bottom.
 pub const VENT_RADIUS: f64 = 0.004;
