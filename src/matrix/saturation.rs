@@ -5,12 +5,12 @@
 use std::time::Instant;
 
 use crate::eigen::complex_modes::{damping_ratio, DenseEigenpair};
+use crate::la::LaError;
 use crate::la::{Petsc, Vector};
 use crate::post::loudness::LoudnessSettings;
 use crate::post::pseudo_contact::ContactPseudoSystem;
 use crate::post::pseudo_trajectory::{pseudo_trajectory, PseudoTrajectorySettings};
-use crate::stages::loudness::{mode_loudness, Radiator};
-use crate::stages::RunError;
+use crate::post::radiator::{mode_loudness, Radiator};
 
 use super::point::{ModeSaturation, PointMode};
 
@@ -46,7 +46,7 @@ pub fn study<'p>(
     shapes: &[Vector<'p>],
     (pairs, modes): (&[DenseEigenpair], &[(usize, PointMode)]),
     margin: f64,
-) -> Result<Vec<ModeSaturation>, RunError> {
+) -> Result<Vec<ModeSaturation>, LaError> {
     let mut out = Vec::new();
     for k in chosen(modes, margin, inputs.modes) {
         let (index, mode) = &modes[k];

@@ -11,5 +11,6 @@ pub mod modal_energy;
 pub mod pseudo_contact;
 pub mod pseudo_period;
 pub mod pseudo_trajectory;
+pub mod radiator;
 pub mod spectrum;
 pub mod states;

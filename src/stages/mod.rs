@@ -98,6 +98,15 @@ pub enum RunError {
     },
 }
 
+impl From<crate::post::radiator::RadiatorError> for RunError {
+    fn from(e: crate::post::radiator::RadiatorError) -> Self {
+        match e {
+            crate::post::radiator::RadiatorError::Invalid(s) => RunError::Setting(s),
+            crate::post::radiator::RadiatorError::La(e) => RunError::La(e),
+        }
+    }
+}
+
 impl RunError {
     pub(crate) fn scene(key: &'static str, message: impl Into<String>) -> Self {
         RunError::Scene {

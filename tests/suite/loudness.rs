@@ -121,7 +121,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     };
     let mesh = &model.mesh;
     let dofs = ops.dofs.as_ref().ok_or("a DOF map")?;
-    let radiator = loudness::radiator(petsc, mesh, dofs, &settings).map_err(e)?;
+    let radiator = loudness::radiator(petsc, mesh, dofs, &settings).map_err(|x| x.to_string())?;
     let nominal = stages::link::Nominal {
         preload: &preload,
         modes: &modes,
