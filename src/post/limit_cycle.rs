@@ -97,9 +97,8 @@ pub struct LimitCycle {
 
 /// Characterizes signal `y` sampled at times `t` (resampled on the grid `dt` first).
 ///
-/// About 150 lines, on purpose: resampling, dominant frequency, envelope, saturation, growth
-/// fit, cycles and verdict in order, each able to end early with its verdict in the one
-/// `LimitCycle` it fills; apart they would pass that half-filled record along.
+/// Resampling, dominant frequency, envelope, saturation, growth fit, cycles and verdict in
+/// order, each able to end early with its verdict in the one `LimitCycle` it fills.
 pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings) -> LimitCycle {
     let mut out = LimitCycle::default();
     if t.len() < 16 || y.iter().any(|v| !v.is_finite()) {
@@ -187,8 +186,19 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
     out.saturation_time = Some(t_sat);
     let first = (((t_sat - t0) / dt).ceil() as usize).min(n - 1);
     let cycle = &u[first..];
+    let (starts, amplitudes) = cycles(cycle, 0.5 / (out.dominant_frequency * dt));
+    out.amplitudes = amplitudes;
+    out.cycle_starts = starts.iter().map(|&s| time((first as f64) + s)).collect();
+    out.period = autocorrelation_period(cycle, dt, out.dominant_frequency);
+    judge_cycles(&mut out, settings, t_sat);
+    out
+}
+
+/// The cycles of `cycle` (samples after the saturation): where each starts (upward crossings
+/// of the mean, at least `min_gap` samples apart, in fractional samples) and the
+/// peak-to-peak amplitude of each between two starts.
+fn cycles(cycle: &[f64], min_gap: f64) -> (Vec<f64>, Vec<f64>) {
     let mean = cycle.iter().sum::<f64>() / cycle.len() as f64;
-    let min_gap = 0.5 / (out.dominant_frequency * dt);
     let mut starts = Vec::new();
     for i in 1..cycle.len() {
         let (a, b) = (cycle[i - 1] - mean, cycle[i] - mean);
@@ -199,6 +209,7 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
             }
         }
     }
+    let mut amplitudes = Vec::new();
     for pair in starts.windows(2) {
         let (i, j) = (
             pair[0].ceil() as usize,
@@ -210,10 +221,14 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                 (a.min(v), b.max(v))
             });
-        out.amplitudes.push(hi - lo);
+        amplitudes.push(hi - lo);
     }
-    out.cycle_starts = starts.iter().map(|&s| time((first as f64) + s)).collect();
-    out.period = autocorrelation_period(cycle, dt, out.dominant_frequency);
+    (starts, amplitudes)
+}
+
+/// The verdict on the cycles after the saturation at `t_sat`: reached when the last
+/// `settings.cycles` peak-to-peak amplitudes vary by at most the tolerance.
+fn judge_cycles(out: &mut LimitCycle, settings: &LimitCycleSettings, t_sat: f64) {
     let last = &out.amplitudes[out.amplitudes.len().saturating_sub(settings.cycles)..];
     if out.amplitudes.len() < settings.cycles {
         out.verdict = format!(
@@ -221,7 +236,7 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
             out.amplitudes.len(),
             settings.cycles
         );
-        return out;
+        return;
     }
     let (lo, hi) = last
         .iter()
@@ -249,7 +264,6 @@ pub fn characterize(t: &[f64], y: &[f64], dt: f64, settings: &LimitCycleSettings
             100.0 * settings.tolerance
         )
     };
-    out
 }
 
 /// Whether signal `y` (times `t`, grid `dt`) has saturated and run at least `cycles` cycles
