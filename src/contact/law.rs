@@ -359,11 +359,12 @@ pub(crate) fn sample_sliding_laws(decay_speed: f64) -> [FrictionLaw; 3] {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 
     fn rel(a: f64, b: f64) -> f64 {
-        (a - b).abs() / b.abs().max(1e-300)
+        (a - b).abs() / crate::measure::nan_max(b.abs(), 1e-300)
     }
 
     /// Every derivative against a central difference (relative error below 1e-6), also at the
@@ -416,10 +417,10 @@ mod tests {
         for law in sample_sliding_laws(0.5) {
             for w in [-2.0, -3e-4, -1e-7, 0.0, 1e-7, 4e-4, 1.3] {
                 let t = law.traction(p, w);
-                let h = 1e-5 * w.abs().max(1e-3);
+                let h = 1e-5 * crate::measure::nan_max(w.abs(), 1e-3);
                 let fd_w =
                     (law.traction(p, w + h).traction - law.traction(p, w - h).traction) / (2.0 * h);
-                let scale = t.d_speed.abs().max(1e-3 * law.mu() * p);
+                let scale = crate::measure::nan_max(t.d_speed.abs(), 1e-3 * law.mu() * p);
                 assert!(
                     (fd_w - t.d_speed).abs() < 1e-6 * scale,
                     "{law:?} w = {w}: {fd_w} vs {}",
@@ -429,7 +430,8 @@ mod tests {
                 let fd_p = (law.traction(p + hp, w).traction - law.traction(p - hp, w).traction)
                     / (2.0 * hp);
                 assert!(
-                    (fd_p - t.d_pressure).abs() < 1e-6 * t.d_pressure.abs().max(1e-6),
+                    (fd_p - t.d_pressure).abs()
+                        < 1e-6 * crate::measure::nan_max(t.d_pressure.abs(), 1e-6),
                     "{law:?} w = {w}"
                 );
                 // Friction opposes the relative motion and never exceeds mu_static p.

@@ -174,7 +174,7 @@ impl<'p> TangentChange<'p> for TangentOperator<'_, 'p> {
         let channel = [Channel::Nor, Channel::Tan, Channel::Tan2, Channel::Conv]
             .get(key.1 as usize)
             .copied()
-            .ok_or_else(|| LaError::Invalid(format!("no channel {}", key.1)))?;
+            .expect("a column key names one of the four channels");
         let mut e = contact.c_nor.new_point_vector()?;
         if let Some(k) = key.0.checked_sub(contact.first_row) {
             if k < contact.local.len() {

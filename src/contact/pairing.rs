@@ -350,6 +350,7 @@ impl BoxTree {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::contact::law::{FrictionLaw, NormalLaw};

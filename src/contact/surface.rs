@@ -288,6 +288,7 @@ pub fn normalize(a: [f64; 3]) -> [f64; 3] {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

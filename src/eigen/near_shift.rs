@@ -236,6 +236,7 @@ pub fn eigenpairs_near(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::eigen::complex_modes::solve_dense;

@@ -138,13 +138,12 @@ pub fn real_modes<'p>(
     if let Some(k) = (0..sol.values.len())
         .find(|&k| !(sol.values[k].is_finite() && backward_errors[k].is_finite()))
     {
-        return Err(LaError::Invalid(format!(
-            "real modes: mode {} has eigenvalue {} and backward error {}: not finite; the \
-             operators hold NaN or Inf (check the materials, matrix files and contact state)",
-            k + 1,
-            sol.values[k],
-            backward_errors[k]
-        )));
+        return Err(LaError::NotFinite {
+            what: "real modes: mode",
+            index: k + 1,
+            value: sol.values[k],
+            backward_error: backward_errors[k],
+        });
     }
     let frequencies_hz: Vec<f64> = sol.values.iter().map(|&l| frequency_hz(l)).collect();
     let rigid = frequencies_hz

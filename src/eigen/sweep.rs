@@ -5,7 +5,8 @@
 use crate::invalid::InvalidSetting;
 use serde::{Deserialize, Serialize};
 
-use crate::contact::law::{FrictionLaw, NormalLaw};
+pub use crate::contact::vary::LawMismatch;
+use crate::contact::vary::{set_law_parameter, LawParameter};
 use crate::contact::ResolvedInterface;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -133,80 +134,33 @@ pub fn listed_or_spaced(
     }
 }
 
-/// A swept parameter that an interface's law does not have.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("sweep over {parameter}: interface '{interface}' has the law {law}; {needs}")]
-pub struct LawMismatch {
-    pub interface: String,
-    pub parameter: &'static str,
-    pub law: String,
-    pub needs: &'static str,
+impl SweepParameter {
+    /// The contact-law parameter this is (None: the pressure or the disc speed).
+    pub fn law(self) -> Option<LawParameter> {
+        match self {
+            SweepParameter::Mu => Some(LawParameter::Mu),
+            SweepParameter::P0 => Some(LawParameter::P0),
+            SweepParameter::Lambda => Some(LawParameter::Lambda),
+            SweepParameter::PressureBar | SweepParameter::DiscSpeed => None,
+        }
+    }
 }
 
-/// Sets a law parameter on the sliding interfaces (mu, p0, lambda); other parameters are not
-/// laws and are left to the caller. Errors name an interface whose law has no such parameter.
+/// Sets a law parameter on the sliding interfaces (`contact::vary`); the pressure and the
+/// disc speed are not laws and are left to the caller.
 pub fn apply_to_laws(
     parameter: SweepParameter,
     value: f64,
     interfaces: &mut [ResolvedInterface],
 ) -> Result<(), LawMismatch> {
-    for i in interfaces.iter_mut().filter(|i| i.friction.is_sliding()) {
-        match parameter {
-            SweepParameter::Mu => {
-                i.friction = match i.friction {
-                    FrictionLaw::Coulomb { slip_speed, .. } => FrictionLaw::Coulomb {
-                        mu: value,
-                        slip_speed,
-                    },
-                    FrictionLaw::Arctan { slip_speed, .. } => FrictionLaw::Arctan {
-                        mu: value,
-                        slip_speed,
-                    },
-                    other => {
-                        return Err(LawMismatch {
-                            interface: i.name.clone(),
-                            parameter: parameter.name(),
-                            law: format!("{other:?}"),
-                            needs: "a mu sweep needs the coulomb or arctan friction law",
-                        })
-                    }
-                }
-            }
-            SweepParameter::P0 | SweepParameter::Lambda => {
-                let NormalLaw::Exponential {
-                    p0,
-                    lambda,
-                    linear_below_gap,
-                } = i.normal
-                else {
-                    return Err(LawMismatch {
-                        interface: i.name.clone(),
-                        parameter: parameter.name(),
-                        law: format!("{:?}", i.normal),
-                        needs: "a sweep over p0 or lambda needs the exponential law",
-                    });
-                };
-                i.normal = if parameter == SweepParameter::P0 {
-                    NormalLaw::Exponential {
-                        p0: value,
-                        lambda,
-                        linear_below_gap,
-                    }
-                } else {
-                    NormalLaw::Exponential {
-                        p0,
-                        lambda: value,
-                        linear_below_gap,
-                    }
-                };
-            }
-            SweepParameter::PressureBar | SweepParameter::DiscSpeed => {}
-        }
+    match parameter.law() {
+        Some(law) => set_law_parameter(law, value, interfaces),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -444,6 +444,7 @@ pub fn track(points: &[Vec<DenseEigenpair>]) -> Tracks {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -82,6 +82,7 @@ pub fn tet_rule(n: usize) -> Rule {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

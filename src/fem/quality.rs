@@ -163,6 +163,7 @@ pub fn table(stats: &[BlockQuality]) -> String {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::mesh::material::Material;

@@ -173,6 +173,7 @@ pub fn append_raw(path: &Path, text: &str) -> std::io::Result<()> {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::matrix::point::{Outcome, PointMode, SolvedPoint};

@@ -24,6 +24,8 @@ pub enum MatrixMarketError {
     },
     #[error(transparent)]
     La(#[from] LaError),
+    #[error("an operator needs at least one matrix term")]
+    NoTerms,
 }
 
 /// A sparse matrix as coordinate triplets (0-based), lower triangle only when `symmetric`.
@@ -248,6 +250,7 @@ pub fn write(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

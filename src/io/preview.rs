@@ -298,6 +298,7 @@ pub fn save(path: &Path, rgb: &[u8], width: usize, height: usize) -> std::io::Re
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::mesh::material::Material;

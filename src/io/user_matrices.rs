@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::matrix_market::{read, MatrixMarketError};
 use crate::la::Preallocation;
-use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
+use crate::la::{MatrixFormat, Petsc, SparseMatrix};
 
 /// One term `coefficient x file` of an operator.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -66,7 +66,7 @@ pub fn load_sum<'p>(
     base: &Path,
 ) -> Result<UserMatrix<'p>, MatrixMarketError> {
     if terms.is_empty() {
-        return Err(LaError::Invalid("an operator needs at least one matrix term".into()).into());
+        return Err(MatrixMarketError::NoTerms);
     }
     let mut sum: HashMap<(u32, u32), f64> = HashMap::new();
     let mut n = None;

@@ -124,6 +124,7 @@ pub fn quadratic_eigenvalues(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -43,6 +43,14 @@ impl std::error::Error for PetscError {}
 pub enum LaError {
     #[error(transparent)]
     Petsc(#[from] PetscError),
+    /// An eigensolver's solution that is not finite: the operators hold NaN or Inf.
+    #[error("{what} {index} has eigenvalue {value} and backward error {backward_error}: not finite; the operators hold NaN or Inf (check the materials, matrix files and contact state)")]
+    NotFinite {
+        what: &'static str,
+        index: usize,
+        value: f64,
+        backward_error: f64,
+    },
     /// MUMPS reported a failure in INFOG(1) (PETSc does not always raise it).
     #[error(
         "MUMPS {phase} failed with INFOG(1) = {infog1}, INFOG(2) = {infog2} (solver prefix \

@@ -362,6 +362,7 @@ impl EigenvaluesFirst {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::la::lapack::eigen_general;

@@ -291,6 +291,7 @@ fn worst_region(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::super::point::{Outcome, PointMode, SolvedPoint};
     use super::*;

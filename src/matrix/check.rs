@@ -100,6 +100,7 @@ pub fn reduced_error(points: &[PointResult], margin: f64) -> Option<ReducedError
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
     use crate::matrix::point::{FullCheck, Outcome, SolvedPoint};

@@ -141,6 +141,7 @@ pub fn warm_order(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::super::{Axis, AxisRange, MatrixSettings};
     use super::*;

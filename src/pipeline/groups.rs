@@ -46,6 +46,7 @@ pub fn refusal(scene: &Scene, groups: usize, size: usize) -> Option<String> {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -425,6 +425,7 @@ pub fn slope(p: &[(f64, f64)]) -> f64 {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

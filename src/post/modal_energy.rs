@@ -339,6 +339,7 @@ fn oscillation(values: &[f64], window: &[usize]) -> f64 {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -281,7 +281,7 @@ impl Reduction {
         let a_basis = products(self, a, &mut work, &mut product)?;
         let reduced = reduced_operators(petsc, self, &[(a, &a_basis)])?
             .pop()
-            .ok_or_else(|| LaError::Invalid("reduction: one operator expected".into()))?;
+            .expect("one operator reduced, one returned");
         reduced.redistributed(petsc, self.columns.clone())
     }
 
@@ -324,13 +324,11 @@ pub fn reduce<'p>(
     let start = Instant::now();
     let world = petsc.world();
     let own = m.ownership();
-    if kept.len() != m.global_rows() {
-        return Err(LaError::Invalid(format!(
-            "reduction: {} kept flags for {} DOFs",
-            kept.len(),
-            m.global_rows()
-        )));
-    }
+    assert_eq!(
+        kept.len(),
+        m.global_rows(),
+        "reduction: one kept flag per DOF"
+    );
     // Numbering: kept DOFs in full order; modal coordinates after them on the last rank.
     let mut map = vec![-1i32; kept.len()];
     let mut n_kept = 0usize;
@@ -442,7 +440,7 @@ pub fn reduce<'p>(
     )?;
     let [stiffness, mass]: [SparseMatrix<'p>; 2] = operators
         .try_into()
-        .map_err(|_| LaError::Invalid("reduction: two operators expected".into()))?;
+        .unwrap_or_else(|_| unreachable!("two operators reduced, two returned"));
     partial.columns = balanced_rows(petsc, &stiffness, partial.natural.clone())?;
     let stiffness = stiffness.redistributed(petsc, partial.columns.clone())?;
     let mass = mass.redistributed(petsc, partial.columns.clone())?;

@@ -164,6 +164,7 @@ pub fn at_largest_phase(dofs: &DofMap, re: &[f64], im: &[f64]) -> Vec<[f64; 3]> 
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -109,11 +109,11 @@ pub fn complex_modes<'p>(
     for route in &out {
         let finite = |m: &&ComplexMode| m.eigenvalue.0.is_finite() && m.eigenvalue.1.is_finite();
         if let Some(bad) = route.modes.iter().find(|m| !finite(m)) {
-            return Err(RunError::from(LaError::Invalid(format!(
-                "complex modes ({:?} route): {} has eigenvalue {:?}: not finite; the operators \
-                 hold NaN or Inf (check the materials, damping, matrix files and contact state)",
-                route.route, bad.name, bad.eigenvalue
-            ))));
+            return Err(RunError::ComplexNotFinite {
+                route: format!("{:?}", route.route),
+                mode: bad.name.clone(),
+                eigenvalue: bad.eigenvalue,
+            });
         }
     }
     Ok(out)

@@ -47,6 +47,14 @@ pub enum RunError {
     Matrices(#[from] MatrixMarketError),
     #[error("{0}")]
     La(#[from] LaError),
+    #[error("real modes need symmetric K and M; the stiffness sum has relative asymmetry {stiffness:.2e} and the mass {mass:.2e} (unsymmetric terms go under model.circulatory)")]
+    Unsymmetric { stiffness: f64, mass: f64 },
+    #[error("complex modes ({route} route): {mode} has eigenvalue {eigenvalue:?}: not finite; the operators hold NaN or Inf (check the materials, damping, matrix files and contact state)")]
+    ComplexNotFinite {
+        route: String,
+        mode: String,
+        eigenvalue: (f64, f64),
+    },
     #[error("results: {0}")]
     Results(#[from] ResultsError),
     #[error("mesh: {0}")]

@@ -8,7 +8,7 @@ use super::{RunError, Timings};
 use crate::fem::dofmap::DofMap;
 use crate::fem::petsc::{assemble_system_as, AssembledSystem};
 use crate::io::user_matrices::{load_sum, MatrixTerm};
-use crate::la::{LaError, MatrixFormat, Petsc, SparseMatrix};
+use crate::la::{MatrixFormat, Petsc, SparseMatrix};
 use crate::mesh::partition;
 use crate::scene::{ModelSource, Scene};
 
@@ -112,11 +112,10 @@ pub fn read_matrices<'p>(
         user_complex = Some((k_full, c));
     }
     if k.asymmetry > 1e-12 || m.asymmetry > 1e-12 {
-        return Err(LaError::Invalid(format!(
-            "real modes need symmetric K and M; the stiffness sum has relative asymmetry {:.2e} and the mass {:.2e} (unsymmetric terms go under model.circulatory)",
-            k.asymmetry, m.asymmetry
-        ))
-        .into());
+        return Err(RunError::Unsymmetric {
+            stiffness: k.asymmetry,
+            mass: m.asymmetry,
+        });
     }
     Ok(Operators {
         k0: k.matrix,

@@ -276,6 +276,7 @@ fn observed_motion<'p>(
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::most_unstable;
 

@@ -282,7 +282,7 @@ impl<'p> TangentSolver<'p> {
         let t = Instant::now();
         self.solver
             .as_ref()
-            .ok_or_else(|| LaError::Invalid("static tangent: no factor to solve with".into()))?
+            .expect("the tangent is factorized before it solves")
             .solve(b, x)?;
         self.seconds_solving += t.elapsed().as_secs_f64();
         self.solves += 1;

@@ -654,6 +654,7 @@ fn retry_with(control: &mut StepControl, fallback: u8, eliminating: bool) -> &'s
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::attempt_history;
 

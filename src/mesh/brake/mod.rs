@@ -591,6 +591,7 @@ pub fn generate_with_size(spec: &BrakeSpec, h: f64) -> BrakeModel {
 }
 
 #[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 

@@ -6,6 +6,10 @@ use super::{Jacobian, Newmark, KRYLOV_MAX};
 use crate::la::gmres::{gmres, Preconditioned};
 use crate::la::{LaError, LowRankUpdate, Operator, TangentChange, Vector};
 
+/// Newton-Krylov is chosen only where the factor keeps its matrix
+/// (`AdaptiveNewmark::attempt`, `next_attempt`).
+const NEEDS_MATRIX: &str = "Newton-Krylov runs only with the assembled Jacobian";
+
 impl<'p> Newmark<'_, 'p> {
     /// Whether a Newton-Krylov correction of the last step attempt was inexact (GMRES ended
     /// at its iteration limit): only then can a full Newton do what it did not.
@@ -15,10 +19,7 @@ impl<'p> Newmark<'_, 'p> {
 
     /// dz = -(J - X) dq by products (a Krylov correction does not satisfy J dq = R).
     pub(super) fn linear_change_from_matrix(&mut self) -> Result<(), LaError> {
-        let matrix =
-            self.jacobian.matrix.as_ref().ok_or_else(|| {
-                LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into())
-            })?;
+        let matrix = self.jacobian.matrix.as_ref().expect(NEEDS_MATRIX);
         matrix.mult(&self.dq, &mut self.dz)?;
         if let Some(extra) = &self.jacobian.extra {
             self.tmp.set_all(0.0)?;
@@ -105,10 +106,7 @@ fn apply_consistent<'p>(
     x: &Vector<'p>,
     y: &mut Vector<'p>,
 ) -> Result<(), LaError> {
-    let matrix = jacobian
-        .matrix
-        .as_ref()
-        .ok_or_else(|| LaError::Invalid("Newton-Krylov needs the assembled Jacobian".into()))?;
+    let matrix = jacobian.matrix.as_ref().expect(NEEDS_MATRIX);
     matrix.mult(x, y)?;
     change.mult_add(x, y)
 }
