@@ -59,25 +59,7 @@ fn modified(path: &Path) -> Option<SystemTime> {
 /// Starts the scene on 2 ranks, waits for its first checkpoint, then for a third of a
 /// checkpoint interval, and kills every rank with SIGKILL (mpirun then ends).
 fn run_and_kill(dir: &Path) -> usize {
-    let mut mpirun = Command::new("mpirun")
-        .args([
-            "-n",
-            "2",
-            env!("CARGO_BIN_EXE_squeal"),
-            "run",
-            "scene.toml",
-            "-o",
-            "out",
-        ])
-        .current_dir(dir)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("SQUEAL_PROGRESS", "0")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("mpirun starts (scripts/setup installs openmpi-bin)");
+    let mut mpirun = start_2_ranks(dir);
     let checkpoint = dir.join("out/checkpoint.h5");
     let start = Instant::now();
     let first = loop {
@@ -226,25 +208,7 @@ fn journal_lines(dir: &Path) -> usize {
 /// Starts the matrix on 2 ranks, waits until its journal holds a quarter of the points, and
 /// kills every rank with SIGKILL while the next points are being computed.
 fn run_matrix_and_kill(dir: &Path) -> usize {
-    let mut mpirun = Command::new("mpirun")
-        .args([
-            "-n",
-            "2",
-            env!("CARGO_BIN_EXE_squeal"),
-            "run",
-            "scene.toml",
-            "-o",
-            "out",
-        ])
-        .current_dir(dir)
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
-        .env("SQUEAL_PROGRESS", "0")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("mpirun starts (scripts/setup installs openmpi-bin)");
+    let mut mpirun = start_2_ranks(dir);
     let start = Instant::now();
     while journal_lines(dir) < 1 + MATRIX_POINTS / 4 {
         assert!(
@@ -257,20 +221,7 @@ fn run_matrix_and_kill(dir: &Path) -> usize {
         );
         std::thread::sleep(Duration::from_millis(5));
     }
-    let ranks = String::from_utf8(
-        Command::new("pgrep")
-            .args(["-P", &mpirun.id().to_string()])
-            .output()
-            .unwrap()
-            .stdout,
-    )
-    .unwrap();
-    let pids: Vec<&str> = ranks.split_whitespace().collect();
-    assert_eq!(pids.len(), 2, "ranks of mpirun {}: {ranks}", mpirun.id());
-    for pid in &pids {
-        Command::new("kill").args(["-KILL", pid]).status().unwrap();
-    }
-    assert!(!mpirun.wait().unwrap().success(), "a killed run ended well");
+    kill_ranks(&mut mpirun);
     journal_lines(dir).saturating_sub(1)
 }
 
@@ -401,4 +352,45 @@ fn a_noise_matrix_killed_while_computing_resumes_to_the_uninterrupted_run() {
             "{name}: {diff:e} of the largest (bound {bound:e})\n{resumed}"
         );
     }
+}
+
+/// `squeal run scene.toml -o out` on 2 ranks in `dir`, its output discarded.
+fn start_2_ranks(dir: &Path) -> std::process::Child {
+    Command::new("mpirun")
+        .args([
+            "-n",
+            "2",
+            env!("CARGO_BIN_EXE_squeal"),
+            "run",
+            "scene.toml",
+            "-o",
+            "out",
+        ])
+        .current_dir(dir)
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .env("OMPI_MCA_rmaps_base_oversubscribe", "1")
+        .env("SQUEAL_PROGRESS", "0")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("mpirun starts (scripts/setup installs openmpi-bin)")
+}
+
+/// Kills both ranks of `mpirun` with SIGKILL and waits for it to end (not well).
+fn kill_ranks(mpirun: &mut std::process::Child) {
+    let ranks = String::from_utf8(
+        Command::new("pgrep")
+            .args(["-P", &mpirun.id().to_string()])
+            .output()
+            .unwrap()
+            .stdout,
+    )
+    .unwrap();
+    let pids: Vec<&str> = ranks.split_whitespace().collect();
+    assert_eq!(pids.len(), 2, "ranks of mpirun {}: {ranks}", mpirun.id());
+    for pid in &pids {
+        Command::new("kill").args(["-KILL", pid]).status().unwrap();
+    }
+    assert!(!mpirun.wait().unwrap().success(), "a killed run ended well");
 }
