@@ -24,6 +24,7 @@ pub mod parallel;
 pub mod pipeline;
 pub mod post;
 pub mod progress;
+pub mod range;
 pub mod reduce;
 pub mod report;
 pub mod scene;

@@ -3,6 +3,7 @@
 //! by MAC so every track is one physical mode (the coalescence picture).
 
 use crate::invalid::InvalidSetting;
+use crate::range::AxisRange;
 use serde::{Deserialize, Serialize};
 
 pub use crate::contact::vary::LawMismatch;
@@ -46,93 +47,97 @@ impl SweepParameter {
 }
 
 /// The `[sweep]` table: a parameter and its values (a list, or `from`, `to`, `points`).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Written flat in the scene (`parameter = "mu"`, `from = 0.2`, ...), read through
+/// `SweepTable` so that unknown keys are still refused.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "SweepTable", into = "SweepTable")]
 pub struct SweepSettings {
     pub parameter: SweepParameter,
-    #[serde(default)]
-    pub values: Vec<f64>,
-    #[serde(default)]
-    pub from: Option<f64>,
-    #[serde(default)]
-    pub to: Option<f64>,
-    #[serde(default)]
-    pub points: Option<usize>,
+    pub range: AxisRange,
+}
+
+/// The scene's flat form of `SweepSettings` (serde's `flatten` cannot be combined with
+/// `deny_unknown_fields`).
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SweepTable {
+    parameter: SweepParameter,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    values: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    from: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    to: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    points: Option<usize>,
+}
+
+impl From<SweepTable> for SweepSettings {
+    fn from(t: SweepTable) -> Self {
+        let range = AxisRange {
+            values: t.values,
+            from: t.from,
+            to: t.to,
+            points: t.points,
+        };
+        SweepSettings {
+            parameter: t.parameter,
+            range,
+        }
+    }
+}
+
+impl From<SweepSettings> for SweepTable {
+    fn from(s: SweepSettings) -> Self {
+        let r = s.range;
+        SweepTable {
+            parameter: s.parameter,
+            values: r.values,
+            from: r.from,
+            to: r.to,
+            points: r.points,
+        }
+    }
 }
 
 impl SweepSettings {
     pub fn validate(&self) -> Result<(), InvalidSetting> {
-        // Checked before the values are made: a huge count would be allocated first.
-        if let Some(n) = self.points.filter(|&n| n > MAX_SWEEP_POINTS) {
-            return Err(InvalidSetting::new(
-                "sweep.points",
-                format!(" = {n}: at most {MAX_SWEEP_POINTS} (each point re-solves the preload)"),
-            ));
-        }
-        let values = self.values();
-        if values.is_empty() {
+        self.range.check_form("sweep", MAX_SWEEP_POINTS)?;
+        if self.values().is_empty() {
             return Err(InvalidSetting::new(
                 "sweep",
                 ": give 'values = [...]' or 'from', 'to' and 'points' (at least 2)",
             ));
         }
-        if !self.values.is_empty() && (self.from.is_some() || self.to.is_some()) {
-            return Err(InvalidSetting::new(
-                "sweep",
-                ": give either 'values' or 'from'/'to'/'points', not both",
-            ));
-        }
-        for v in &values {
-            let ok = v.is_finite()
+        let admits = |v: f64| {
+            v.is_finite()
                 && match self.parameter {
-                    SweepParameter::Mu => *v >= 0.0,
-                    _ => *v > 0.0,
-                };
-            if !ok {
-                return Err(InvalidSetting::new(
-                    "sweep.values",
-                    format!(
-                        ": {v} is not a valid {} (finite, {})",
-                        self.parameter.name(),
-                        if self.parameter == SweepParameter::Mu {
-                            "non-negative"
-                        } else {
-                            "positive"
-                        }
-                    ),
-                ));
-            }
+                    SweepParameter::Mu => v >= 0.0,
+                    _ => v > 0.0,
+                }
+        };
+        if let Some(v) = self.range.first_refused(admits) {
+            let sign = if self.parameter == SweepParameter::Mu {
+                "non-negative"
+            } else {
+                "positive"
+            };
+            let detail = format!(
+                ": {v} is not a valid {} (finite, {sign})",
+                self.parameter.name()
+            );
+            return Err(InvalidSetting::new("sweep.values", detail));
         }
         Ok(())
     }
 
     pub fn values(&self) -> Vec<f64> {
-        listed_or_spaced(&self.values, self.from, self.to, self.points)
+        self.range.values()
     }
 }
 
 /// The most points a sweep takes from `from`/`to`/`points`.
 pub const MAX_SWEEP_POINTS: usize = 1 << 16;
-
-/// The values of a swept axis: the list when given, else `points` evenly spaced from `from`
-/// to `to` (one point when from = to); empty when neither is complete.
-pub fn listed_or_spaced(
-    values: &[f64],
-    from: Option<f64>,
-    to: Option<f64>,
-    points: Option<usize>,
-) -> Vec<f64> {
-    if !values.is_empty() {
-        return values.to_vec();
-    }
-    match (from, to, points) {
-        (Some(a), Some(b), Some(1)) if a == b => vec![a],
-        (Some(a), Some(b), Some(n)) if n >= 2 => (0..n)
-            .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
-            .collect(),
-        _ => Vec::new(),
-    }
-}
 
 impl SweepParameter {
     /// The contact-law parameter this is (None: the pressure or the disc speed).
@@ -168,10 +173,7 @@ mod tests {
     fn a_huge_point_count_is_refused_before_it_is_allocated() {
         let s = SweepSettings {
             parameter: SweepParameter::Mu,
-            values: Vec::new(),
-            from: Some(0.0),
-            to: Some(0.5),
-            points: Some(1 << 40),
+            range: AxisRange::spaced(0.0, 0.5, 1 << 40),
         };
         let e = s.validate().unwrap_err();
         assert_eq!(e.key, "sweep.points");
@@ -181,19 +183,13 @@ mod tests {
     fn values_from_range_and_validation_names_the_key() {
         let s = SweepSettings {
             parameter: SweepParameter::Mu,
-            values: Vec::new(),
-            from: Some(0.0),
-            to: Some(0.5),
-            points: Some(6),
+            range: AxisRange::spaced(0.0, 0.5, 6),
         };
         assert_eq!(s.values().len(), 6);
         assert!((s.values()[5] - 0.5).abs() < 1e-15);
         s.validate().unwrap();
         let bad = SweepSettings {
-            values: vec![0.1, f64::NAN],
-            from: None,
-            to: None,
-            points: None,
+            range: AxisRange::listed(vec![0.1, f64::NAN]),
             ..s
         };
         assert_eq!(bad.validate().unwrap_err().key, "sweep.values");

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::eigen::sweep::SweepParameter;
 use crate::invalid::InvalidSetting;
-use crate::measure::{greatest, smallest};
+pub use crate::range::AxisRange;
 
 /// A parameter of the operating point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
@@ -122,40 +122,6 @@ fn is_true(b: &bool) -> bool {
 
 /// Points also solved on the full model when the reduced one solves the matrix, by default.
 pub const DEFAULT_FULL_CHECKS: usize = 3;
-
-/// One axis: a list of values, or `from`, `to` (and `points`, for a grid).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AxisRange {
-    #[serde(default)]
-    pub values: Vec<f64>,
-    #[serde(default)]
-    pub from: Option<f64>,
-    #[serde(default)]
-    pub to: Option<f64>,
-    #[serde(default)]
-    pub points: Option<usize>,
-}
-
-impl AxisRange {
-    /// The grid values of this axis.
-    pub fn values(&self) -> Vec<f64> {
-        crate::eigen::sweep::listed_or_spaced(&self.values, self.from, self.to, self.points)
-    }
-
-    /// The range sampled (smallest, largest value).
-    pub fn range(&self) -> (f64, f64) {
-        match (self.from, self.to) {
-            (Some(a), Some(b)) => (a.min(b), a.max(b)),
-            _ => {
-                let v = &self.values;
-                let lo = smallest(v.iter().copied());
-                let hi = greatest(v.iter().copied());
-                (lo, hi)
-            }
-        }
-    }
-}
 
 /// Properties of the lining against temperature, interpolated linearly between the rows: the
 /// friction coefficient mu(T), the lining's stiffness E_lining(T), or both.
@@ -417,16 +383,7 @@ impl MatrixSettings {
 
     fn validate_axis(&self, axis: Axis, range: &AxisRange) -> Result<(), InvalidSetting> {
         let key = format!("matrix.axes.{}", axis.name());
-        let has_range = range.from.is_some() || range.to.is_some();
-        if !range.values.is_empty() && (has_range || range.points.is_some()) {
-            let detail =
-                ": give either 'values' or 'from'/'to' (and 'points' for a grid), not both";
-            return Err(InvalidSetting::new(key, detail));
-        }
-        if let Some(n) = range.points.filter(|&n| n > MAX_POINTS) {
-            let detail = format!(" = {n}: at most {MAX_POINTS}");
-            return Err(InvalidSetting::new(format!("{key}.points"), detail));
-        }
+        range.check_form(&key, MAX_POINTS)?;
         let usable = match self.sampling {
             Sampling::Grid => !range.values().is_empty(),
             Sampling::Sobol => range.from.is_some() && range.to.is_some() && range.points.is_none(),
@@ -438,14 +395,7 @@ impl MatrixSettings {
             };
             return Err(InvalidSetting::new(key, detail));
         }
-        let ends = [range.from, range.to].into_iter().flatten();
-        if let Some(v) = range
-            .values
-            .iter()
-            .copied()
-            .chain(ends)
-            .find(|&v| !axis.admits(v))
-        {
+        if let Some(v) = range.first_refused(|v| axis.admits(v)) {
             let detail = format!(
                 ": {v} is not a valid {} ({})",
                 axis.name(),

@@ -180,10 +180,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
     }
     let sweep = SweepSettings {
         parameter: SweepParameter::Mu,
-        values: vec![0.3, 0.35],
-        from: None,
-        to: None,
-        points: None,
+        range: squeal::range::AxisRange::listed(vec![0.3, 0.35]),
     };
     let input = stages::sweep::SweepInputs {
         k0: &ops.k0,
