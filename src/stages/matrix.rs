@@ -31,7 +31,7 @@ use crate::statics::{Factored, Start, StaticError, StaticSettings, StaticState};
 
 pub use super::matrix_lining::lining_stiffness;
 use super::matrix_lining::{LiningOperator, LiningParts};
-use super::matrix_share::share_dense;
+use super::matrix_share::{share_dense, PointFailure};
 
 /// What the matrix needs from the earlier stages.
 pub struct MatrixInputs<'a, 'p> {
@@ -236,10 +236,10 @@ pub fn matrix<'p>(
         }
         let mut own = prepared.get(rank).and_then(|p| p.solve_dense(m));
         for (b, point) in prepared.into_iter().enumerate() {
-            let dense = match point.statics.is_ok() {
-                true => share_dense(comm, b, (b == rank).then(|| own.take()).flatten(), m),
-                false => Err(String::new()),
-            };
+            let dense = point
+                .statics
+                .is_ok()
+                .then(|| share_dense(comm, b, (b == rank).then(|| own.take()).flatten(), m));
             let result = solver.finish(petsc, settings, point, dense)?;
             record(&result)?;
             computed.push(result);
@@ -276,7 +276,7 @@ struct Prepared<'p> {
     values: Vec<f64>,
     started: Instant,
     conditions: Conditions,
-    statics: Result<Projected<'p>, String>,
+    statics: Result<Projected<'p>, PointFailure>,
 }
 
 /// A point's static state and its projected stiffness and damping (m x m, column-major).
@@ -298,11 +298,11 @@ impl<'p> Prepared<'p> {
 
     /// The dense complex modes of the projected operators (m coordinates) and the seconds
     /// they took; None without a static state.
-    fn solve_dense(&self, m: usize) -> Option<Result<(Vec<DenseEigenpair>, f64), String>> {
+    fn solve_dense(&self, m: usize) -> Option<Result<(Vec<DenseEigenpair>, f64), PointFailure>> {
         let projected = self.statics.as_ref().ok()?;
         let t = Instant::now();
         let pairs =
-            solve_dense(m, &projected.kp, &projected.cp).map_err(|e| format!("complex modes: {e}"));
+            solve_dense(m, &projected.kp, &projected.cp).map_err(PointFailure::ComplexModes);
         Some(pairs.map(|p| (p, t.elapsed().as_secs_f64())))
     }
 }
@@ -422,7 +422,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         warm: &Vector<'p>,
         factor: &mut Option<Factored<'p>>,
         cold_budget: usize,
-    ) -> Result<Result<PointStatics<'p>, String>, RunError> {
+    ) -> Result<Result<PointStatics<'p>, PointFailure>, RunError> {
         let contact = problem
             .contact
             .with_laws(conditions.laws.clone(), conditions.speed)?;
@@ -452,12 +452,13 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             // 11 points of the 100k and 600k matrices that failed so on 2026-11-27, warm and
             // cold, had NaN in their tangent instead: a joint's stick law, since fixed.)
             Err(e @ StaticError::SingularTangent { .. }) => {
-                return Ok(Err(format!("static state: from the nearest point: {e}; not retried from the unloaded state (to check it, run this point as a scene of its own)")));
+                return Ok(Err(PointFailure::SingularFromNeighbour(Box::new(e))));
             }
             Err(warm_error) => match solve(None) {
                 Ok(s) => (s, true),
                 Err(cold) => {
-                    return Ok(Err(format!("static state: from the nearest point: {warm_error}; from the unloaded state: {cold}")));
+                    let (warm, cold) = (Box::new(warm_error), Box::new(cold));
+                    return Ok(Err(PointFailure::NoStaticState { warm, cold }));
                 }
             },
         };
@@ -528,7 +529,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
     }
 
     /// A prepared point finished with its dense complex modes (`dense`: eigenpairs and the
-    /// seconds they took, or why they failed): its result.
+    /// seconds they took, or why they failed; None when the static state failed): its result.
     ///
     /// # Collective
     fn finish(
@@ -536,7 +537,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         petsc: &'p Petsc,
         settings: &MatrixSettings,
         prepared: Prepared<'p>,
-        dense: Result<(Vec<DenseEigenpair>, f64), String>,
+        dense: Option<Result<(Vec<DenseEigenpair>, f64), PointFailure>>,
     ) -> Result<PointResult, RunError> {
         let Prepared {
             index,
@@ -545,11 +546,11 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             conditions,
             statics,
         } = prepared;
-        let failed = |reason: String, values: Vec<f64>| PointResult {
+        let failed = |reason: PointFailure, values: Vec<f64>| PointResult {
             index,
             values,
             outcome: Outcome::Failed {
-                reason,
+                reason: reason.to_string(),
                 seconds: started.elapsed().as_secs_f64(),
             },
         };
@@ -557,6 +558,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             Ok(p) => (p.point, p.seconds),
             Err(reason) => return Ok(failed(reason, values)),
         };
+        let dense = dense.expect("dense modes for a solved static state");
         let modes = match dense.and_then(|(pairs, seconds)| Ok((self.label(pairs)?, seconds))) {
             Ok(m) => m,
             Err(reason) => return Ok(failed(reason, values)),
@@ -617,7 +619,7 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         contact: &ContactModel<'p>,
         state: &ContactState,
         lining: f64,
-    ) -> Result<PointModes, String> {
+    ) -> Result<PointModes, PointFailure> {
         // The superelement's contact model has the full one's points, in the same order on
         // the same ranks: its state projects on the same observed modes.
         let extra = self.lining_extra(lining);
@@ -626,18 +628,18 @@ impl<'a, 'p> PointSolver<'a, 'p> {
             .stability
             .operators_with_stiffness(comm, contact, state, &extra);
         let pairs = solve_dense(self.stability.projection.size, &kp, &cp)
-            .map_err(|e| format!("complex modes: {e}"))?;
+            .map_err(PointFailure::ComplexModes)?;
         self.label(pairs)
     }
 
     /// Complex modes labelled, or why they cannot be.
-    fn label(&self, mut pairs: Vec<DenseEigenpair>) -> Result<PointModes, String> {
+    fn label(&self, mut pairs: Vec<DenseEigenpair>) -> Result<PointModes, PointFailure> {
         let modes = self.labelled(&mut pairs);
         if modes
             .iter()
             .any(|(_, m)| !(m.re.is_finite() && m.im.is_finite()))
         {
-            return Err("complex modes: an eigenvalue is not finite (NaN or Inf)".to_string());
+            return Err(PointFailure::NotFinite);
         }
         Ok(PointModes { modes, pairs })
     }
@@ -676,13 +678,13 @@ impl<'a, 'p> PointSolver<'a, 'p> {
         let budget = self.cold_budget;
         let solved =
             Self::solve_static(petsc, problem, statics, conditions, &start, factor, budget)?;
-        let failed = |reason: String| FullCheck {
+        let failed = |reason: PointFailure| FullCheck {
             displacement_error: f64::NAN,
             braking_torque: f64::NAN,
             normal_force: f64::NAN,
             modes: Vec::new(),
             seconds: t.elapsed().as_secs_f64(),
-            failure: Some(reason),
+            failure: Some(reason.to_string()),
         };
         let point = match solved {
             Ok(p) => p,

@@ -1,10 +1,33 @@
 //! A noise-matrix point's dense complex modes, solved on one rank of the group, shared with
-//! the others.
+//! the others, and why a point fails.
 
 use mpi::topology::SimpleCommunicator;
 
 use crate::eigen::complex_modes::DenseEigenpair;
+use crate::la::DenseError;
 use crate::parallel::{broadcast_f64s, broadcast_string};
+use crate::statics::StaticError;
+
+/// Why a point of the matrix has no result. The matrix records it (as its text) and goes on.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum PointFailure {
+    /// A (nearly) singular tangent at the point's own load and laws, from the neighbour's
+    /// state: not retried from the unloaded state (see `solve_static`).
+    #[error("static state: from the nearest point: {0}; not retried from the unloaded state (to check it, run this point as a scene of its own)")]
+    SingularFromNeighbour(Box<StaticError>),
+    #[error("static state: from the nearest point: {warm}; from the unloaded state: {cold}")]
+    NoStaticState {
+        warm: Box<StaticError>,
+        cold: Box<StaticError>,
+    },
+    #[error("complex modes: {0}")]
+    ComplexModes(DenseError),
+    #[error("complex modes: an eigenvalue is not finite (NaN or Inf)")]
+    NotFinite,
+    /// The failure of the rank that solved the dense modes, as that rank gave it.
+    #[error("{0}")]
+    OnSolvingRank(String),
+}
 
 /// What `root` found (`local` on that rank: the eigenpairs with m coordinates each and the
 /// seconds they took, or why they failed), on every rank.
@@ -13,20 +36,20 @@ use crate::parallel::{broadcast_f64s, broadcast_string};
 pub(super) fn share_dense(
     comm: &SimpleCommunicator,
     root: usize,
-    local: Option<Result<(Vec<DenseEigenpair>, f64), String>>,
+    local: Option<Result<(Vec<DenseEigenpair>, f64), PointFailure>>,
     m: usize,
-) -> Result<(Vec<DenseEigenpair>, f64), String> {
+) -> Result<(Vec<DenseEigenpair>, f64), PointFailure> {
     let root = root as i32;
     // [1, seconds, then per pair Re(s), Im(s) and m coordinates (Re, Im)], or [0] and a message.
-    let (mut data, mut message) = match local {
-        Some(Ok((pairs, seconds))) => (encode(&pairs, seconds, m), String::new()),
-        Some(Err(reason)) => (vec![0.0], reason),
-        None => (Vec::new(), String::new()),
+    let (mut data, mut message, own_failure) = match local {
+        Some(Ok((pairs, seconds))) => (encode(&pairs, seconds, m), String::new(), None),
+        Some(Err(failure)) => (vec![0.0], failure.to_string(), Some(failure)),
+        None => (Vec::new(), String::new(), None),
     };
     broadcast_f64s(comm, root, &mut data);
     if data.first() != Some(&1.0) {
         broadcast_string(comm, root, &mut message);
-        return Err(message);
+        return Err(own_failure.unwrap_or(PointFailure::OnSolvingRank(message)));
     }
     Ok(decode(&data, m))
 }
