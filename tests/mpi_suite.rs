@@ -112,7 +112,7 @@ enum Verdict {
 }
 
 impl Verdict {
-    fn of(result: &Result<(), String>, skipped: bool) -> Verdict {
+    fn of(result: &suite::TestResult, skipped: bool) -> Verdict {
         match (result, skipped) {
             (Err(_), _) => Verdict::Failed,
             (Ok(()), true) => Verdict::Skipped,

@@ -1,5 +1,6 @@
 //! Helpers shared by the MPI suite.
 
+use super::TestResult;
 use squeal::eigen::real_modes::{real_modes, RealModeRequest, RealModes};
 use squeal::fem::petsc::{assemble_system, AssembledSystem};
 use squeal::la::Petsc;
@@ -17,8 +18,8 @@ pub fn solve_modes<'p>(
     mesh: &Mesh,
     clamps: &[Clamp],
     request: &RealModeRequest,
-) -> Result<(AssembledSystem<'p>, RealModes<'p>), String> {
-    let system = assemble_system(petsc, mesh, clamps).map_err(|e| e.to_string())?;
+) -> TestResult<(AssembledSystem<'p>, RealModes<'p>)> {
+    let system = assemble_system(petsc, mesh, clamps)?;
     let modes = real_modes(
         petsc,
         &system.stiffness,
@@ -26,8 +27,7 @@ pub fn solve_modes<'p>(
         system.is_free_free(),
         request,
         "",
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     Ok((system, modes))
 }
 
@@ -49,11 +49,11 @@ pub fn max_scaled_difference(one: &[f64], other: &[f64]) -> f64 {
 }
 
 /// Ok when `value <= bound`; an error naming `what` otherwise, and when `value` is NaN.
-pub fn check_le(what: &str, value: f64, bound: f64) -> Result<(), String> {
+pub fn check_le(what: &str, value: f64, bound: f64) -> TestResult {
     if value <= bound {
         Ok(())
     } else {
-        Err(format!("{what}: {value:e} exceeds the bound {bound:e}"))
+        Err(format!("{what}: {value:e} exceeds the bound {bound:e}").into())
     }
 }
 
@@ -72,7 +72,7 @@ pub fn one_rank_values(
     petsc: &squeal::la::Petsc,
     name: &str,
     values: &[f64],
-) -> Result<Option<Vec<f64>>, String> {
+) -> TestResult<Option<Vec<f64>>> {
     let rows = one_rank_rows(petsc, name, &[values.to_vec()])?;
     Ok(rows.map(|mut r| r.remove(0)))
 }
@@ -83,10 +83,10 @@ pub fn one_rank_rows(
     petsc: &squeal::la::Petsc,
     name: &str,
     rows: &[Vec<f64>],
-) -> Result<Option<Vec<Vec<f64>>>, String> {
+) -> TestResult<Option<Vec<Vec<f64>>>> {
     let file = suite_dir().join(format!("{name}-1-rank.txt"));
     if petsc.size() == 1 {
-        std::fs::create_dir_all(suite_dir()).map_err(|e| e.to_string())?;
+        std::fs::create_dir_all(suite_dir())?;
         let text: Vec<String> = rows
             .iter()
             .map(|row| {
@@ -96,7 +96,7 @@ pub fn one_rank_rows(
                     .join(" ")
             })
             .collect();
-        std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
+        std::fs::write(&file, text.join("\n"))?;
         skip(&format!(
             "1 rank: stored the reference {} for the runs on more ranks",
             file.display()
@@ -114,11 +114,7 @@ pub fn one_rank_rows(
         })
         .collect();
     if one.len() != rows.len() {
-        return Err(format!(
-            "{name}: {} rows on 1 rank, {} here",
-            one.len(),
-            rows.len()
-        ));
+        return Err(format!("{name}: {} rows on 1 rank, {} here", one.len(), rows.len()).into());
     }
     for (i, (a, b)) in one.iter().zip(rows).enumerate() {
         if a.len() != b.len() {
@@ -126,7 +122,8 @@ pub fn one_rank_rows(
                 "{name}: row {i} has {} values on 1 rank, {} here",
                 a.len(),
                 b.len()
-            ));
+            )
+            .into());
         }
     }
     Ok(Some(one))

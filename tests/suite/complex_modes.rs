@@ -13,6 +13,7 @@
 //!   the largest Re(s): mu_crit and omega_c agree with the closed form to 1e-8 relative. The
 //!   full route (SLEPc PEP on the same tangent) agrees with the projected one below and above.
 
+use super::TestResult;
 use squeal::contact::kernel::{self, Channel, Observed, Part, PointRows};
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::eigen::complex_modes::{full, solve_dense, ComplexModeSettings, Operators};
@@ -48,7 +49,7 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// the previous one (warm start at mu 0.3) and re-projected on the nominal basis, so its
 /// tracked eigenvalues must equal the projected complex modes of the nominal stage to the
 /// static tolerance (asserted 1e-7 relative in s): every nominal mode is the end of a track.
-fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
+fn brake_sweep_nominal_point(petsc: &Petsc) -> TestResult {
     let text =
         brake_scene(40, "projected") + "[sweep]\nparameter = \"mu\"\nvalues = [0.3, 0.35, 0.4]\n";
     let run = run_scene(petsc, &text, "complex-sweep")?;
@@ -56,14 +57,14 @@ fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
     let sweep = run.sweep.as_ref().ok_or("no sweep summary")?;
     // The tracks at the last point, from the results file.
     let h5 = super::common::suite_dir().join("complex-sweep/results.h5");
-    let file = hdf5::File::open(&h5).map_err(|e| e.to_string())?;
+    let file = hdf5::File::open(&h5)?;
     let mut ends = Vec::new();
     for t in 0..sweep.tracks {
         let g = format!("sweep/tracks/track_{:04}", t + 1);
-        let read = |name: &str| -> Result<Vec<f64>, String> {
-            file.dataset(&format!("{g}/{name}"))
-                .and_then(|d| d.read_raw::<f64>())
-                .map_err(|e| e.to_string())
+        let read = |name: &str| -> TestResult<Vec<f64>> {
+            Ok(file
+                .dataset(&format!("{g}/{name}"))
+                .and_then(|d| d.read_raw::<f64>())?)
         };
         let (re, f) = (read("real_part")?, read("frequency")?);
         ends.push((re[2], 2.0 * std::f64::consts::PI * f[2]));
@@ -92,7 +93,8 @@ fn brake_sweep_nominal_point(petsc: &Petsc) -> Result<(), String> {
             "{} tracks vs {} nominal modes; nominal point off by {worst:e}",
             sweep.tracks,
             nominal.len()
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -121,7 +123,7 @@ fn m0_scene(disc_speed: f64, count: usize, tolerance: f64) -> String {
 /// scaling: the matrices' norms span 1e-5 (M) to 2e7 (K1). Two solver settings (150 pairs at
 /// tolerance 1e-10, 200 pairs at 1e-12) give the same count and the same eigenvalues to 1e-8;
 /// every backward error is below 1e-10.
-fn brake_m0_band(petsc: &Petsc) -> Result<(), String> {
+fn brake_m0_band(petsc: &Petsc) -> TestResult {
     let omega = 4.0 * std::f64::consts::PI;
     let a = run_scene(petsc, &m0_scene(omega, 150, 1e-10), "m0-a")?;
     let b = run_scene(petsc, &m0_scene(omega, 200, 1e-12), "m0-b")?;
@@ -163,12 +165,14 @@ fn brake_m0_band(petsc: &Petsc) -> Result<(), String> {
             "band count depends on the settings: {} vs {}",
             ma.len(),
             mb.len()
-        ));
+        )
+        .into());
     }
     if exceeds(worst, 1e-8) || exceeds(worst_eta, 1e-10) {
         return Err(format!(
             "eigenvalues differ by {worst:e} between settings; backward error {worst_eta:e}"
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -186,15 +190,17 @@ fn brake_scene(real_modes: usize, method: &str) -> String {
     )
 }
 
-fn run_scene(
-    petsc: &Petsc,
-    text: &str,
-    name: &str,
-) -> Result<squeal::pipeline::RunSummary, String> {
-    let scene = squeal::scene::Scene::parse(text, name).map_err(|e| e.to_string())?;
+fn run_scene(petsc: &Petsc, text: &str, name: &str) -> TestResult<squeal::pipeline::RunSummary> {
+    let scene = squeal::scene::Scene::parse(text, name)?;
     let out = super::common::suite_dir().join(name);
-    squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())
+    Ok(squeal::pipeline::run(
+        petsc,
+        &scene,
+        text,
+        std::path::Path::new("."),
+        &out,
+        &[],
+    )?)
 }
 
 /// Projected vs full complex modes of a preloaded brake. The projected route works in the
@@ -213,7 +219,7 @@ fn run_scene(
 /// (zeta +-5.4e-3) comes out at 507.0 Hz with zeta +-1.85e-2 (1.3e-2 off, bound 0.12; on 40
 /// modes 2.8e-3 off: not monotone in the basis). Backward errors of the full route below
 /// 1e-10.
-fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
+fn brake_projected_vs_full(petsc: &Petsc) -> TestResult {
     let both = run_scene(petsc, &brake_scene(100, "both"), "complex-both")?;
     let small = run_scene(petsc, &brake_scene(40, "projected"), "complex-small")?;
     let route = |s: &squeal::pipeline::RunSummary, r: &str| {
@@ -227,7 +233,7 @@ fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
     let projected = route(&both, "projected")?;
     let projected_small = route(&small, "projected")?;
     if full.len() < 10 {
-        return Err(format!("only {} full modes below 2.5 kHz", full.len()));
+        return Err(format!("only {} full modes below 2.5 kHz", full.len()).into());
     }
     let worst_eta = full.iter().map(|m| m.backward_error).fold(0.0f64, nan_max);
     // Members of coalesced flutter pairs (see above).
@@ -282,19 +288,20 @@ fn brake_projected_vs_full(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if exceeds(worst_eta, 1e-10) {
-        return Err(format!("full route backward error {worst_eta:e}"));
+        return Err(format!("full route backward error {worst_eta:e}").into());
     }
     // NaN-aware: every comparison must hold.
     if !(df <= 1e-2 && dz <= 5e-3 && dz_pair <= pair_bound) || mismatch > 0 {
         return Err(format!(
             "projected vs full: frequency {df:e}, damping ratio {dz:e} (coalesced pairs \
              {dz_pair:e}, bound {pair_bound:e}), {mismatch} unstable flags differ"
-        ));
+        )
+        .into());
     }
     if median.is_nan() || median_small.is_nan() || median >= median_small {
         return Err(format!(
             "the projection does not converge: median frequency error with 100 modes {median:e}, with 40 modes {median_small:e}"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -384,11 +391,7 @@ fn real_modes(model: &TwoDof) -> ([f64; 2], [[f64; 2]; 2]) {
 }
 
 /// Projected eigenvalues (Im >= 0) at mu.
-fn projected_eigenvalues(
-    petsc: &Petsc,
-    model: &TwoDof,
-    mu: f64,
-) -> Result<Vec<(f64, f64)>, String> {
+fn projected_eigenvalues(petsc: &Petsc, model: &TwoDof, mu: f64) -> TestResult<Vec<(f64, f64)>> {
     let (omega2, phi) = real_modes(model);
     let rank0 = petsc.rank() == 0;
     let (rows, _, r) = contact_point(model, mu);
@@ -431,15 +434,11 @@ fn projected_eigenvalues(
         &terms(&[Part::Damping]),
         &Default::default(),
     );
-    Ok(solve_dense(2, &kp, &cp)
-        .map_err(|e| e.to_string())?
-        .into_iter()
-        .map(|p| p.0)
-        .collect())
+    Ok(solve_dense(2, &kp, &cp)?.into_iter().map(|p| p.0).collect())
 }
 
 /// The eigenvalue with the largest real part, and its Re(s)/|s|.
-fn largest_real_part(petsc: &Petsc, model: &TwoDof, mu: f64) -> Result<((f64, f64), f64), String> {
+fn largest_real_part(petsc: &Petsc, model: &TwoDof, mu: f64) -> TestResult<((f64, f64), f64)> {
     let top = projected_eigenvalues(petsc, model, mu)?
         .into_iter()
         .max_by(|a, b| a.0.total_cmp(&b.0))
@@ -448,7 +447,7 @@ fn largest_real_part(petsc: &Petsc, model: &TwoDof, mu: f64) -> Result<((f64, f6
 }
 
 /// A distributed 2 x 2 matrix (row i on rank i when there are two ranks).
-fn matrix_2x2<'p>(petsc: &'p Petsc, a: [f64; 4]) -> Result<SparseMatrix<'p>, String> {
+fn matrix_2x2<'p>(petsc: &'p Petsc, a: [f64; 4]) -> TestResult<SparseMatrix<'p>> {
     let size = petsc.size() as usize;
     let rank = petsc.rank() as usize;
     let local = if size == 1 { 2 } else { usize::from(rank < 2) };
@@ -459,17 +458,15 @@ fn matrix_2x2<'p>(petsc: &'p Petsc, a: [f64; 4]) -> Result<SparseMatrix<'p>, Str
         diag_upper: vec![diag; local],
         off_upper: vec![off; local],
     };
-    let mut m =
-        SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local, &p).map_err(|e| e.to_string())?;
+    let mut m = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local, &p)?;
     if rank == 0 {
-        m.add_values(&[0, 1], &[0, 1], &a)
-            .map_err(|e| e.to_string())?;
+        m.add_values(&[0, 1], &[0, 1], &a)?;
     }
-    m.assemble().map_err(|e| e.to_string())?;
+    m.assemble()?;
     Ok(m)
 }
 
-fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
+fn hoffmann_two_dof(petsc: &Petsc) -> TestResult {
     if petsc.size() > 2 {
         return Ok(());
     }
@@ -478,7 +475,7 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
     let threshold = 1e-9; // Re(s)/|s| above which the pair counts as unstable
     let (mut lo, mut hi) = (0.0, 1.0);
     if exceeds(threshold, largest_real_part(petsc, &model, hi)?.1) {
-        return Err(format!("mu = 1 is stable; closed-form mu_crit {exact}"));
+        return Err(format!("mu = 1 is stable; closed-form mu_crit {exact}").into());
     }
     while hi - lo > 1e-11 * hi {
         let mid = 0.5 * (lo + hi);
@@ -502,14 +499,15 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if exceeds(rel(found, exact), 1e-8) {
-        return Err(format!("mu_crit {found} vs closed form {exact}"));
+        return Err(format!("mu_crit {found} vs closed form {exact}").into());
     }
     if exceeds(rel(s.1, model.omega_c()), 1e-8) {
         return Err(format!(
             "coalescence frequency {} vs closed form {}",
             s.1,
             model.omega_c()
-        ));
+        )
+        .into());
     }
     // Below: both pairs on the imaginary axis; above: one pair unstable. Full route (SLEPc on
     // the kernel's tangent) agrees with the projected one.
@@ -520,17 +518,18 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
             return Err(format!(
                 "mu = {factor} mu_crit: largest Re(s)/|s| = {ratio:e}, expected {}",
                 if unstable { "unstable" } else { "stable" }
-            ));
+            )
+            .into());
         }
         let k = matrix_2x2(petsc, tangent(&model, mu))?;
         let c = matrix_2x2(petsc, [0.0; 4])?;
         let m = matrix_2x2(petsc, [model.m, 0.0, 0.0, model.m])?;
-        let ops = Operators::new(&k, &c, &m).map_err(|e| e.to_string())?;
+        let ops = Operators::new(&k, &c, &m)?;
         let settings = ComplexModeSettings {
             tolerance: 1e-12,
             ..Default::default()
         };
-        let modes = full(petsc, &ops, &settings, 2).map_err(|e| e.to_string())?;
+        let modes = full(petsc, &ops, &settings, 2)?;
         // Every full eigenvalue against the nearest projected one.
         let projected = projected_eigenvalues(petsc, &model, mu)?;
         let mut d = 0.0f64;
@@ -562,13 +561,11 @@ fn hoffmann_two_dof(petsc: &Petsc) -> Result<(), String> {
             return Err(format!(
                 "mu = {factor} mu_crit: {} full modes, off the projected ones by {d:e}, backward error {worst_eta:e}",
                 modes.modes.len()
-            ));
+            ).into());
         }
         let flagged = modes.modes.iter().filter(|m| m.unstable).count();
         if flagged != usize::from(unstable) {
-            return Err(format!(
-                "mu = {factor} mu_crit: {flagged} modes flagged unstable"
-            ));
+            return Err(format!("mu = {factor} mu_crit: {flagged} modes flagged unstable").into());
         }
     }
     Ok(())

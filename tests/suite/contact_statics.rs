@@ -20,6 +20,7 @@
 //!   with single-precision factors (`[statics] factor = "single"`) reach the same state within
 //!   their Newton error estimates.
 
+use super::TestResult;
 use squeal::contact::kernel::Part;
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::contact::{ContactModel, ContactSettings, InterfaceLaws};
@@ -64,7 +65,7 @@ fn faces_at(mesh: &Mesh, elements: std::ops::Range<usize>, z0: f64) -> Vec<(usiz
     out
 }
 
-fn contact_patch_test(petsc: &Petsc) -> Result<(), String> {
+fn contact_patch_test(petsc: &Petsc) -> TestResult {
     let nested = patch_error(petsc, [6, 6], 2)?;
     let straddling_2 = patch_error(petsc, [4, 5], 2)?;
     let straddling_4 = patch_error(petsc, [4, 5], 4)?;
@@ -75,20 +76,21 @@ fn contact_patch_test(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if exceeds(nested, 1e-8) {
-        return Err(format!(
-            "nested non-matching meshes: pressure not uniform ({nested:e})"
-        ));
+        return Err(
+            format!("nested non-matching meshes: pressure not uniform ({nested:e})").into(),
+        );
     }
     if exceeds(straddling_2, 1e-2) || exceeds(straddling_4, 1e-2) {
         return Err(format!(
             "straddling meshes: error {straddling_2:e} (2x2), {straddling_4:e} (4x4)"
-        ));
+        )
+        .into());
     }
     Ok(())
 }
 
 /// Largest relative deviation of the contact pressure from the applied one.
-fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f64, String> {
+fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> TestResult<f64> {
     let mut mesh = block([1.0, 1.0, 0.5], [3, 3, 2], ElementKind::Hex8, steel());
     let lower_elements = mesh.element_count();
     let mut upper = block(
@@ -133,8 +135,7 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         roller("upper_u0", 0),
         roller("upper_v0", 1),
     ];
-    let system = assemble_system_as(petsc, &mesh, &clamps, Some(MatrixFormat::Aij))
-        .map_err(|e| e.to_string())?;
+    let system = assemble_system_as(petsc, &mesh, &clamps, Some(MatrixFormat::Aij))?;
     let interfaces = vec![Interface {
         name: "blocks".into(),
         master: "upper_bottom".into(),
@@ -154,18 +155,16 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
         gauss_points: gauss,
         ..Default::default()
     };
-    let resolved = settings.resolve(&interfaces).map_err(|e| e.to_string())?;
-    let contact = ContactModel::new(petsc, &mesh, &system.dofs, resolved, &settings)
-        .map_err(|e| e.to_string())?;
+    let resolved = settings.resolve(&interfaces)?;
+    let contact = ContactModel::new(petsc, &mesh, &system.dofs, resolved, &settings)?;
     if contact.misses()[0] != 0 {
-        return Err(format!("{} points missed", contact.misses()[0]));
+        return Err(format!("{} points missed", contact.misses()[0]).into());
     }
     let loads = [PressureLoad {
         surface: "upper_top".into(),
         area: 1.0,
     }];
-    let f =
-        pressure_load(petsc, &mesh, &system.dofs, &loads, p_applied).map_err(|e| e.to_string())?;
+    let f = pressure_load(petsc, &mesh, &system.dofs, &loads, p_applied)?;
     let statics = StaticSettings {
         tolerance: 1e-12,
         ..Default::default()
@@ -180,21 +179,17 @@ fn patch_error(petsc: &Petsc, upper_cells: [usize; 2], gauss: usize) -> Result<f
     let worst = squeal::parallel::max(petsc.world(), worst);
     let force = state.summaries[0].normal_force;
     if exceeds(rel(force, p_applied), 1e-10) {
-        return Err(format!(
-            "total contact force {force} N, applied {p_applied} N"
-        ));
+        return Err(format!("total contact force {force} N, applied {p_applied} N").into());
     }
     Ok(worst)
 }
 
-fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
+fn static_brake_force_balance(petsc: &Petsc) -> TestResult {
     let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\n";
-    let scene = squeal::scene::Scene::parse(text, "brake").map_err(|e| e.to_string())?;
-    let model = squeal::pipeline::build_model(&scene.model, std::path::Path::new("."))
-        .map_err(|e| e.to_string())?
+    let scene = squeal::scene::Scene::parse(text, "brake")?;
+    let model = squeal::pipeline::build_model(&scene.model, std::path::Path::new("."))?
         .ok_or("no model")?;
-    let system = assemble_system_as(petsc, &model.mesh, &model.clamps, Some(MatrixFormat::Aij))
-        .map_err(|e| e.to_string())?;
+    let system = assemble_system_as(petsc, &model.mesh, &model.clamps, Some(MatrixFormat::Aij))?;
     let mut settings = ContactSettings::default();
     // mu 0.25: see jobs/brake-static-preload.toml on the static limit of the anchored pads.
     settings.sliding.friction = FrictionLaw::Coulomb {
@@ -202,19 +197,15 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         slip_speed: 1e-3,
     };
     settings.disc_speed = 2.0 * std::f64::consts::PI; // one revolution per second
-    let resolved = settings
-        .resolve(&model.interfaces)
-        .map_err(|e| e.to_string())?;
-    let contact = ContactModel::new(petsc, &model.mesh, &system.dofs, resolved, &settings)
-        .map_err(|e| e.to_string())?;
+    let resolved = settings.resolve(&model.interfaces)?;
+    let contact = ContactModel::new(petsc, &model.mesh, &system.dofs, resolved, &settings)?;
     let f = pressure_load(
         petsc,
         &model.mesh,
         &system.dofs,
         &model.loads,
         model.pressure,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let statics = StaticSettings::default();
     let state = preload(petsc, &system, &contact, &f, &statics)?;
     let piston = model.loads[0].area * model.pressure;
@@ -225,7 +216,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
             worst_force = nan_max(worst_force, rel(s.normal_force, piston));
             worst_torque = nan_max(worst_torque, rel(s.torque, s.coulomb_torque));
             if s.stick != 0 {
-                return Err(format!("{}: {} points stick", itf.name, s.stick));
+                return Err(format!("{}: {} points stick", itf.name, s.stick).into());
             }
             say(
                 petsc,
@@ -239,7 +230,8 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     if exceeds(worst_force, 1e-8) || exceeds(worst_torque, 1e-8) {
         return Err(format!(
             "pad force vs piston {worst_force:e}, torque vs mu F r {worst_torque:e}"
-        ));
+        )
+        .into());
     }
     let new_factors = StaticSettings {
         krylov: false,
@@ -257,14 +249,14 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
     low_rank_update_of_the_tangent(petsc, &contact, &state.contact, &system.stiffness, &f)?;
     // 1 vs 2 ranks: contact pressures in point order.
     let local: Vec<f64> = state.contact.response.iter().map(|r| r.pressure).collect();
-    let pressures = contact.gather(petsc, &local).map_err(|e| e.to_string())?;
+    let pressures = contact.gather(petsc, &local)?;
     let dir = suite_dir();
     let file = dir.join("static-brake-pressures-1-rank.txt");
     if petsc.size() == 1 {
         if petsc.rank() == 0 {
-            std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+            std::fs::create_dir_all(&dir)?;
             let text: Vec<String> = pressures.iter().map(|p| format!("{p:e}")).collect();
-            std::fs::write(&file, text.join("\n")).map_err(|e| e.to_string())?;
+            std::fs::write(&file, text.join("\n"))?;
         }
         return Ok(());
     }
@@ -272,11 +264,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
     let one: Vec<f64> = text.lines().map(|l| l.parse().unwrap()).collect();
     if one.len() != pressures.len() {
-        return Err(format!(
-            "{} points vs {} on 1 rank",
-            pressures.len(),
-            one.len()
-        ));
+        return Err(format!("{} points vs {} on 1 rank", pressures.len(), one.len()).into());
     }
     let pmax = one.iter().fold(0.0f64, |m, p| nan_max(m, p.abs()));
     let diff = one
@@ -292,7 +280,7 @@ fn static_brake_force_balance(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if exceeds(diff, 1e-8) {
-        return Err(format!("pressures differ by {diff:e} of the largest"));
+        return Err(format!("pressures differ by {diff:e} of the largest").into());
     }
     Ok(())
 }
@@ -310,13 +298,14 @@ fn route_reaches_the_same_state<'p>(
     f: &squeal::la::Vector<'p>,
     state: &squeal::statics::StaticState<'p>,
     (name, route): (&str, &StaticSettings),
-) -> Result<(), String> {
+) -> TestResult {
     let direct = preload(petsc, system, contact, f, route)?;
     if direct.factor_precision != route.factor {
         return Err(format!(
             "{name}: the preload factorized in {:?}, the settings asked for {:?}",
             direct.factor_precision, route.factor
-        ));
+        )
+        .into());
     }
     let estimate = |q: &squeal::la::Vector<'p>| -> Result<f64, squeal::la::LaError> {
         let at = contact.evaluate(q, None, 1.0)?;
@@ -341,17 +330,13 @@ fn route_reaches_the_same_state<'p>(
         lu.solve(&r, &mut e)?;
         e.norm2()
     };
-    let text = |e: squeal::la::LaError| e.to_string();
     let (e_krylov, e_direct) = (
-        estimate(&state.displacement).map_err(text)?,
-        estimate(&direct.displacement).map_err(text)?,
+        estimate(&state.displacement)?,
+        estimate(&direct.displacement)?,
     );
-    let mut d = state.displacement.try_clone().map_err(text)?;
-    d.axpy(-1.0, &direct.displacement).map_err(text)?;
-    let (diff, size) = (
-        d.norm2().map_err(text)?,
-        direct.displacement.norm2().map_err(text)?,
-    );
+    let mut d = state.displacement.try_clone()?;
+    d.axpy(-1.0, &direct.displacement)?;
+    let (diff, size) = (d.norm2()?, direct.displacement.norm2()?);
     say(
         petsc,
         &format!(
@@ -362,7 +347,7 @@ fn route_reaches_the_same_state<'p>(
     if exceeds(diff, 2.0 * (e_krylov + e_direct)) {
         return Err(format!(
             "the default route's and {name}'s static states differ by {diff:e} m, their Newton error estimates are {e_krylov:e} and {e_direct:e} m"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -374,47 +359,42 @@ fn tangent_operator_equals_assembled<'p>(
     contact: &ContactModel<'p>,
     state: &squeal::contact::ContactState,
     like: &squeal::la::Vector<'p>,
-) -> Result<(), String> {
+) -> TestResult {
     use squeal::contact::kernel::Part;
     use squeal::la::Operator;
-    let e = |e: squeal::la::LaError| e.to_string();
-    let mut x = like.duplicate().map_err(e)?;
+    let mut x = like.duplicate()?;
     {
         let range = x.ownership();
-        let mut local = x.local_mut().map_err(e)?;
+        let mut local = x.local_mut()?;
         for (i, v) in local.iter_mut().enumerate() {
             *v = ((range.start + i) as f64 * 0.7).sin();
         }
     }
     let stiffness: &[Part] = &[Part::Normal, Part::Stick, Part::Friction];
     let damping_scale = 2.5e3;
-    let mut assembled = contact.tangent_matrix(petsc, state, stiffness).map_err(e)?;
-    let damping = contact
-        .tangent_matrix(petsc, state, &[Part::Damping])
-        .map_err(e)?;
-    assembled.axpy(damping_scale, &damping).map_err(e)?;
-    let operator = contact
-        .tangent_operator(
-            petsc,
-            state,
-            &[(stiffness, 1.0), (&[Part::Damping], damping_scale)],
-        )
-        .map_err(e)?;
-    let (mut y, mut z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
-    assembled.mult(&x, &mut y).map_err(e)?;
-    z.set_all(0.0).map_err(e)?;
-    operator.mult_add(&x, &mut z).map_err(e)?;
-    let scale = y.norm2().map_err(e)?;
-    z.axpy(-1.0, &y).map_err(e)?;
-    let diff = z.norm2().map_err(e)? / scale;
+    let mut assembled = contact.tangent_matrix(petsc, state, stiffness)?;
+    let damping = contact.tangent_matrix(petsc, state, &[Part::Damping])?;
+    assembled.axpy(damping_scale, &damping)?;
+    let operator = contact.tangent_operator(
+        petsc,
+        state,
+        &[(stiffness, 1.0), (&[Part::Damping], damping_scale)],
+    )?;
+    let (mut y, mut z) = (x.duplicate()?, x.duplicate()?);
+    assembled.mult(&x, &mut y)?;
+    z.set_all(0.0)?;
+    operator.mult_add(&x, &mut z)?;
+    let scale = y.norm2()?;
+    z.axpy(-1.0, &y)?;
+    let diff = z.norm2()? / scale;
     say(
         petsc,
         &format!("contact tangent through the observation rows vs assembled: {diff:.1e} (|K x| = {scale:.3e})"),
     );
     if !(scale > 0.0 && diff < 1e-12) {
-        return Err(format!(
-            "tangent operator differs from the assembled tangent by {diff:e}"
-        ));
+        return Err(
+            format!("tangent operator differs from the assembled tangent by {diff:e}").into(),
+        );
     }
     Ok(())
 }
@@ -432,27 +412,24 @@ fn low_rank_update_of_the_tangent<'p>(
     state: &squeal::contact::ContactState,
     k: &squeal::la::SparseMatrix<'p>,
     like: &squeal::la::Vector<'p>,
-) -> Result<(), String> {
+) -> TestResult {
     use squeal::contact::kernel::Part;
     use squeal::contact::linearize::Base;
     use squeal::la::{
         ColumnKey, DirectSolver, Dominant, Factorization, LaError, LowRankUpdate, Operator,
         TangentChange, Vector,
     };
-    let e = |e: LaError| e.to_string();
     let parts: &[Part] = &[Part::Normal, Part::Stick, Part::Friction];
     let damping_scale = 2.5e3;
-    let tangent = contact
-        .tangent_operator(
-            petsc,
-            state,
-            &[(parts, 1.0), (&[Part::Damping], damping_scale)],
-        )
-        .map_err(e)?;
-    let mut x = like.duplicate().map_err(e)?;
+    let tangent = contact.tangent_operator(
+        petsc,
+        state,
+        &[(parts, 1.0), (&[Part::Damping], damping_scale)],
+    )?;
+    let mut x = like.duplicate()?;
     {
         let range = x.ownership();
-        let mut local = x.local_mut().map_err(e)?;
+        let mut local = x.local_mut()?;
         for (i, v) in local.iter_mut().enumerate() {
             *v = ((range.start + i) as f64 * 0.37).cos();
         }
@@ -474,15 +451,14 @@ fn low_rank_update_of_the_tangent<'p>(
         y.maxpy(&c, &refs)
     };
     let all = tangent
-        .dominant(contact.points().len(), 1.0)
-        .map_err(e)?
+        .dominant(contact.points().len(), 1.0)?
         .ok_or("the static tangent has no explicit part")?;
-    let (mut y, mut z) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
-    tangent.mult_add(&x, &mut y).map_err(e)?;
-    explicit(&all, &x, &mut z).map_err(e)?;
-    let scale = y.norm2().map_err(e)?;
-    z.axpy(-1.0, &y).map_err(e)?;
-    let rebuilt = z.norm2().map_err(e)? / scale;
+    let (mut y, mut z) = (x.duplicate()?, x.duplicate()?);
+    tangent.mult_add(&x, &mut y)?;
+    explicit(&all, &x, &mut z)?;
+    let scale = y.norm2()?;
+    z.axpy(-1.0, &y)?;
+    let rebuilt = z.norm2()? / scale;
     // 20 points' part as a change of its own.
     struct Part20<'t, 'c, 'p> {
         tangent: &'t squeal::contact::linearize::TangentOperator<'c, 'p>,
@@ -504,30 +480,28 @@ fn low_rank_update_of_the_tangent<'p>(
     }
     let change = Part20 {
         tangent: &tangent,
-        dominant: tangent.dominant(20, 1.0).map_err(e)?.ok_or("no part")?,
+        dominant: tangent.dominant(20, 1.0)?.ok_or("no part")?,
         apply: &explicit,
     };
-    let j0 = contact
-        .linearize(petsc, Base::Plus(k), state, parts)
-        .map_err(e)?;
-    let factor = DirectSolver::factorize(petsc, &j0, Factorization::Lu, "lowrank_").map_err(e)?;
+    let j0 = contact.linearize(petsc, Base::Plus(k), state, parts)?;
+    let factor = DirectSolver::factorize(petsc, &j0, Factorization::Lu, "lowrank_")?;
     let mut update = LowRankUpdate::default();
-    let solves = update.prepare(&factor, &change, &x).map_err(e)?;
-    let mut b = x.duplicate().map_err(e)?;
-    j0.mult(&x, &mut b).map_err(e)?;
-    change.mult_add(&x, &mut b).map_err(e)?;
-    let mut w = x.duplicate().map_err(e)?;
-    update.apply(&factor, &b, &mut w).map_err(e)?;
-    w.axpy(-1.0, &x).map_err(e)?;
-    let inverted = w.norm2().map_err(e)? / x.norm2().map_err(e)?;
+    let solves = update.prepare(&factor, &change, &x)?;
+    let mut b = x.duplicate()?;
+    j0.mult(&x, &mut b)?;
+    change.mult_add(&x, &mut b)?;
+    let mut w = x.duplicate()?;
+    update.apply(&factor, &b, &mut w)?;
+    w.axpy(-1.0, &x)?;
+    let inverted = w.norm2()? / x.norm2()?;
     // (3) The update's own part, U D U^T x (what a correction solved with P changes beyond
     // the factor), equals the change applied to x.
-    let (mut own, mut applied) = (x.duplicate().map_err(e)?, x.duplicate().map_err(e)?);
-    update.mult_add_update(&x, &mut own).map_err(e)?;
-    change.mult_add(&x, &mut applied).map_err(e)?;
-    let own_scale = applied.norm2().map_err(e)?;
-    own.axpy(-1.0, &applied).map_err(e)?;
-    let own_part = own.norm2().map_err(e)? / own_scale;
+    let (mut own, mut applied) = (x.duplicate()?, x.duplicate()?);
+    update.mult_add_update(&x, &mut own)?;
+    change.mult_add(&x, &mut applied)?;
+    let own_scale = applied.norm2()?;
+    own.axpy(-1.0, &applied)?;
+    let own_part = own.norm2()? / own_scale;
     say(
         petsc,
         &format!(
@@ -544,7 +518,7 @@ fn low_rank_update_of_the_tangent<'p>(
         return Err(format!(
             "explicit columns rebuild the tangent to {rebuilt:e}, the updated factor inverts to {inverted:e} with {} columns, its own part {own_part:e}",
             update.rank()
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -558,7 +532,7 @@ fn an_iteration_budget_stops_the_solve<'p>(
     contact: &ContactModel<'p>,
     f: &squeal::la::Vector<'p>,
     state: &squeal::statics::StaticState<'p>,
-) -> Result<(), String> {
+) -> TestResult {
     use squeal::statics::{solve_from, Start, StaticError};
     let settings = StaticSettings::default();
     let needed = state.log.iter().filter(|r| r.step_length > 0.0).count();
@@ -582,27 +556,23 @@ fn an_iteration_budget_stops_the_solve<'p>(
     };
     match budgeted(needed / 2) {
         Err(StaticError::BudgetSpent { iterations, .. }) if iterations == needed / 2 => {}
-        Err(e) => return Err(format!("budget {}: {e}", needed / 2)),
+        Err(e) => return Err(format!("budget {}: {e}", needed / 2).into()),
         Ok(_) => {
-            return Err(format!(
-                "budget {} of {needed} iterations: converged",
-                needed / 2
-            ))
+            return Err(format!("budget {} of {needed} iterations: converged", needed / 2).into())
         }
     }
     let full = budgeted(needed).map_err(|e| format!("budget {needed} (what it needs): {e}"))?;
-    let mut d = full.displacement.try_clone().map_err(|e| e.to_string())?;
-    d.axpy(-1.0, &state.displacement)
-        .map_err(|e| e.to_string())?;
-    let difference = d.norm2().map_err(|e| e.to_string())?;
+    let mut d = full.displacement.try_clone()?;
+    d.axpy(-1.0, &state.displacement)?;
+    let difference = d.norm2()?;
     // The same iterations; on several ranks MUMPS' distributed solves differ by round-off
     // (4e-15 m here): bounded by the Newton tolerance's share of the displacement (1e-9
     // relative; this state's Newton error estimates are ~2e-12 m, see above).
-    let size = state.displacement.norm2().map_err(|e| e.to_string())?;
+    let size = state.displacement.norm2()?;
     if squeal::measure::exceeds(difference, 1e-9 * size) {
         return Err(format!(
             "with a budget of what it needs: {difference:e} m from the solve without one (|q| {size:e} m)"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -614,6 +584,14 @@ fn preload<'p>(
     contact: &ContactModel<'p>,
     f: &squeal::la::Vector<'p>,
     settings: &StaticSettings,
-) -> Result<squeal::statics::StaticState<'p>, String> {
-    solve(petsc, &system.stiffness, contact, f, settings, None, |_| {}).map_err(|e| e.to_string())
+) -> TestResult<squeal::statics::StaticState<'p>> {
+    Ok(solve(
+        petsc,
+        &system.stiffness,
+        contact,
+        f,
+        settings,
+        None,
+        |_| {},
+    )?)
 }

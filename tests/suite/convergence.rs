@@ -9,6 +9,7 @@
 //! element's rate (measured: Hex8I went non-monotone on the cantilever), whereas the free
 //! beam's eigenfunction is smooth. The six rigid-body modes come first (shift below zero).
 
+use super::TestResult;
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::la::Petsc;
 use squeal::measure::exceeds;
@@ -21,7 +22,7 @@ pub fn tests() -> Vec<super::NamedTest> {
     vec![("free_beam_convergence_rates", free_beam_convergence_rates)]
 }
 
-fn free_beam_convergence_rates(petsc: &Petsc) -> Result<(), String> {
+fn free_beam_convergence_rates(petsc: &Petsc) -> TestResult {
     let (l, b, h) = (1.0, 0.1, 0.1);
     say(petsc, "element  cells(k=1)  f(k=1)        f(k=2)        f(k=4)        f(k=8)        order k=2,4,8 (expected)");
     for (kind, base, expected) in [
@@ -45,7 +46,8 @@ fn free_beam_convergence_rates(petsc: &Petsc) -> Result<(), String> {
                 return Err(format!(
                     "{kind:?}: {rigid} rigid-body modes, expected 6: {:?}",
                     modes.frequencies_hz
-                ));
+                )
+                .into());
             }
             f.push(modes.frequencies_hz[6]);
         }
@@ -65,7 +67,7 @@ fn free_beam_convergence_rates(petsc: &Petsc) -> Result<(), String> {
             ),
         );
         if f.iter().any(|x| x.is_nan()) || (f[1] - f[2]) * (f[2] - f[3]) <= 0.0 {
-            return Err(format!("{kind:?}: not monotone: {f:?}"));
+            return Err(format!("{kind:?}: not monotone: {f:?}").into());
         }
         // How far the observed order may still be from the theory. With an error
         // C h^p (1 + D h^q + ...), the observed order is p + O(h^q) and its distance from p
@@ -78,7 +80,7 @@ fn free_beam_convergence_rates(petsc: &Petsc) -> Result<(), String> {
         if exceeds((order - expected).abs(), window) {
             return Err(format!(
                 "{kind:?}: observed order {order:.2} (from k=1,2,4: {coarse:.2}), expected {expected} within {window:.2}"
-            ));
+            ).into());
         }
     }
     Ok(())

@@ -25,6 +25,7 @@
 //! member at 4,846 Hz): dense solve 26 s on one core; full route within 3.4e-11 of it (2e-3 of
 //! its bound), projected route within 5.3e-4.
 
+use super::TestResult;
 use squeal::io::matrix_market;
 use squeal::la::dense_quadratic::quadratic_eigenvalues;
 use squeal::la::Petsc;
@@ -55,13 +56,12 @@ fn scene(out: &str) -> String {
     )
 }
 
-fn small_brake_against_dense(petsc: &Petsc) -> Result<(), String> {
+fn small_brake_against_dense(petsc: &Petsc) -> TestResult {
     let name = format!("dense-reference-{}", petsc.size());
     let out = suite_dir().join(&name);
     let text = scene(&out.display().to_string());
-    let scene = squeal::scene::Scene::parse(&text, &name).map_err(|e| e.to_string())?;
-    let run = squeal::pipeline::run(petsc, &scene, &text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())?;
+    let scene = squeal::scene::Scene::parse(&text, &name)?;
+    let run = squeal::pipeline::run(petsc, &scene, &text, std::path::Path::new("."), &out, &[])?;
     let route = |r: &str| {
         run.complex
             .iter()
@@ -87,8 +87,7 @@ fn small_brake_against_dense(petsc: &Petsc) -> Result<(), String> {
             .iter()
             .flat_map(|&(re, im)| [format!("{re:e}"), format!("{im:e}")])
             .collect();
-        std::fs::write(stored_file(), format!("{}\n{n}\n", row.join(" ")))
-            .map_err(|e| e.to_string())?;
+        std::fs::write(stored_file(), format!("{}\n{n}\n", row.join(" ")))?;
         (n, values)
     } else {
         read_stored()?
@@ -101,7 +100,7 @@ fn stored_file() -> std::path::PathBuf {
 }
 
 /// The stored dense eigenvalues of the 1-rank run and the order n of the model.
-fn read_stored() -> Result<(usize, Vec<(f64, f64)>), String> {
+fn read_stored() -> TestResult<(usize, Vec<(f64, f64)>)> {
     let file = stored_file();
     let text = std::fs::read_to_string(&file)
         .map_err(|e| format!("{}: {e}: run the suite on 1 rank first", file.display()))?;
@@ -117,32 +116,31 @@ fn read_stored() -> Result<(usize, Vec<(f64, f64)>), String> {
         .copied()
         .unwrap_or(f64::NAN);
     if !values.len().is_multiple_of(2) || n.is_nan() {
-        return Err(format!("{}: malformed", file.display()));
+        return Err(format!("{}: malformed", file.display()).into());
     }
     Ok((n as usize, values.chunks(2).map(|c| (c[0], c[1])).collect()))
 }
 
 /// Reads M, C and K_tangent from the export, forms the scaled companion pencil and returns the
 /// model's order and the eigenvalues s with 0 < Im(s) <= 2 pi f_max, ascending in Im.
-fn dense_of_export(out: &std::path::Path) -> Result<(usize, Vec<(f64, f64)>), String> {
-    let read = |name: &str| {
-        let t = matrix_market::read(&out.join(format!("{name}.mtx"))).map_err(|e| e.to_string())?;
+fn dense_of_export(out: &std::path::Path) -> TestResult<(usize, Vec<(f64, f64)>)> {
+    let read = |name: &str| -> TestResult<_> {
+        let t = matrix_market::read(&out.join(format!("{name}.mtx")))?;
         let n = t.rows;
         let mut dense = vec![0.0; n * n];
         for (i, j, v) in t.expanded() {
             dense[i as usize + n * j as usize] += v;
         }
-        Ok::<_, String>((n, dense))
+        Ok((n, dense))
     };
     let (n, m) = read("M")?;
     let (nc, c) = read("C")?;
     let (nk, k) = read("K_tangent")?;
     if nc != n || nk != n {
-        return Err(format!("orders differ: M {n}, C {nc}, K_tangent {nk}"));
+        return Err(format!("orders differ: M {n}, C {nc}, K_tangent {nk}").into());
     }
     let omega_max = 2.0 * std::f64::consts::PI * F_MAX_HZ;
-    let mut values: Vec<(f64, f64)> = quadratic_eigenvalues(n, &k, &c, &m)
-        .map_err(|e| e.to_string())?
+    let mut values: Vec<(f64, f64)> = quadratic_eigenvalues(n, &k, &c, &m)?
         .into_iter()
         .filter(|&(_, im)| im > 0.0 && im <= omega_max)
         .collect();
@@ -155,7 +153,7 @@ fn compare(
     (n, dense): (usize, Vec<(f64, f64)>),
     full: &[squeal::eigen::complex_modes::ComplexMode],
     projected: &[squeal::eigen::complex_modes::ComplexMode],
-) -> Result<(), String> {
+) -> TestResult {
     let nearest = |s: (f64, f64)| {
         dense
             .iter()
@@ -170,7 +168,8 @@ fn compare(
             "{} full-route modes below {F_MAX_HZ} Hz, the dense solve finds {}",
             full.len(),
             dense.len()
-        ));
+        )
+        .into());
     }
     let eta_dense = 2.0 * (2 * n) as f64 * f64::EPSILON;
     let (mut worst_full, mut worst_ratio) = (0.0f64, 0.0f64);
@@ -189,7 +188,7 @@ fn compare(
             return Err(format!(
                 "full route {} at {:.3} Hz: {d:.2e} from the nearest dense eigenvalue (bound {bound:.1e})",
                 m.name, m.frequency_hz
-            ));
+            ).into());
         }
     }
     // The projected route against the dense one, partner by partner: nearest in the complex
@@ -210,7 +209,7 @@ fn compare(
             return Err(format!(
                 "dense mode at {f:.3} Hz (Re {:.3e}): projected partner {} at {:.3} Hz (Re {:.3e}), {d:.2e} off, unstable {}",
                 q.0, partner.name, partner.frequency_hz, partner.eigenvalue.0, partner.unstable
-            ));
+            ).into());
         }
     }
     if projected.len() != dense.len() {
@@ -218,7 +217,8 @@ fn compare(
             "{} projected modes below {F_MAX_HZ} Hz, the dense solve finds {}",
             projected.len(),
             dense.len()
-        ));
+        )
+        .into());
     }
     say(
         petsc,

@@ -29,6 +29,7 @@
 //!   its unstable fraction lies strictly between 0 and 1, and its mean damping ratio is the
 //!   mean over the phases of its (closed-form, as above) damping ratios, to round-off.
 
+use super::TestResult;
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::la::{Petsc, Vector};
 use squeal::measure::{nan_max, nan_min};
@@ -82,7 +83,7 @@ fn frozen_roots(k: &[f64], c: f64) -> Vec<Cx> {
     roots
 }
 
-fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
+fn hoffmann_frozen_closed_form(petsc: &Petsc) -> TestResult {
     use super::mode_coupling::{static_x, C, K_S, MU};
     use super::pseudo_trajectory::Hoffmann;
     use squeal::eigen::complex_modes::{damping_ratio, projected_coordinates};
@@ -98,9 +99,9 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
     for (q, v) in &states {
         let lin = Hoffmann.tangent(*q, *v);
         if lin.cp[0] != C || lin.cp[1] != 0.0 || lin.cp[2] != 0.0 || lin.cp[3] != C {
-            return Err(format!("the damping is not c I: {:?}", lin.cp));
+            return Err(format!("the damping is not c I: {:?}", lin.cp).into());
         }
-        let pairs = projected_coordinates(2, &lin.kp, &lin.cp).map_err(|e| e.to_string())?;
+        let pairs = projected_coordinates(2, &lin.kp, &lin.cp)?;
         // The frozen tangent from the state alone: k_c = lambda N0 e^(-lambda y) = e^-y.
         let kc = (-q[1]).exp();
         let frozen = [K_S[0][0], K_S[1][0], K_S[0][1] + MU * kc, K_S[1][1] + kc];
@@ -121,7 +122,8 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
         if found.len() != 2 || exact.len() != 2 || error.is_nan() || error > 1e-10 {
             return Err(format!(
                 "at q = {q:?}: linearization {found:?} vs closed form {exact:?} ({error:.1e})"
-            ));
+            )
+            .into());
         }
         points.push(pairs);
         closed.push(exact);
@@ -135,7 +137,7 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
         .ok_or("no mode unstable at rest")?;
     let along = &flutter.eigenvalue[1..];
     if lost > 0 || along.iter().any(|s| !s.0.is_finite()) {
-        return Err(format!("{lost} tracks lost"));
+        return Err(format!("{lost} tracks lost").into());
     }
     let open_phases = open[1..].iter().filter(|&&o| o).count();
     let unstable_when_open = along
@@ -157,24 +159,21 @@ fn hoffmann_frozen_closed_form(petsc: &Petsc) -> Result<(), String> {
     if open_phases == 0 || unstable_when_open > 0 {
         return Err(format!(
             "open at {open_phases} phases, unstable at {unstable_when_open} of them"
-        ));
+        )
+        .into());
     }
     let fraction = flutter.unstable_fraction;
     if fraction.is_nan() || fraction <= 0.0 || fraction >= 1.0 {
-        return Err(format!("unstable fraction {fraction}"));
+        return Err(format!("unstable fraction {fraction}").into());
     }
     let difference = (flutter.mean_damping_ratio - mean).abs();
     if difference.is_nan() || difference > 1e-12 {
-        return Err(format!(
-            "mean damping {} vs {mean}",
-            flutter.mean_damping_ratio
-        ));
+        return Err(format!("mean damping {} vs {mean}", flutter.mean_damping_ratio).into());
     }
     Ok(())
 }
 
-fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
-    let e = |x: squeal::la::LaError| x.to_string();
+fn modal_energy_identity(petsc: &Petsc) -> TestResult {
     let mesh = block([1.0, 0.1, 0.05], [20, 2, 2], ElementKind::Hex8I, steel());
     let request = RealModeRequest {
         count: 6,
@@ -187,24 +186,24 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     // The modes' orthogonality error: max |Phi'M Phi - I|, |Phi'K Phi - W^2| / w_max^2.
     let mut mass_shapes = Vec::new();
     let mut d = 0.0f64;
-    let mut y = modes.shapes[0].duplicate().map_err(e)?;
+    let mut y = modes.shapes[0].duplicate()?;
     for (j, phi) in modes.shapes.iter().enumerate() {
-        let mut w = phi.duplicate().map_err(e)?;
-        m.mult(phi, &mut w).map_err(e)?;
-        k.mult(phi, &mut y).map_err(e)?;
+        let mut w = phi.duplicate()?;
+        m.mult(phi, &mut w)?;
+        k.mult(phi, &mut y)?;
         for (i, psi) in modes.shapes.iter().enumerate() {
             let eye = f64::from(u8::from(i == j));
-            d = nan_max(d, (psi.dot(&w).map_err(e)? - eye).abs());
-            let kij = psi.dot(&y).map_err(e)? - eye * omega[j].powi(2);
+            d = nan_max(d, (psi.dot(&w)? - eye).abs());
+            let kij = psi.dot(&y)? - eye * omega[j].powi(2);
             d = nan_max(d, kij.abs() / omega[n - 1].powi(2));
         }
         mass_shapes.push(w);
     }
     // An arbitrary static offset and vibration: amplitudes a_k, phases p_k.
-    let mut q_static = modes.shapes[0].duplicate().map_err(e)?;
+    let mut q_static = modes.shapes[0].duplicate()?;
     {
         let range = q_static.ownership();
-        let mut l = q_static.local_mut().map_err(e)?;
+        let mut l = q_static.local_mut()?;
         for (i, x) in l.iter_mut().enumerate() {
             *x = 1e-4 * ((range.start + i) as f64 * 0.37).sin();
         }
@@ -213,40 +212,39 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     let p: Vec<f64> = (0..n).map(|k| 0.7 * k as f64).collect();
     let times: Vec<f64> = (0..25).map(|i| 7.3e-4 * i as f64).collect();
     let shapes: Vec<&Vector> = modes.shapes.iter().collect();
-    let mut q = q_static.duplicate().map_err(e)?;
-    let mut v = q_static.duplicate().map_err(e)?;
-    let sensors =
-        ModalSensors::new(petsc, &mass_shapes, &modes.eigenvalues, m, &q_static).map_err(e)?;
+    let mut q = q_static.duplicate()?;
+    let mut v = q_static.duplicate()?;
+    let sensors = ModalSensors::new(petsc, &mass_shapes, &modes.eigenvalues, m, &q_static)?;
     // The states at `times`, as the transient samples them.
-    let state_at = |t: f64, q: &mut Vector, v: &mut Vector| -> Result<(), String> {
+    let state_at = |t: f64, q: &mut Vector, v: &mut Vector| -> TestResult {
         let c: Vec<f64> = (0..n).map(|k| a[k] * (omega[k] * t + p[k]).cos()).collect();
         let cd: Vec<f64> = (0..n)
             .map(|k| -a[k] * omega[k] * (omega[k] * t + p[k]).sin())
             .collect();
-        q.copy_from(&q_static).map_err(e)?;
-        q.maxpy(&c, &shapes).map_err(e)?;
-        v.set_all(0.0).map_err(e)?;
-        v.maxpy(&cd, &shapes).map_err(e)
+        q.copy_from(&q_static)?;
+        q.maxpy(&c, &shapes)?;
+        v.set_all(0.0)?;
+        Ok(v.maxpy(&cd, &shapes)?)
     };
     // Sampled in one block, as the transient's recorder samples its buffered states.
     let (mut qs, mut vs) = (Vec::new(), Vec::new());
     for &t in &times {
         state_at(t, &mut q, &mut v)?;
-        qs.extend_from_slice(&q.local().map_err(e)?);
-        vs.extend_from_slice(&v.local().map_err(e)?);
+        qs.extend_from_slice(&q.local()?);
+        vs.extend_from_slice(&v.local()?);
     }
-    let samples = sensors.sample_block(&qs, &vs, times.len()).map_err(e)?;
+    let samples = sensors.sample_block(&qs, &vs, times.len())?;
     let settings = ModalEnergySettings::default();
     let out = modal_energy(&times, &samples, &modes.eigenvalues, &settings, 1e-3);
     // The reference at every time: closed-form E_k, and the energy from the matrices.
     let (mut worst_mode, mut worst_total, mut worst_kinetic) = (0.0f64, 0.0f64, 0.0f64);
-    let mut dq = q_static.duplicate().map_err(e)?;
-    let mut kdq = q_static.duplicate().map_err(e)?;
-    let mut mv = q_static.duplicate().map_err(e)?;
+    let mut dq = q_static.duplicate()?;
+    let mut kdq = q_static.duplicate()?;
+    let mut mv = q_static.duplicate()?;
     let exact_total: f64 = (0..n).map(|k| 0.5 * (a[k] * omega[k]).powi(2)).sum();
     // Round-off of dq'K dq: its terms are of size ||K|| ||dq||^2, far above the energy (K's
     // largest eigenvalues sit far above the modes'), summed over the unknowns.
-    let k_norm = k.norm_infinity().map_err(e)?;
+    let k_norm = k.norm_infinity()?;
     let mut roundoff = 0.0f64;
     for (i, &t) in times.iter().enumerate() {
         for (k, ek) in out.energy.iter().enumerate() {
@@ -254,23 +252,19 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
             worst_mode = nan_max(worst_mode, (ek[i] - exact).abs() / exact_total);
         }
         state_at(t, &mut q, &mut v)?;
-        dq.copy_from(&q).map_err(e)?;
-        dq.axpy(-1.0, &q_static).map_err(e)?;
-        k.mult(&dq, &mut kdq).map_err(e)?;
-        m.mult(&v, &mut mv).map_err(e)?;
-        let energy = 0.5 * v.dot(&mv).map_err(e)? + 0.5 * dq.dot(&kdq).map_err(e)?;
-        let terms = k_norm * dq.norm2().map_err(e)?.powi(2);
+        dq.copy_from(&q)?;
+        dq.axpy(-1.0, &q_static)?;
+        k.mult(&dq, &mut kdq)?;
+        m.mult(&v, &mut mv)?;
+        let energy = 0.5 * v.dot(&mv)? + 0.5 * dq.dot(&kdq)?;
+        let terms = k_norm * dq.norm2()?.powi(2);
         let unknowns = q.global_len() as f64;
         roundoff = nan_max(roundoff, f64::EPSILON * unknowns.sqrt() * terms / energy);
         worst_total = nan_max(worst_total, (out.total(i) - energy).abs() / energy);
         let kinetic_error = (out.kinetic_in_basis[i] - out.kinetic[i]).abs() / exact_total;
         worst_kinetic = nan_max(worst_kinetic, kinetic_error);
         if !(out.total(i).is_finite() && (t - out.times[i]).abs() < 1e-15) {
-            return Err(format!(
-                "state {i}: total {} at {}",
-                out.total(i),
-                out.times[i]
-            ));
+            return Err(format!("state {i}: total {} at {}", out.total(i), out.times[i]).into());
         }
     }
     let modal_bound = 4.0 * n as f64 * d + 16.0 * f64::EPSILON;
@@ -287,7 +281,7 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
     if modal.is_nan() || worst_total.is_nan() || modal > modal_bound || worst_total > bound {
         return Err(format!(
             "modal energies off by {worst_mode:e} (closed form), {worst_kinetic:e} (kinetic), bound {modal_bound:e}; {worst_total:e} (identity), bound {bound:e}"
-        ));
+        ).into());
     }
     // The ranking: the largest a_k w_k first.
     let exact_first = (0..n)
@@ -297,12 +291,13 @@ fn modal_energy_identity(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "ranked {:?}, expected mode {} first",
             out.ranked, exact_first
-        ));
+        )
+        .into());
     }
     Ok(())
 }
 
-fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
+fn dynamic_stability_at_rest(petsc: &Petsc) -> TestResult {
     let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
         [contact]\ndisc_speed = 6.2832\n\
         [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
@@ -312,10 +307,9 @@ fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
         [transient]\nstep = 2.0e-6\nsteps = 40\nmode = 2\namplitude = 0.0\n\
         state_interval = 2.0e-5\n\
         [post.modal_energy]\n[post.dynamic_stability]\ntimes = [0.0, 4.0e-5, 8.0e-5]\n";
-    let scene = squeal::scene::Scene::parse(text, "link-rest").map_err(|e| e.to_string())?;
+    let scene = squeal::scene::Scene::parse(text, "link-rest")?;
     let out = suite_dir().join("link-rest");
-    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())?;
+    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])?;
     let ds = run
         .link
         .dynamic_stability
@@ -355,13 +349,15 @@ fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
             "tracks {names:?} vs unstable {expected:?}; {} times, {} lost",
             s.times.len(),
             s.lost
-        ));
+        )
+        .into());
     }
     if worst.is_nan() || worst > 1e-7 || unstable.is_empty() {
         return Err(format!(
             "tracked modes move by {worst:e} at rest ({} unstable)",
             unstable.len()
-        ));
+        )
+        .into());
     }
     same_on_one_and_two_ranks(petsc, s)
 }
@@ -373,7 +369,7 @@ fn dynamic_stability_at_rest(petsc: &Petsc) -> Result<(), String> {
 fn same_on_one_and_two_ranks(
     petsc: &Petsc,
     s: &squeal::post::dynamic_stability::DynamicStability,
-) -> Result<(), String> {
+) -> TestResult {
     let values: Vec<f64> = s
         .tracks
         .iter()
@@ -397,9 +393,7 @@ fn same_on_one_and_two_ranks(
         ),
     );
     if diff.is_nan() || diff > 1e-9 {
-        return Err(format!(
-            "tracked eigenvalues differ from 1 rank by {diff:e}"
-        ));
+        return Err(format!("tracked eigenvalues differ from 1 rank by {diff:e}").into());
     }
     Ok(())
 }

@@ -8,6 +8,7 @@
 //! give that mean over whole periods, and at a microphone the pressure level of that
 //! harmonic vibration (Rayleigh integral of the window's spectrum against the harmonic one).
 
+use super::TestResult;
 use std::path::Path;
 
 use squeal::io::series::{Hdf5Storage, SeriesFile};
@@ -16,7 +17,7 @@ use squeal::post::limit_cycle::LimitCycle;
 use squeal::post::loudness::LoudnessSettings;
 use squeal::post::states::StoredStates;
 use squeal::scene::Scene;
-use squeal::stages::{self, loudness, RunError, Timings};
+use squeal::stages::{self, loudness, Timings};
 use squeal::time::transient::{TransientFiles, TransientSettings};
 
 use super::common::{say, suite_dir};
@@ -50,8 +51,7 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// Newmark's period elongation changes omega by (omega h)^2 / 12, the power by twice that;
 /// the contact laws at 1 nm of a 5 um gap scale are linear to 2e-4. Sum asserted (measured
 /// value printed).
-fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
-    let e = |e: RunError| e.to_string();
+fn single_mode_erp(petsc: &Petsc) -> TestResult {
     let text = "[model]\nsource = \"brake\"\ntarget_dofs = 6000\npressure_bar = 20.0\n\
                 [contact]\ndisc_speed = 0.0\n\
                 [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
@@ -59,20 +59,18 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
                 [contact.sticking]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
                 friction = { law = \"none\" }\n\
                 [statics]\nreuse_contraction = 0.0\n[real_modes]\ncount = 40\n[reduction]\n";
-    let scene = Scene::parse(text, "loudness test").map_err(|e| e.to_string())?;
+    let scene = Scene::parse(text, "loudness test")?;
     let mut timings = Timings::default();
     let (model, _, ops) =
-        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings).map_err(e)?;
+        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings)?;
     let model = model.ok_or("a brake model")?;
     let statics = scene.statics.as_ref().ok_or("[statics]")?;
     let contact = scene.contact.clone().unwrap_or_default();
-    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
-        .map_err(e)?;
+    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)?;
     let request = scene.real_modes.clone().ok_or("[real_modes]")?;
-    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
+    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request)?;
     let reduction = scene.reduction.clone().ok_or("[reduction]")?;
-    let reduced = stages::reduce::reduce(petsc, &reduction, &model, &ops, &preload, &modes, &[])
-        .map_err(|e| e.to_string())?;
+    let reduced = stages::reduce::reduce(petsc, &reduction, &model, &ops, &preload, &modes, &[])?;
     let (index, f) = modes
         .frequencies_hz
         .iter()
@@ -86,10 +84,9 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         "step = {h:e}\nsteps = {steps}\nstart = \"mode\"\nmode = {}\namplitude = 1.0e-9\n\
          state_interval = 1.0e-5\ncheckpoint_every = 0\n",
         index + 1
-    ))
-    .map_err(|e| e.to_string())?;
+    ))?;
     let dir = suite_dir().join(format!("loudness-mode-{}", petsc.size()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    std::fs::create_dir_all(&dir)?;
     squeal::parallel::barrier(petsc.world());
     let storage = Hdf5Storage {
         comm: petsc.world(),
@@ -105,14 +102,12 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         &modes,
         Some(&reduced),
         &files,
-    )
-    .map_err(e)?;
+    )?;
     if let Some(failure) = trajectory.failure {
-        return Err(failure.to_string());
+        return Err(failure.to_string().into());
     }
-    let file = SeriesFile::open(petsc.world(), &files.stream).map_err(|e| e.to_string())?;
-    let states =
-        StoredStates::new(Box::new(file), "transient.h5".into(), 2).map_err(|e| e.to_string())?;
+    let file = SeriesFile::open(petsc.world(), &files.stream)?;
+    let states = StoredStates::new(Box::new(file), "transient.h5".into(), 2)?;
     let front = [0.0, 0.0, 0.5];
     let settings = LoudnessSettings {
         cycles: periods as usize,
@@ -121,7 +116,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     };
     let mesh = &model.mesh;
     let dofs = ops.dofs.as_ref().ok_or("a DOF map")?;
-    let radiator = loudness::radiator(petsc, mesh, dofs, &settings).map_err(|x| x.to_string())?;
+    let radiator = loudness::radiator(petsc, mesh, dofs, &settings)?;
     let nominal = stages::link::Nominal {
         preload: &preload,
         modes: &modes,
@@ -129,33 +124,20 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     };
     // The closed form: the start state's displacement from the static state, x.
     let at = nominal.contact_at(petsc);
-    let mut x0 = at.state_template.duplicate().map_err(|e| e.to_string())?;
-    let mut v0 = at.state_template.duplicate().map_err(|e| e.to_string())?;
-    states
-        .read(0, &mut x0, &mut v0)
-        .map_err(|e| e.to_string())?;
+    let mut x0 = at.state_template.duplicate()?;
+    let mut v0 = at.state_template.duplicate()?;
+    states.read(0, &mut x0, &mut v0)?;
     // From the superelement's static state, about which the transient vibrates (it starts
     // from it as an equilibrium), not the full model's: the two differ by the reduction's
     // static error, which on this frictionless brake (pads held tangentially by open
     // abutment contacts only) varies with round-off from run to run, and counting it as
     // vibration moved this closed form by up to 0.35 dB between runs on 2 ranks.
-    let mut dx0 = x0.try_clone().map_err(|e| e.to_string())?;
-    dx0.axpy(-1.0, &reduced.q_static)
-        .map_err(|e| e.to_string())?;
-    let mut x = preload
-        .state
-        .displacement
-        .duplicate()
-        .map_err(|e| e.to_string())?;
-    reduced
-        .model
-        .reduction
-        .recover(petsc, &dx0, &mut x)
-        .map_err(|e| e.to_string())?;
+    let mut dx0 = x0.try_clone()?;
+    dx0.axpy(-1.0, &reduced.q_static)?;
+    let mut x = preload.state.displacement.duplicate()?;
+    reduced.model.reduction.recover(petsc, &dx0, &mut x)?;
     let omega = 2.0 * std::f64::consts::PI * f;
-    let expected = radiator
-        .harmonic_power(petsc, &settings, &x, omega)
-        .map_err(|e| e.to_string())?;
+    let expected = radiator.harmonic_power(petsc, &settings, &x, omega)?;
     let cycle = LimitCycle {
         period: Some(1.0 / f),
         dominant_frequency: *f,
@@ -165,8 +147,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         states: &states,
         cycle: &cycle,
     };
-    let report = loudness::loudness(petsc, &radiator, &settings, nominal, &[], None, Some(run))
-        .map_err(e)?;
+    let report = loudness::loudness(petsc, &radiator, &settings, nominal, &[], None, Some(run))?;
     let t = report.transient.as_ref().ok_or("no transient level")?;
     let error = (t.mean_power - expected).abs() / expected;
     let peak = squeal::measure::largest(t.power.iter().copied()) / expected;
@@ -185,7 +166,8 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "transient ERP {:e} W vs the mode's {expected:e} W: relative {error:e} > {bound:e}",
             t.mean_power
-        ));
+        )
+        .into());
     }
     // The microphone: the time-domain Rayleigh integral (retarded accelerations by central
     // differences and linear interpolation of the stored states, every 1e-5 s) against the
@@ -195,9 +177,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
     // field, where the small admixture of other modes (the ERP's peak / mean departs from 2
     // by 0.3 %) can add more: 0.25 dB allowed in all (a frequency-domain version that
     // evaluated each bin at its own frequency was off by 0.38 dB and fails this).
-    let amplitude = radiator
-        .harmonic_pressure(petsc, &settings, &x, omega, front)
-        .map_err(|e| e.to_string())?;
+    let amplitude = radiator.harmonic_pressure(petsc, &settings, &x, omega, front)?;
     let expected_db = squeal::post::loudness::pressure_level(amplitude);
     let measured_db = t.microphones.first().map_or(f64::NAN, |m| m.1);
     let db_bound = 0.25;
@@ -209,9 +189,7 @@ fn single_mode_erp(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if squeal::measure::exceeds(db_error, db_bound) {
-        return Err(format!(
-            "microphone: transient {measured_db} dB vs {expected_db} dB"
-        ));
+        return Err(format!("microphone: transient {measured_db} dB vs {expected_db} dB").into());
     }
     Ok(())
 }

@@ -25,8 +25,11 @@ use std::time::Duration;
 
 use squeal::la::Petsc;
 
+/// What a test returns: Ok, or what went wrong (any error converts with `?`).
+pub type TestResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
+
 /// A test: its name and a function that returns Ok or what went wrong.
-pub type NamedTest = (&'static str, fn(&Petsc) -> Result<(), String>);
+pub type NamedTest = (&'static str, fn(&Petsc) -> TestResult);
 
 pub fn all() -> Vec<NamedTest> {
     let mut v: Vec<NamedTest> = Vec::new();

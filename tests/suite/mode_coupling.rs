@@ -31,6 +31,7 @@
 //! - against fine-step references (h = 0.04, 0.02, 0.01): the cycle's amplitude and period
 //!   converge at second order (the differences of successive halvings shrink by at least 3).
 
+use super::TestResult;
 use squeal::contact::law::{FrictionLaw, NormalLaw};
 use squeal::la::Preallocation;
 use squeal::la::{
@@ -115,7 +116,7 @@ pub(super) struct Record {
     control: StepControl,
 }
 
-fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
+fn mode_coupling(petsc: &Petsc) -> TestResult {
     let (sigma, omega) = closed_form_eigenvalue();
     // Linear phase, from a 1e-3 kick: peaks of y from t = 60 (the stable pair, decaying at
     // 0.137 + 0.037 relative to the unstable one, is below 1e-4 of it by then) while y stays
@@ -126,7 +127,7 @@ fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
         .filter(|&(t, y)| t > 60.0 && y < 0.03)
         .collect();
     if linear.len() < 5 {
-        return Err(format!("{} peaks in the linear phase", linear.len()));
+        return Err(format!("{} peaks in the linear phase", linear.len()).into());
     }
     let growth = slope(&linear.iter().map(|&(t, y)| (t, y.ln())).collect::<Vec<_>>());
     let frequency = 2.0 * std::f64::consts::PI * (linear.len() - 1) as f64
@@ -160,11 +161,12 @@ fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
     if !(rel(growth, sigma) < 2e-3 && rel(frequency, omega) < 1e-3) {
         return Err(format!(
             "linear phase: growth {growth} vs {sigma}, frequency {frequency} vs {omega}"
-        ));
+        )
+        .into());
     }
     // (NaN fails.)
     if cycle.spread.is_nan() || cycle.spread >= 1e-3 {
-        return Err(format!("the cycle is not closed: spread {}", cycle.spread));
+        return Err(format!("the cycle is not closed: spread {}", cycle.spread).into());
     }
     if cycle.open_fraction.is_nan() || cycle.open_fraction <= 0.0 {
         return Err("the contact never opens on the cycle".into());
@@ -180,7 +182,7 @@ fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
             cycle.energy_change,
             1e-3 * cycle.dissipation,
             cycle.quadrature_bound
-        ));
+        ).into());
     }
 
     // Fine-step references: second-order convergence of the cycle's amplitude and period.
@@ -218,7 +220,7 @@ fn mode_coupling(petsc: &Petsc) -> Result<(), String> {
     if !(d_amplitude[0] >= 3.0 * d_amplitude[1] && d_period[0] >= 3.0 * d_period[1]) {
         return Err(format!(
             "not second order: amplitude differences {d_amplitude:?}, period differences {d_period:?}"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -238,11 +240,11 @@ struct LimitCycle {
 }
 
 impl LimitCycle {
-    fn of(r: &Record) -> Result<Self, String> {
+    fn of(r: &Record) -> TestResult<Self> {
         const CYCLES: usize = 10;
         let peaks = maxima_at(r, 1);
         if peaks.len() < CYCLES + 1 {
-            return Err(format!("{} maxima of y", peaks.len()));
+            return Err(format!("{} maxima of y", peaks.len()).into());
         }
         let last = &peaks[peaks.len() - CYCLES - 1..];
         let mut amplitudes = Vec::new();
@@ -364,10 +366,9 @@ fn tangent(ns: &NewmarkSettings, q: [f64; 2], v: [f64; 2]) -> [[f64; 2]; 2] {
     ]
 }
 
-pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Record, String> {
-    let e = |e: LaError| e.to_string();
-    let m = dense(petsc, [[1.0, 0.0], [0.0, 1.0]]).map_err(e)?;
-    let k = dense(petsc, K_S).map_err(e)?;
+pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> TestResult<Record> {
+    let m = dense(petsc, [[1.0, 0.0], [0.0, 1.0]])?;
+    let k = dense(petsc, K_S)?;
     let damping = Damping::Rayleigh {
         alpha: C,
         beta: 0.0,
@@ -411,15 +412,15 @@ pub(super) fn run(petsc: &Petsc, step: f64, kick: f64, end: f64) -> Result<Recor
     let mut state = State {
         time: 0.0,
         step: 0,
-        q: vector(petsc, [static_x(), kick]).map_err(e)?,
-        v: vector(petsc, [0.0; 2]).map_err(e)?,
-        a: vector(petsc, [0.0; 2]).map_err(e)?,
+        q: vector(petsc, [static_x(), kick])?,
+        v: vector(petsc, [0.0; 2])?,
+        a: vector(petsc, [0.0; 2])?,
         linear: None,
     };
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
-    initial_acceleration(&m, damping, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_")?;
+    initial_acceleration(&m, damping, &k, &mut state, &mut forces, &mass)?;
     let mut record = Record::default();
-    let (q, v) = pair(&state).map_err(e)?;
+    let (q, v) = pair(&state)?;
     record.t.push(0.0);
     record.q.push(q);
     record.v.push(v);

@@ -35,6 +35,7 @@
 //!   20 log10(1.01) = 0.09 dB of it (asserted 0.1 dB). Route against route, not against a
 //!   reference: the pseudo trajectory itself is verified on the 2-DOF model elsewhere.
 
+use super::TestResult;
 use std::path::{Path, PathBuf};
 
 use squeal::io::matrix_journal::{self, JOURNAL};
@@ -79,11 +80,18 @@ fn brake(pressure_bar: f64, mu: f64) -> String {
     )
 }
 
-fn run(petsc: &Petsc, text: &str, name: &str, options: &RunOptions) -> Result<RunSummary, String> {
-    let scene = squeal::scene::Scene::parse(text, name).map_err(|e| e.to_string())?;
+fn run(petsc: &Petsc, text: &str, name: &str, options: &RunOptions) -> TestResult<RunSummary> {
+    let scene = squeal::scene::Scene::parse(text, name)?;
     let out = suite_dir().join(name);
-    squeal::pipeline::run_with(petsc, &scene, text, Path::new("."), &out, &[], options)
-        .map_err(|e| e.to_string())
+    Ok(squeal::pipeline::run_with(
+        petsc,
+        &scene,
+        text,
+        Path::new("."),
+        &out,
+        &[],
+        options,
+    )?)
 }
 
 /// A fresh output directory (a journal left by an earlier suite run would be refused).
@@ -96,7 +104,7 @@ fn fresh(petsc: &Petsc, name: &str) -> PathBuf {
     dir
 }
 
-fn points(summary: &RunSummary) -> Result<Vec<PointResult>, String> {
+fn points(summary: &RunSummary) -> TestResult<Vec<PointResult>> {
     Ok(summary
         .matrix
         .as_ref()
@@ -109,18 +117,14 @@ fn points(summary: &RunSummary) -> Result<Vec<PointResult>, String> {
 /// Every point's figures on this many ranks against those stored by the 1-rank run: torque
 /// and normal force relative, eigenvalues relative to |s| (a Re(s) near zero has no relative
 /// accuracy of its own); bound 1e-6, the static tolerance's.
-fn agrees_with_one_rank(petsc: &Petsc, name: &str, pts: &[PointResult]) -> Result<(), String> {
+fn agrees_with_one_rank(petsc: &Petsc, name: &str, pts: &[PointResult]) -> TestResult {
     let per_point: Vec<Vec<f64>> = pts.iter().map(figures).collect::<Result<_, _>>()?;
     let all = per_point.concat();
     let Some(one) = one_rank_values(petsc, name, &all)? else {
         return Ok(());
     };
     if one.len() != all.len() {
-        return Err(format!(
-            "{} figures on 1 rank, {} here",
-            one.len(),
-            all.len()
-        ));
+        return Err(format!("{} figures on 1 rank, {} here", one.len(), all.len()).into());
     }
     let mut d = 0.0f64;
     let mut at = 0;
@@ -135,13 +139,13 @@ fn agrees_with_one_rank(petsc: &Petsc, name: &str, pts: &[PointResult]) -> Resul
     }
     say(petsc, &format!("1 vs {} ranks: {d:.1e}", petsc.size()));
     if exceeds(d, 1e-6) {
-        return Err(format!("1 vs {} ranks differ by {d:e}", petsc.size()));
+        return Err(format!("1 vs {} ranks differ by {d:e}", petsc.size()).into());
     }
     Ok(())
 }
 
 /// Torque, normal force and every eigenvalue of a solved point, in order.
-fn figures(p: &PointResult) -> Result<Vec<f64>, String> {
+fn figures(p: &PointResult) -> TestResult<Vec<f64>> {
     let s = p
         .solved()
         .ok_or(format!("point {} failed: {:?}", p.index + 1, p.outcome))?;
@@ -151,7 +155,7 @@ fn figures(p: &PointResult) -> Result<Vec<f64>, String> {
 }
 
 /// Largest relative difference of two points' figures (eigenvalues relative to |s|).
-fn difference(a: &PointResult, b: &PointResult) -> Result<f64, String> {
+fn difference(a: &PointResult, b: &PointResult) -> TestResult<f64> {
     let (x, y) = (figures(a)?, figures(b)?);
     if x.len() != y.len() {
         return Err(format!(
@@ -159,7 +163,8 @@ fn difference(a: &PointResult, b: &PointResult) -> Result<f64, String> {
             a.index + 1,
             x.len(),
             y.len()
-        ));
+        )
+        .into());
     }
     let mut worst = nan_max(rel(x[0], y[0]), rel(x[1], y[1]));
     for k in (2..x.len()).step_by(2) {
@@ -169,7 +174,7 @@ fn difference(a: &PointResult, b: &PointResult) -> Result<f64, String> {
     Ok(worst)
 }
 
-fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
+fn points_equal_single_runs(petsc: &Petsc) -> TestResult {
     let matrix = "[matrix]\nsampling = \"grid\"\n[matrix.axes]\n\
                   pressure_bar = { values = [10.0, 20.0] }\nmu = { values = [0.3, 0.4] }\n";
     fresh(petsc, "matrix-grid");
@@ -181,7 +186,7 @@ fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
     )?;
     let pts = points(&summary)?;
     if pts.len() != 4 {
-        return Err(format!("{} points, expected the 2 x 2 grid", pts.len()));
+        return Err(format!("{} points, expected the 2 x 2 grid", pts.len()).into());
     }
     // The nominal point (20 bar, mu 0.4) is the last of the grid (the last axis fastest).
     let nominal = &summary
@@ -196,7 +201,8 @@ fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
             pts[3].values,
             at.modes.len(),
             nominal.len()
-        ));
+        )
+        .into());
     }
     let mut worst_mode = 0.0f64;
     for (k, (m, n)) in at.modes.iter().zip(nominal).enumerate() {
@@ -208,7 +214,8 @@ fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
                 k + 1,
                 m.label,
                 m.mac
-            ));
+            )
+            .into());
         }
     }
     // The other points against runs of the scene at their parameters (statics from zero).
@@ -237,12 +244,12 @@ fn points_equal_single_runs(petsc: &Petsc) -> Result<(), String> {
     }
     say(petsc, &format!("nominal point's modes against the stage: {worst_mode:.1e}; static states against single runs: {worst_static:.1e}"));
     if exceeds(worst_mode, 1e-7) || exceeds(worst_static, 1e-6) {
-        return Err(format!("nominal modes off by {worst_mode:e} (bound 1e-7), static states by {worst_static:e} (bound 1e-6)"));
+        return Err(format!("nominal modes off by {worst_mode:e} (bound 1e-7), static states by {worst_static:e} (bound 1e-6)").into());
     }
     agrees_with_one_rank(petsc, "noise-matrix-grid", &pts)
 }
 
-fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
+fn slices_and_resume(petsc: &Petsc) -> TestResult {
     let matrix = "[matrix]\nsampling = \"sobol\"\npoints = 8\nseed = 5\n[matrix.axes]\n\
                   pressure_bar = { from = 10.0, to = 30.0 }\ndisc_speed = { from = 2.0, to = 12.0 }\n";
     let text = brake(20.0, 0.4) + matrix;
@@ -263,39 +270,40 @@ fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
             return Err(format!(
                 "slice {k}/2 computed {:?}",
                 part.iter().map(|p| p.index).collect::<Vec<_>>()
-            ));
+            )
+            .into());
         }
     }
     let merged_dir = fresh(petsc, "matrix-merged");
     let merged =
-        squeal::pipeline::merge::merge(petsc.world(), &slice_dirs, &merged_dir, Slice::WHOLE)
-            .map_err(|e| e.to_string())?;
+        squeal::pipeline::merge::merge(petsc.world(), &slice_dirs, &merged_dir, Slice::WHOLE)?;
     let worst_merge = compare(&whole, &merged.run.points)?;
 
     // A run killed after 3 points (its journal cut in the 4th line), resumed.
     let resumed_dir = fresh(petsc, "matrix-resumed");
     if petsc.rank() == 0 {
-        std::fs::create_dir_all(&resumed_dir).map_err(|e| e.to_string())?;
-        let full = std::fs::read_to_string(whole_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+        std::fs::create_dir_all(&resumed_dir)?;
+        let full = std::fs::read_to_string(whole_dir.join(JOURNAL))?;
         let lines: Vec<&str> = full.lines().collect();
         let cut = format!(
             "{}\n{}",
             lines[..4].join("\n"),
             &lines[4][..lines[4].len() / 2]
         );
-        std::fs::write(resumed_dir.join(JOURNAL), cut).map_err(|e| e.to_string())?;
+        std::fs::write(resumed_dir.join(JOURNAL), cut)?;
     }
     squeal::parallel::barrier(petsc.world());
-    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL))?;
     let kept: Vec<usize> = journal.points.iter().map(|p| p.index).collect();
     let refused = run(petsc, &text, "matrix-resumed", &RunOptions::default());
     match refused {
-        Err(e) if e.contains("--restart") && e.contains(JOURNAL) => {}
+        Err(e) if e.to_string().contains("--restart") && e.to_string().contains(JOURNAL) => {}
         other => {
             return Err(format!(
                 "a journal with points, no --restart: {:?}",
                 other.map(|_| "ran")
-            ))
+            )
+            .into())
         }
     }
     let restart = RunOptions {
@@ -309,7 +317,8 @@ fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
             "resumed {} (journal kept {kept:?}), {} points in all",
             report.run.resumed,
             report.run.points.len()
-        ));
+        )
+        .into());
     }
     // The resumed points are the journal's, bit for bit (timings aside: each rank measures
     // its own, the journal holds rank 0's).
@@ -319,27 +328,25 @@ fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
             .find(|w| w.index == p.index)
             .ok_or("a resumed point not in the whole run")?;
         if figures(p)? != figures(w)? || p.values != w.values {
-            return Err(format!("resumed point {} changed", p.index + 1));
+            return Err(format!("resumed point {} changed", p.index + 1).into());
         }
     }
     let worst_resume = compare(&whole, &report.run.points)?;
-    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL)).map_err(|e| e.to_string())?;
+    let journal = matrix_journal::read(&resumed_dir.join(JOURNAL))?;
     if journal.points.len() != 8 || journal.truncated {
         return Err(format!(
             "the resumed journal holds {} points (cut: {})",
             journal.points.len(),
             journal.truncated
-        ));
+        )
+        .into());
     }
     // Another scene (another seed) on this journal: refused, naming the file.
     let other = text.replace("seed = 5", "seed = 6");
     match run(petsc, &other, "matrix-resumed", &restart) {
-        Err(e) if e.contains("another scene") && e.contains(JOURNAL) => {}
+        Err(e) if e.to_string().contains("another scene") && e.to_string().contains(JOURNAL) => {}
         other => {
-            return Err(format!(
-                "restart with another scene: {:?}",
-                other.map(|_| "ran")
-            ))
+            return Err(format!("restart with another scene: {:?}", other.map(|_| "ran")).into())
         }
     }
     say(
@@ -351,9 +358,9 @@ fn slices_and_resume(petsc: &Petsc) -> Result<(), String> {
 
 /// The same points (indices, parameters bit for bit, labels) with results within 1e-6
 /// relative (torque, force, eigenvalues); returns the largest difference.
-fn compare(whole: &[PointResult], other: &[PointResult]) -> Result<f64, String> {
+fn compare(whole: &[PointResult], other: &[PointResult]) -> TestResult<f64> {
     if whole.len() != other.len() {
-        return Err(format!("{} points against {}", other.len(), whole.len()));
+        return Err(format!("{} points against {}", other.len(), whole.len()).into());
     }
     let mut worst = 0.0f64;
     for (a, b) in whole.iter().zip(other) {
@@ -364,7 +371,8 @@ fn compare(whole: &[PointResult], other: &[PointResult]) -> Result<f64, String> 
                 b.values,
                 a.index + 1,
                 a.values
-            ));
+            )
+            .into());
         }
         let d = difference(b, a)?;
         let (sa, sb) = (a.solved().ok_or("failed")?, b.solved().ok_or("failed")?);
@@ -372,12 +380,12 @@ fn compare(whole: &[PointResult], other: &[PointResult]) -> Result<f64, String> 
             s.modes.iter().map(|m| m.label).collect::<Vec<_>>()
         };
         if labels(sa) != labels(sb) {
-            return Err(format!("point {}: labels differ", a.index + 1));
+            return Err(format!("point {}: labels differ", a.index + 1).into());
         }
         worst = nan_max(worst, d);
     }
     if exceeds(worst, 1e-6) {
-        return Err(format!("results differ by {worst:e} (bound 1e-6)"));
+        return Err(format!("results differ by {worst:e} (bound 1e-6)").into());
     }
     Ok(worst)
 }
@@ -397,7 +405,7 @@ fn scaled_lining(e: f64) -> String {
     )
 }
 
-fn lining_and_superelement(petsc: &Petsc) -> Result<(), String> {
+fn lining_and_superelement(petsc: &Petsc) -> TestResult {
     let matrix =
         "[reduction]\n[matrix]\nsampling = \"grid\"\nstatics = \"reduced\"\nfull_checks = 9\n\
                   [matrix.axes]\npressure_bar = { values = [20.0, 22.5, 25.0] }\n\
@@ -411,7 +419,7 @@ fn lining_and_superelement(petsc: &Petsc) -> Result<(), String> {
     )?;
     let pts = points(&summary)?;
     // (displacement error, torque: reduced, full) at (pressure, lining).
-    let at = |pressure: f64, lining: f64| -> Result<(f64, f64, f64), String> {
+    let at = |pressure: f64, lining: f64| -> TestResult<(f64, f64, f64)> {
         let p = pts
             .iter()
             .find(|p| p.values == [pressure, lining])
@@ -422,7 +430,7 @@ fn lining_and_superelement(petsc: &Petsc) -> Result<(), String> {
             p.values
         ))?;
         if let Some(f) = &c.failure {
-            return Err(format!("full check at {:?}: {f}", p.values));
+            return Err(format!("full check at {:?}: {f}", p.values).into());
         }
         Ok((c.displacement_error, s.braking_torque, c.braking_torque))
     };
@@ -449,15 +457,15 @@ fn lining_and_superelement(petsc: &Petsc) -> Result<(), String> {
     let (rate_p, rate_l) = (rate(pressure), rate(lining));
     say(petsc, &format!("lining x 0.8 against the scaled material: {material:.1e}; superelement at the nominal point {nominal:.1e}; its error at +2.5/+5 bar {:.2e}/{:.2e} (rate {rate_p:.2}), at lining x 0.9/0.8 {:.2e}/{:.2e} (rate {rate_l:.2})", pressure[0], pressure[1], lining[0], lining[1]));
     if exceeds(material, 1e-6) || exceeds(nominal, 1e-6) {
-        return Err(format!("lining factor vs scaled material {material:e} (bound 1e-6), superelement at the nominal point {nominal:e} (bound 1e-6)"));
+        return Err(format!("lining factor vs scaled material {material:e} (bound 1e-6), superelement at the nominal point {nominal:e} (bound 1e-6)").into());
     }
     if !(rate_p >= 1.5 && rate_l >= 1.5) {
-        return Err(format!("the superelement's static error converges at rate {rate_p} in pressure and {rate_l} in lining stiffness, below 1.5 (second order expected)"));
+        return Err(format!("the superelement's static error converges at rate {rate_p} in pressure and {rate_l} in lining stiffness, below 1.5 (second order expected)").into());
     }
     agrees_with_one_rank(petsc, "noise-matrix-lining", &pts)
 }
 
-fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
+fn saturation_at_the_nominal_point(petsc: &Petsc) -> TestResult {
     // The pseudo-trajectory suite's brake (40 modes: C35, the most unstable, saturates in the
     // coarse sweep).
     let post = "[post.pseudo_trajectory]\nmost_unstable = 1\nalphas = 9\nphases = 16\n\
@@ -474,7 +482,7 @@ fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
         .first()
         .ok_or("no saturated mode at the nominal point")?;
     if let Some(f) = &sat.failure {
-        return Err(format!("the nominal point's study failed: {f}"));
+        return Err(format!("the nominal point's study failed: {f}").into());
     }
     let study = summary
         .pseudo
@@ -484,19 +492,16 @@ fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
     let t = &study.trajectory;
     let label = sat.label.map(|l| format!("C{l}"));
     if label.as_deref() != Some(t.name.as_str()) {
-        return Err(format!(
-            "the point followed {label:?}, the stage {}",
-            t.name
-        ));
+        return Err(format!("the point followed {label:?}, the stage {}", t.name).into());
     }
     let (a, b) = (sat.alpha_sat, t.alpha_sat.alpha());
     let (Some(a), Some(b)) = (a, b) else {
-        return Err(format!("alpha_sat: point {a:?}, stage {b:?}"));
+        return Err(format!("alpha_sat: point {a:?}, stage {b:?}").into());
     };
     let crit = match (sat.alpha_crit, t.alpha_crit.alpha()) {
         (Some(x), Some(y)) => rel(x, y),
         (None, None) => 0.0,
-        (x, y) => return Err(format!("alpha_crit: point {x:?}, stage {y:?}")),
+        (x, y) => return Err(format!("alpha_crit: point {x:?}, stage {y:?}").into()),
     };
     let loud = summary.loudness.as_ref().ok_or("no loudness report")?;
     let stage_level = loud
@@ -509,7 +514,7 @@ fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
     let (d_sat, d_level) = (rel(a, b), (level - stage_level).abs());
     say(petsc, &format!("{}: alpha_sat {a:.4e} m (stage {b:.4e}, {d_sat:.1e}), alpha_crit {crit:.1e} apart, level {level:.2} dB(A) (stage {stage_level:.2}); the other point: {:?}", t.name, pts[1].solved().and_then(|s| s.saturation.first()).map(|m| (m.label, m.alpha_sat, m.level_db_a))));
     if exceeds(d_sat, 0.01) || exceeds(crit, 0.01) || exceeds(d_level, 0.1) {
-        return Err(format!("alpha_sat {d_sat:e} and alpha_crit {crit:e} apart (bound 1 %), level {d_level:e} dB (bound 0.1 dB)"));
+        return Err(format!("alpha_sat {d_sat:e} and alpha_crit {crit:e} apart (bound 1 %), level {d_level:e} dB (bound 0.1 dB)").into());
     }
     let mine: Vec<f64> = pts
         .iter()
@@ -549,6 +554,7 @@ fn saturation_at_the_nominal_point(petsc: &Petsc) -> Result<(), String> {
             petsc.size(),
             mine.len(),
             one.len()
-        )),
+        )
+        .into()),
     }
 }

@@ -23,6 +23,7 @@
 //! - the product with a matrix's chosen columns, stored by column on each rank's rows (a
 //!   nonlinear elimination's change of the linear force), equals the whole product.
 
+use super::TestResult;
 use mpi::collective::{CommunicatorCollectives, SystemOperation};
 use std::path::{Path, PathBuf};
 
@@ -45,16 +46,15 @@ use squeal::measure::{exceeds, nan_max, nan_min};
 use super::common::{check_le, one_rank_rows, rel, say, solve_modes, steel, suite_dir};
 
 /// max |x - 1| where `solver` solves x from b = `m` 1.
-fn error_solving_for_ones(solver: &DirectSolver, m: &SparseMatrix) -> Result<f64, String> {
-    let e = |e: squeal::la::LaError| e.to_string();
-    let mut ones = m.new_vector().map_err(e)?;
-    ones.set_all(1.0).map_err(e)?;
-    let mut rhs = ones.duplicate().map_err(e)?;
-    m.mult(&ones, &mut rhs).map_err(e)?;
-    let mut x = ones.duplicate().map_err(e)?;
-    solver.solve(&rhs, &mut x).map_err(e)?;
-    x.axpy(-1.0, &ones).map_err(e)?;
-    x.norm_inf().map_err(e)
+fn error_solving_for_ones(solver: &DirectSolver, m: &SparseMatrix) -> TestResult<f64> {
+    let mut ones = m.new_vector()?;
+    ones.set_all(1.0)?;
+    let mut rhs = ones.duplicate()?;
+    m.mult(&ones, &mut rhs)?;
+    let mut x = ones.duplicate()?;
+    solver.solve(&rhs, &mut x)?;
+    x.axpy(-1.0, &ones)?;
+    Ok(x.norm_inf()?)
 }
 
 /// Rank r's blocks for the plan test: (global id, indices); one holds a -1 (skipped).
@@ -83,20 +83,16 @@ fn block_value(id: usize, a: usize, c: usize) -> f64 {
 /// after a second addition with the same plan; entries outside the blocks stay as they were.
 /// A block outside the pattern gives no plan on any rank; another list of blocks is refused
 /// on every rank; a factor renewed after an addition solves with the new values.
-fn planned_block_addition_lands_exactly_where_matsetvalues_would(
-    petsc: &Petsc,
-) -> Result<(), String> {
+fn planned_block_addition_lands_exactly_where_matsetvalues_would(petsc: &Petsc) -> TestResult {
     let n = 40;
     let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
     let local = rank * n / size..(rank + 1) * n / size;
-    let e = |e: squeal::la::LaError| e.to_string();
     let base = |i: usize, j: usize| if i == j { 400.0 } else { 0.0 };
     let mut a = banded(petsc, n, local.clone(), 2, base)?;
     let mine = rank_blocks(rank, n);
     let indices: Vec<&[i32]> = mine.iter().map(|(_, b)| b.as_slice()).collect();
-    let mut plan = BlockAddPlan::new(&a, &indices)
-        .map_err(e)?
-        .ok_or("no plan for blocks inside the pattern")?;
+    let mut plan =
+        BlockAddPlan::new(&a, &indices)?.ok_or("no plan for blocks inside the pattern")?;
     let mut sum = vec![0.0; n * n];
     for r in 0..size {
         for (id, b) in rank_blocks(r, n) {
@@ -117,17 +113,15 @@ fn planned_block_addition_lands_exactly_where_matsetvalues_would(
             }
         }
     };
-    plan.add(&mut a, &indices, fill).map_err(e)?;
+    plan.add(&mut a, &indices, fill)?;
     let once = entry_error(&a, |i, j| base(i, j) + sum[i * n + j])?;
-    let mut solver = DirectSolver::factorize(petsc, &a, Factorization::Lu, "plan_").map_err(e)?;
-    plan.add(&mut a, &indices, fill).map_err(e)?;
+    let mut solver = DirectSolver::factorize(petsc, &a, Factorization::Lu, "plan_")?;
+    plan.add(&mut a, &indices, fill)?;
     let twice = entry_error(&a, |i, j| base(i, j) + 2.0 * sum[i * n + j])?;
-    solver.refactorize(&a).map_err(e)?;
+    solver.refactorize(&a)?;
     let solve_error = error_solving_for_ones(&solver, &a)?;
     let outside: Vec<i32> = vec![0, 5];
-    let no_plan = BlockAddPlan::new(&a, &[outside.as_slice()])
-        .map_err(e)?
-        .is_none();
+    let no_plan = BlockAddPlan::new(&a, &[outside.as_slice()])?.is_none();
     let fewer = &indices[..indices.len() - 1];
     let refused = plan.add(&mut a, fewer, |_, _| {}).is_err();
     say(
@@ -207,12 +201,11 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// of the same terms in another order: |difference| <= 2 n_row eps (|J| |x|)_i with n_row the
 /// longest row's entries (the standard bound on a sum's rounding, for each of the two).
 /// The entries stored over the ranks are those of the chosen columns, none lost or doubled.
-fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Result<(), String> {
+fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> TestResult {
     use squeal::la::ColumnBlock;
-    let e = |e: squeal::la::LaError| e.to_string();
     let (j, _) = m0_newmark_system(petsc)?;
     let columns: Vec<usize> = (1500..2700.min(j.global_rows())).collect();
-    let block = ColumnBlock::new(&j, &columns).map_err(e)?;
+    let block = ColumnBlock::new(&j, &columns)?;
     let moved: Vec<(usize, f64)> = (0..columns.len())
         .step_by(3)
         .map(|p| (p, (0.37 * p as f64).sin() * (1.0 + (p % 7) as f64)))
@@ -222,12 +215,10 @@ fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Resu
     for &(p, v) in &moved {
         x_global[columns[p]] = v;
     }
-    let mut x = j.new_vector().map_err(e)?;
-    x.local_mut()
-        .map_err(e)?
-        .copy_from_slice(&x_global[own.clone()]);
-    let mut whole = x.duplicate().map_err(e)?;
-    j.mult(&x, &mut whole).map_err(e)?;
+    let mut x = j.new_vector()?;
+    x.local_mut()?.copy_from_slice(&x_global[own.clone()]);
+    let mut whole = x.duplicate()?;
+    j.mult(&x, &mut whole)?;
     // (|J| |x|)_i, the longest row and the entries in the chosen columns, on this rank's rows.
     let (mut scale, mut longest, mut stored) = (Vec::new(), 0usize, 0usize);
     j.for_each_local_row(|_, cols, vals| {
@@ -242,15 +233,14 @@ fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Resu
                 .map(|(&c, v)| (v * x_global[c as usize]).abs())
                 .sum::<f64>(),
         );
-    })
-    .map_err(e)?;
+    })?;
     let mut by_columns = vec![0.0; own.len()];
     block.mult_add(1.0, moved.iter().copied(), &mut by_columns);
     let longest = squeal::parallel::max(petsc.world(), longest as f64);
     let allowed = 2.0 * longest * f64::EPSILON;
     let mut worst = 0.0f64;
     {
-        let w = whole.local().map_err(e)?;
+        let w = whole.local()?;
         for i in 0..own.len() {
             let ratio = if by_columns[i] == w[i] {
                 0.0
@@ -277,16 +267,15 @@ fn brake_m0_column_block_product_equals_the_whole_product(petsc: &Petsc) -> Resu
         return Err(format!(
             "the column block holds {} entries, J has {} in those columns",
             counts[0], counts[1]
-        ));
+        )
+        .into());
     }
     check_le("column block product / round-off bound", worst_all[0], 1.0)
 }
 
 /// A `Selection` built once gathers the same chosen entries (owned by any rank, in any
 /// order) on every rank, each time, from vectors of the template's layout.
-fn selection_gathers_the_chosen_entries_in_their_order_on_every_rank(
-    petsc: &Petsc,
-) -> Result<(), String> {
+fn selection_gathers_the_chosen_entries_in_their_order_on_every_rank(petsc: &Petsc) -> TestResult {
     let (rank, size) = (petsc.rank() as usize, petsc.size() as usize);
     let global = 101;
     // Uneven ownership: the last rank holds the remainder.
@@ -302,15 +291,15 @@ fn selection_gathers_the_chosen_entries_in_their_order_on_every_rank(
             .map(|i| scale * (i as f64 + 0.5))
             .collect()
     };
-    let x = Vector::from_local(petsc, &values(1.0)).map_err(|e| e.to_string())?;
-    let y = Vector::from_local(petsc, &values(-2.0)).map_err(|e| e.to_string())?;
+    let x = Vector::from_local(petsc, &values(1.0))?;
+    let y = Vector::from_local(petsc, &values(-2.0))?;
     let chosen = [100, 3, 57, 0, 42, 99];
-    let selection = Selection::new(&x, &chosen).map_err(|e| e.to_string())?;
+    let selection = Selection::new(&x, &chosen)?;
     for (v, scale) in [(&x, 1.0), (&y, -2.0), (&x, 1.0)] {
-        let got = selection.gather(v).map_err(|e| e.to_string())?;
+        let got = selection.gather(v)?;
         let want: Vec<f64> = chosen.iter().map(|&i| scale * (i as f64 + 0.5)).collect();
         if got != want {
-            return Err(format!("gathered {got:?}, expected {want:?}"));
+            return Err(format!("gathered {got:?}, expected {want:?}").into());
         }
     }
     Ok(())
@@ -323,7 +312,7 @@ fn data_dir() -> PathBuf {
 /// Modes of a rectangular cantilever (no doublets, so shapes are unique up to sign) on this
 /// run's ranks, gathered in global DOF order; the 1-rank run stores them, the 2-rank run
 /// compares against them.
-fn same_modes_one_and_two_ranks(petsc: &Petsc) -> Result<(), String> {
+fn same_modes_one_and_two_ranks(petsc: &Petsc) -> TestResult {
     let mesh = block([1.0, 0.12, 0.07], [12, 3, 2], ElementKind::Hex20, steel());
     let request = RealModeRequest {
         count: 8,
@@ -331,11 +320,8 @@ fn same_modes_one_and_two_ranks(petsc: &Petsc) -> Result<(), String> {
         ..Default::default()
     };
     let (system, modes) = solve_modes(petsc, &mesh, &[Clamp::all("u0")], &request)?;
-    let norm_k = system
-        .stiffness
-        .norm_infinity()
-        .map_err(|e| e.to_string())?;
-    let norm_m = system.mass.norm_infinity().map_err(|e| e.to_string())?;
+    let norm_k = system.stiffness.norm_infinity()?;
+    let norm_m = system.mass.norm_infinity()?;
     // Per mode: frequency, backward error, condition number, then the shape.
     let mut rows = Vec::new();
     for ((f, shape), eta) in modes
@@ -345,7 +331,7 @@ fn same_modes_one_and_two_ranks(petsc: &Petsc) -> Result<(), String> {
         .zip(&modes.backward_errors)
     {
         // A shape's sign is arbitrary: it is aligned with the 1-rank one below.
-        let v = shape.gather_all().map_err(|e| e.to_string())?;
+        let v = shape.gather_all()?;
         let lambda = (2.0 * std::f64::consts::PI * f).powi(2);
         let x2: f64 = v.iter().map(|x| x * x).sum();
         let condition = (norm_k + lambda * norm_m) * x2 / lambda;
@@ -410,7 +396,7 @@ fn diagonal<'p>(
     petsc: &'p Petsc,
     local: std::ops::Range<usize>,
     value: impl Fn(usize) -> f64,
-) -> Result<SparseMatrix<'p>, String> {
+) -> TestResult<SparseMatrix<'p>> {
     let n = local.len();
     let p = Preallocation {
         diag: vec![1; n],
@@ -418,16 +404,15 @@ fn diagonal<'p>(
         diag_upper: vec![1; n],
         off_upper: vec![0; n],
     };
-    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, n, &p).map_err(|e| e.to_string())?;
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, n, &p)?;
     for i in local {
-        a.add_values(&[i as i32], &[i as i32], &[value(i)])
-            .map_err(|e| e.to_string())?;
+        a.add_values(&[i as i32], &[i as i32], &[value(i)])?;
     }
-    a.assemble().map_err(|e| e.to_string())?;
+    a.assemble()?;
     Ok(a)
 }
 
-fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), String> {
+fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> TestResult {
     let n = 40;
     let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
     let local = rank * n / size..(rank + 1) * n / size;
@@ -444,7 +429,7 @@ fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), Str
         tolerance: 1e-12,
         ..Default::default()
     };
-    let sol = solve_quadratic(petsc, &kk, &cc, &mm, &opts).map_err(|e| e.to_string())?;
+    let sol = solve_quadratic(petsc, &kk, &cc, &mm, &opts)?;
     let exact: Vec<(f64, f64)> = (0..n)
         .flat_map(|i| {
             let re = -c(i) / (2.0 * m(i));
@@ -466,9 +451,7 @@ fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), Str
             let tolerance = 1e-9 * nan_max(im.abs(), 1.0);
             (r2 - re).abs() < tolerance && (i2 + im).abs() < tolerance
         }) {
-            return Err(format!(
-                "eigenvalue {re} + {im}i has no conjugate in the result"
-            ));
+            return Err(format!("eigenvalue {re} + {im}i has no conjugate in the result").into());
         }
     }
     let smallest = exact
@@ -486,7 +469,7 @@ fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), Str
         ),
     );
     if exceeds(worst, 1e-9) {
-        return Err(format!("worst relative eigenvalue error {worst:e}"));
+        return Err(format!("worst relative eigenvalue error {worst:e}").into());
     }
     let nearest = sol
         .values
@@ -494,12 +477,12 @@ fn quadratic_damped_oscillators_conjugate_pairs(petsc: &Petsc) -> Result<(), Str
         .map(|&(r, i)| (r * r + i * i).sqrt())
         .fold(f64::INFINITY, nan_min);
     if exceeds(rel(nearest, smallest), 1e-9) {
-        return Err(format!("smallest |s| found {nearest}, exact {smallest}"));
+        return Err(format!("smallest |s| found {nearest}, exact {smallest}").into());
     }
     Ok(())
 }
 
-fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), String> {
+fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> TestResult {
     let term = |f: &str| {
         vec![MatrixTerm {
             file: PathBuf::from(f),
@@ -507,13 +490,14 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
             speed_power: 0,
         }]
     };
-    let k = load_sum(petsc, &term("K1.mtx.gz"), &data_dir()).map_err(|e| e.to_string())?;
-    let m = load_sum(petsc, &term("M.mtx.gz"), &data_dir()).map_err(|e| e.to_string())?;
+    let k = load_sum(petsc, &term("K1.mtx.gz"), &data_dir())?;
+    let m = load_sum(petsc, &term("M.mtx.gz"), &data_dir())?;
     if k.rows != 4669 || exceeds(k.asymmetry, 1e-12) || exceeds(m.asymmetry, 1e-12) {
         return Err(format!(
             "M0: {} rows, asymmetry K {:e} M {:e}",
             k.rows, k.asymmetry, m.asymmetry
-        ));
+        )
+        .into());
     }
     let by_count = real_modes(
         petsc,
@@ -526,8 +510,7 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
             ..Default::default()
         },
         "count_",
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let f_max = 3000.0;
     let by_slicing = real_modes(
         petsc,
@@ -540,8 +523,7 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
             ..Default::default()
         },
         "slice_",
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let expected: Vec<f64> = by_count
         .frequencies_hz
         .iter()
@@ -561,11 +543,12 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
         return Err(format!(
             "slicing found {:?}, count-based {:?}",
             by_slicing.frequencies_hz, expected
-        ));
+        )
+        .into());
     }
     for (a, b) in by_slicing.frequencies_hz.iter().zip(&expected) {
         if exceeds(rel(*a, *b), 1e-9) {
-            return Err(format!("frequency {a} (slicing) vs {b} (count)"));
+            return Err(format!("frequency {a} (slicing) vs {b} (count)").into());
         }
     }
     let worst = by_count
@@ -573,22 +556,22 @@ fn brake_m0_modes_by_slicing_equal_modes_by_count(petsc: &Petsc) -> Result<(), S
         .iter()
         .fold(0.0f64, |a, &b| nan_max(a, b));
     if exceeds(worst, 1e-10) {
-        return Err(format!("backward error {worst:e}"));
+        return Err(format!("backward error {worst:e}").into());
     }
     Ok(())
 }
 
-fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
+fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> TestResult {
     let mesh = block([0.3, 0.1, 0.05], [6, 2, 2], ElementKind::Hex20, steel());
-    let system = assemble_system(petsc, &mesh, &[Clamp::all("u0")]).map_err(|e| e.to_string())?;
+    let system = assemble_system(petsc, &mesh, &[Clamp::all("u0")])?;
     let dir = suite_dir().join(format!("roundtrip-{}", petsc.size()));
     // Rank 0 makes the folder; its failure is shared before anyone waits for it.
     let made = petsc.rank() != 0 || std::fs::create_dir_all(&dir).is_ok();
     if squeal::parallel::any_rank(petsc.world(), !made) {
-        return Err(format!("cannot create {}", dir.display()));
+        return Err(format!("cannot create {}", dir.display()).into());
     }
     let path = dir.join("K.mtx");
-    matrix_market::write(petsc.world(), &system.stiffness, &path).map_err(|e| e.to_string())?;
+    matrix_market::write(petsc.world(), &system.stiffness, &path)?;
     squeal::parallel::barrier(petsc.world());
     let back = load_sum(
         petsc,
@@ -598,32 +581,22 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
             speed_power: 0,
         }],
         Path::new(""),
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     // Compare K x for a deterministic x; layouts may differ, so compare gathered products.
     let n = system.stiffness.global_rows();
-    let mut x1 = system.stiffness.new_vector().map_err(|e| e.to_string())?;
-    let mut x2 = back.matrix.new_vector().map_err(|e| e.to_string())?;
+    let mut x1 = system.stiffness.new_vector()?;
+    let mut x2 = back.matrix.new_vector()?;
     let (r1, r2) = (x1.ownership(), x2.ownership());
     for (x, range) in [(&mut x1, r1), (&mut x2, r2)] {
-        let mut l = x.local_mut().map_err(|e| e.to_string())?;
+        let mut l = x.local_mut()?;
         for (i, v) in range.clone().zip(l.iter_mut()) {
             *v = ((i * 7919) % 101) as f64 / 101.0 - 0.5;
         }
     }
-    let (mut y1, mut y2) = (
-        x1.duplicate().map_err(|e| e.to_string())?,
-        x2.duplicate().map_err(|e| e.to_string())?,
-    );
-    system
-        .stiffness
-        .mult(&x1, &mut y1)
-        .map_err(|e| e.to_string())?;
-    back.matrix.mult(&x2, &mut y2).map_err(|e| e.to_string())?;
-    let (a, b) = (
-        y1.gather_all().map_err(|e| e.to_string())?,
-        y2.gather_all().map_err(|e| e.to_string())?,
-    );
+    let (mut y1, mut y2) = (x1.duplicate()?, x2.duplicate()?);
+    system.stiffness.mult(&x1, &mut y1)?;
+    back.matrix.mult(&x2, &mut y2)?;
+    let (a, b) = (y1.gather_all()?, y2.gather_all()?);
     let scale = a.iter().fold(0.0f64, |m, v| nan_max(m, v.abs()));
     let diff = a
         .iter()
@@ -641,14 +614,15 @@ fn matrix_market_export_import_roundtrip(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "rows {} vs {n}, asymmetry {:e}, difference {diff:e}",
             back.rows, back.asymmetry
-        ));
+        )
+        .into());
     }
     Ok(())
 }
 
 /// The brake M0 Newmark Jacobian (see the test below) and b = J x_true for an x_true with
 /// entries of both signs and several magnitudes.
-fn m0_newmark_system<'p>(petsc: &'p Petsc) -> Result<(SparseMatrix<'p>, Vector<'p>), String> {
+fn m0_newmark_system<'p>(petsc: &'p Petsc) -> TestResult<(SparseMatrix<'p>, Vector<'p>)> {
     m0_newmark_system_with_friction(petsc, 1.0)
 }
 
@@ -656,7 +630,7 @@ fn m0_newmark_system<'p>(petsc: &'p Petsc) -> Result<(SparseMatrix<'p>, Vector<'
 fn m0_newmark_system_with_friction<'p>(
     petsc: &'p Petsc,
     friction: f64,
-) -> Result<(SparseMatrix<'p>, Vector<'p>), String> {
+) -> TestResult<(SparseMatrix<'p>, Vector<'p>)> {
     let (h, beta, gamma, omega) = (1e-6, 0.25, 0.5, 4.0 * std::f64::consts::PI);
     let term = |f: &str, c: f64| MatrixTerm {
         file: PathBuf::from(f),
@@ -671,26 +645,27 @@ fn m0_newmark_system_with_friction<'p>(
         term("K1.mtx.gz", 1.0),
         term("KR.mtx.gz", friction),
     ];
-    let j = load_sum(petsc, &terms, &data_dir()).map_err(|e| e.to_string())?;
+    let j = load_sum(petsc, &terms, &data_dir())?;
     if j.asymmetry.is_nan() || j.asymmetry < 1e-12 {
         return Err(format!(
             "J should be unsymmetric (friction), asymmetry {:e}",
             j.asymmetry
-        ));
+        )
+        .into());
     }
     let j = j.matrix;
     // x_true with entries of both signs and several magnitudes; b = J x_true.
-    let mut x_true = j.new_vector().map_err(|e| e.to_string())?;
+    let mut x_true = j.new_vector()?;
     let range = x_true.ownership();
     {
-        let mut local = x_true.local_mut().map_err(|e| e.to_string())?;
+        let mut local = x_true.local_mut()?;
         for (k, v) in local.iter_mut().enumerate() {
             let i = (range.start + k) as f64;
             *v = (0.37 * i).sin() * (1.0 + (i / 500.0).cos().powi(2) * 10.0);
         }
     }
-    let mut b = x_true.duplicate().map_err(|e| e.to_string())?;
-    j.mult(&x_true, &mut b).map_err(|e| e.to_string())?;
+    let mut b = x_true.duplicate()?;
+    j.mult(&x_true, &mut b)?;
     Ok((j, b))
 }
 
@@ -703,32 +678,30 @@ fn m0_newmark_system_with_friction<'p>(
 /// multiple of n_row eps (n_row <= 200 entries per row here: ~4e-14); asserted below 1e-12,
 /// as for MUMPS with its pivoting on the same system. The two solutions then agree within
 /// cond(J) times that (cond_inf(J) ~ 1e2 here, from the mass-dominated diagonal): 1e-9.
-fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Result<(), String> {
+fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> TestResult {
     let (j, b) = m0_newmark_system(petsc)?;
-    let j_inf = j.norm_infinity().map_err(|e| e.to_string())?;
-    let b_inf = b.norm_inf().map_err(|e| e.to_string())?;
-    let solve = |per_rank: bool| -> Result<(Vector<'_>, f64), String> {
+    let j_inf = j.norm_infinity()?;
+    let b_inf = b.norm_inf()?;
+    let solve = |per_rank: bool| -> TestResult<(Vector<'_>, f64)> {
         let factor = if per_rank {
             DirectSolver::factorize_per_rank(petsc, &j, "m0_per_rank_")
         } else {
             DirectSolver::factorize(petsc, &j, Factorization::Lu, "m0_mumps_")
-        }
-        .map_err(|e| e.to_string())?;
-        let mut x = b.duplicate().map_err(|e| e.to_string())?;
-        factor.solve(&b, &mut x).map_err(|e| e.to_string())?;
-        let mut r = b.duplicate().map_err(|e| e.to_string())?;
-        j.mult(&x, &mut r).map_err(|e| e.to_string())?;
-        r.axpy(-1.0, &b).map_err(|e| e.to_string())?;
-        let x_inf = x.norm_inf().map_err(|e| e.to_string())?;
-        let backward = r.norm_inf().map_err(|e| e.to_string())? / (j_inf * x_inf + b_inf);
+        }?;
+        let mut x = b.duplicate()?;
+        factor.solve(&b, &mut x)?;
+        let mut r = b.duplicate()?;
+        j.mult(&x, &mut r)?;
+        r.axpy(-1.0, &b)?;
+        let x_inf = x.norm_inf()?;
+        let backward = r.norm_inf()? / (j_inf * x_inf + b_inf);
         Ok((x, backward))
     };
     let (x_lu, backward_lu) = solve(true)?;
     let (x_mumps, backward_mumps) = solve(false)?;
-    let mut d = x_lu.try_clone().map_err(|e| e.to_string())?;
-    d.axpy(-1.0, &x_mumps).map_err(|e| e.to_string())?;
-    let difference =
-        d.norm_inf().map_err(|e| e.to_string())? / x_mumps.norm_inf().map_err(|e| e.to_string())?;
+    let mut d = x_lu.try_clone()?;
+    d.axpy(-1.0, &x_mumps)?;
+    let difference = d.norm_inf()? / x_mumps.norm_inf()?;
     say(
         petsc,
         &format!(
@@ -739,7 +712,7 @@ fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Resul
     if bad(backward_lu, 1e-12) || bad(backward_mumps, 1e-12) || bad(difference, 1e-9) {
         return Err(format!(
             "backward errors {backward_lu:e} (per-rank LU), {backward_mumps:e} (MUMPS), difference {difference:e}"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -753,49 +726,47 @@ fn brake_m0_newmark_jacobian_per_rank_lu_backward_stable(petsc: &Petsc) -> Resul
 /// contracts the error by about cond(J) u ~ 1e-5 per step, so from 1.2e-5 it must reach the
 /// double-precision bound above (1e-12) within 3 steps, and then agree with MUMPS' double
 /// factor's solution within 1e-9 as above.
-fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(), String> {
-    let e = |e: squeal::la::LaError| e.to_string();
+fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> TestResult {
     let (j, b) = m0_newmark_system(petsc)?;
-    let j_inf = j.norm_infinity().map_err(e)?;
-    let b_inf = b.norm_inf().map_err(e)?;
-    let backward = |x: &Vector, r: &mut Vector| -> Result<f64, String> {
-        j.mult(x, r).map_err(e)?;
-        r.axpy(-1.0, &b).map_err(e)?;
-        r.scale(-1.0).map_err(e)?;
-        Ok(r.norm_inf().map_err(e)? / (j_inf * x.norm_inf().map_err(e)? + b_inf))
+    let j_inf = j.norm_infinity()?;
+    let b_inf = b.norm_inf()?;
+    let backward = |x: &Vector, r: &mut Vector| -> TestResult<f64> {
+        j.mult(x, r)?;
+        r.axpy(-1.0, &b)?;
+        r.scale(-1.0)?;
+        Ok(r.norm_inf()? / (j_inf * x.norm_inf()? + b_inf))
     };
-    let single =
-        DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_single_").map_err(e)?;
-    let double = DirectSolver::factorize(petsc, &j, Factorization::Lu, "m0_double_").map_err(e)?;
-    let mut x = b.duplicate().map_err(e)?;
-    let mut r = b.duplicate().map_err(e)?;
+    let single = DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_single_")?;
+    let double = DirectSolver::factorize(petsc, &j, Factorization::Lu, "m0_double_")?;
+    let mut x = b.duplicate()?;
+    let mut r = b.duplicate()?;
     // The solve with MUMPS' one-column GEMMs sent to GEMV (la::one_column_gemm, the default)
     // and with the library's GEMM: both within the bound; forwarded calls counted over the
     // ranks (none would mean the executable does not interpose the symbol).
     one_column_gemm::set_forwarding(false);
-    single.solve(&b, &mut x).map_err(e)?;
+    single.solve(&b, &mut x)?;
     let first_library = backward(&x, &mut r)?;
     one_column_gemm::set_forwarding(true);
     let before = one_column_gemm::calls().0;
-    single.solve(&b, &mut x).map_err(e)?;
+    single.solve(&b, &mut x)?;
     let forwarded_here = one_column_gemm::calls().0 - before;
     let mut forwarded = 0u64;
     petsc
         .world()
         .all_reduce_into(&forwarded_here, &mut forwarded, SystemOperation::sum());
     let first = backward(&x, &mut r)?;
-    let mut dx = b.duplicate().map_err(e)?;
+    let mut dx = b.duplicate()?;
     let (mut refined, mut steps) = (first, 0);
     while (refined > 1e-12 || refined.is_nan()) && steps < 3 {
-        single.solve(&r, &mut dx).map_err(e)?;
-        x.axpy(1.0, &dx).map_err(e)?;
+        single.solve(&r, &mut dx)?;
+        x.axpy(1.0, &dx)?;
         refined = backward(&x, &mut r)?;
         steps += 1;
     }
-    let mut reference = b.duplicate().map_err(e)?;
-    double.solve(&b, &mut reference).map_err(e)?;
-    x.axpy(-1.0, &reference).map_err(e)?;
-    let difference = x.norm_inf().map_err(e)? / reference.norm_inf().map_err(e)?;
+    let mut reference = b.duplicate()?;
+    double.solve(&b, &mut reference)?;
+    x.axpy(-1.0, &reference)?;
+    let difference = x.norm_inf()? / reference.norm_inf()?;
     let report = single.report();
     say(
         petsc,
@@ -817,7 +788,7 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
     {
         return Err(format!(
             "single precision: backward error {first:e} ({first_library:e} with the library's GEMM), refined {refined:e} after {steps} steps, difference {difference:e}"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -828,27 +799,25 @@ fn brake_m0_newmark_jacobian_single_precision_mumps(petsc: &Petsc) -> Result<(),
 /// the factor renewed, and one solve of the new system must meet the single-precision bound
 /// of the test above (n_row u = 1.2e-5), which the old factor misses by orders of magnitude
 /// (checked, so the renewal is not vacuous); another matrix is refused.
-fn brake_m0_single_precision_factor_renewed_in_place(petsc: &Petsc) -> Result<(), String> {
-    let e = |e: squeal::la::LaError| e.to_string();
+fn brake_m0_single_precision_factor_renewed_in_place(petsc: &Petsc) -> TestResult {
     let (mut j, _) = m0_newmark_system(petsc)?;
     let (j2, b2) = m0_newmark_system_with_friction(petsc, 2.0)?;
-    let mut factor =
-        DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_renewed_").map_err(e)?;
-    j.copy_values_from(&j2).map_err(e)?;
-    let (j_inf, b_inf) = (j.norm_infinity().map_err(e)?, b2.norm_inf().map_err(e)?);
-    let backward = |factor: &DirectSolver| -> Result<f64, String> {
-        let mut x = b2.duplicate().map_err(e)?;
-        factor.solve(&b2, &mut x).map_err(e)?;
-        let mut r = b2.duplicate().map_err(e)?;
-        j.mult(&x, &mut r).map_err(e)?;
-        r.axpy(-1.0, &b2).map_err(e)?;
-        Ok(r.norm_inf().map_err(e)? / (j_inf * x.norm_inf().map_err(e)? + b_inf))
+    let mut factor = DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_renewed_")?;
+    j.copy_values_from(&j2)?;
+    let (j_inf, b_inf) = (j.norm_infinity()?, b2.norm_inf()?);
+    let backward = |factor: &DirectSolver| -> TestResult<f64> {
+        let mut x = b2.duplicate()?;
+        factor.solve(&b2, &mut x)?;
+        let mut r = b2.duplicate()?;
+        j.mult(&x, &mut r)?;
+        r.axpy(-1.0, &b2)?;
+        Ok(r.norm_inf()? / (j_inf * x.norm_inf()? + b_inf))
     };
     let stale = backward(&factor)?;
-    let renews = factor.factors(&j).map_err(e)?;
-    factor.refactorize(&j).map_err(e)?;
+    let renews = factor.factors(&j)?;
+    factor.refactorize(&j)?;
     let renewed = backward(&factor)?;
-    let refused = factor.refactorize(&j2).is_err() && !factor.factors(&j2).map_err(e)?;
+    let refused = factor.refactorize(&j2).is_err() && !factor.factors(&j2)?;
     say(
         petsc,
         &format!("M0 Newmark J, friction doubled in place: the old single-precision factor's backward error {stale:.2e}, renewed {renewed:.2e} (bound 1.2e-5); another matrix refused: {refused}"),
@@ -858,7 +827,7 @@ fn brake_m0_single_precision_factor_renewed_in_place(petsc: &Petsc) -> Result<()
     if stale.is_nan() || stale <= 100.0 * renewed {
         return Err(format!(
             "the old factor solves the new system nearly as well ({stale:e} vs {renewed:e}): the test does not see a renewal"
-        ));
+        ).into());
     }
     match (renews, refused) {
         (false, _) => Err("the factor does not recognize its own matrix".into()),
@@ -874,7 +843,7 @@ fn banded<'p>(
     local: std::ops::Range<usize>,
     band: usize,
     value: impl Fn(usize, usize) -> f64,
-) -> Result<SparseMatrix<'p>, String> {
+) -> TestResult<SparseMatrix<'p>> {
     let columns = |i: usize| i.saturating_sub(band)..(i + band + 1).min(n);
     let p = Preallocation {
         diag: local
@@ -888,27 +857,24 @@ fn banded<'p>(
         diag_upper: vec![0; local.len()],
         off_upper: vec![0; local.len()],
     };
-    let e = |e: squeal::la::LaError| e.to_string();
-    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p).map_err(e)?;
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p)?;
     for i in local {
         for j in columns(i) {
-            a.add_values(&[i as i32], &[j as i32], &[value(i, j)])
-                .map_err(e)?;
+            a.add_values(&[i as i32], &[j as i32], &[value(i, j)])?;
         }
     }
-    a.assemble().map_err(e)?;
+    a.assemble()?;
     Ok(a)
 }
 
 /// The largest |a_ij - expected(i, j)| over this rank's rows, every stored entry (NaN counts).
-fn entry_error(a: &SparseMatrix, expected: impl Fn(usize, usize) -> f64) -> Result<f64, String> {
+fn entry_error(a: &SparseMatrix, expected: impl Fn(usize, usize) -> f64) -> TestResult<f64> {
     let mut worst = 0.0f64;
     a.for_each_local_row(|i, cols, vals| {
         for (&j, &v) in cols.iter().zip(vals) {
             worst = nan_max(worst, (v - expected(i, j as usize)).abs());
         }
-    })
-    .map_err(|e| e.to_string())?;
+    })?;
     Ok(worst)
 }
 
@@ -922,11 +888,10 @@ fn entry_error(a: &SparseMatrix, expected: impl Fn(usize, usize) -> f64) -> Resu
 /// pentadiagonal source: every rank gets an error, none hangs.
 fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_them(
     petsc: &Petsc,
-) -> Result<(), String> {
+) -> TestResult {
     let n = 40;
     let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
     let local = rank * n / size..(rank + 1) * n / size;
-    let e = |e: squeal::la::LaError| e.to_string();
     let b_value = |i: usize, j: usize| {
         if i == j {
             10.0 + i as f64
@@ -939,17 +904,17 @@ fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_the
     let mut a = banded(petsc, n, local.clone(), 2, |i, j| {
         1000.0 + i as f64 + 0.1 * j as f64
     })?;
-    a.copy_values_from(&b).map_err(e)?;
+    a.copy_values_from(&b)?;
     let b_in_a = |i: usize, j: usize| if in_band(i, j) { b_value(i, j) } else { 0.0 };
     let copied = entry_error(&a, b_in_a)?;
     // A factor of A = B now, then A := B + 5 I through a second copy, renewed.
-    let mut solver = DirectSolver::factorize(petsc, &a, Factorization::Lu, "nested_").map_err(e)?;
+    let mut solver = DirectSolver::factorize(petsc, &a, Factorization::Lu, "nested_")?;
     let shifted = |i: usize, j: usize| b_value(i, j) + if i == j { 5.0 } else { 0.0 };
     let b2 = banded(petsc, n, local.clone(), 1, shifted)?;
-    a.copy_values_from(&b2).map_err(e)?;
-    solver.refactorize(&a).map_err(e)?;
+    a.copy_values_from(&b2)?;
+    solver.refactorize(&a)?;
     let solve_error = error_solving_for_ones(&solver, &b2)?;
-    a.axpy_subset(-0.5, &b2).map_err(e)?;
+    a.axpy_subset(-0.5, &b2)?;
     let halved = entry_error(&a, |i, j| {
         0.5 * if in_band(i, j) { shifted(i, j) } else { 0.0 }
     })?;
@@ -972,7 +937,7 @@ fn nested_pattern_copy_and_axpy_set_exact_entries_and_a_refactorization_sees_the
 /// The block of a pentadiagonal matrix at indices spread over the ranks' rows (9, 10, 11:
 /// entries off the diagonal inside the block; 19, 20, 22: across the two-rank split at 20)
 /// equals its entries exactly, zero outside the band, and is the same on every rank.
-fn block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> Result<(), String> {
+fn block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> TestResult {
     let n = 40;
     let (size, rank) = (petsc.size() as usize, petsc.rank() as usize);
     let local = rank * n / size..(rank + 1) * n / size;
@@ -980,10 +945,7 @@ fn block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> Result<(), 
     let a = banded(petsc, n, local, 2, value)?;
     let indices = [0, 9, 10, 11, 19, 20, 22, 39];
     // Column-major: block[c * n + r] is row r, column c.
-    let block = a
-        .block(&indices)
-        .map_err(|e| e.to_string())?
-        .dense_columns();
+    let block = a.block(&indices)?.dense_columns();
     let mut worst = 0.0f64;
     for (r, &i) in indices.iter().enumerate() {
         for (c, &j) in indices.iter().enumerate() {
@@ -1017,14 +979,13 @@ fn block_holds_the_entries_of_its_rows_and_columns(petsc: &Petsc) -> Result<(), 
 /// next local Jacobian), it solves that matrix to the same bound. A matrix with a zero
 /// diagonal ([[0, 1], [1, 0]]) is reported as needing pivoting (None), not factored into
 /// garbage, and so is a refactor to it. Every rank gets the same block.
-fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Result<(), String> {
+fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> TestResult {
     use squeal::la::lapack::RealLu;
     use squeal::la::local_lu::{Csr, LocalLu};
-    let e = |e: squeal::la::LaError| e.to_string();
     let (j, _) = m0_newmark_system(petsc)?;
     let indices: Vec<usize> = (1500..2700.min(j.global_rows())).collect();
     let n = indices.len();
-    let block = j.block(&indices).map_err(e)?;
+    let block = j.block(&indices)?;
     let x_true: Vec<f64> = (0..n)
         .map(|i| (0.37 * i as f64).sin() * (1.0 + (i as f64 / 50.0).cos().powi(2) * 10.0))
         .collect();
@@ -1044,11 +1005,10 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
         block.mult_add(x, &mut r);
         inf(&r) / (inf(&row_sums) * inf(x) + inf(&b))
     };
-    let mut sparse = LocalLu::new(petsc, &block)
-        .map_err(e)?
+    let mut sparse = LocalLu::new(petsc, &block)?
         .ok_or("the local sparse LU met a zero pivot on a mass-dominated Jacobian")?;
     let mut x_sparse = b.clone();
-    sparse.solve(&mut x_sparse).map_err(e)?;
+    sparse.solve(&mut x_sparse)?;
     let factor_entries = sparse.factor_entries();
     let mut other = block.clone();
     for i in 0..n {
@@ -1056,13 +1016,13 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
             other.values[k] *= if other.columns[k] == i { 2.0 } else { 0.5 };
         }
     }
-    if !sparse.refactor(&other.values).map_err(e)? {
+    if !sparse.refactor(&other.values)? {
         return Err("the refactored LU met a zero pivot on a mass-dominated Jacobian".into());
     }
     let mut b_other = vec![0.0; n];
     other.mult_add(&x_true, &mut b_other);
     let mut x_other = b_other.clone();
-    sparse.solve(&mut x_other).map_err(e)?;
+    sparse.solve(&mut x_other)?;
     let backward_refactored = {
         let mut r: Vec<f64> = b_other.iter().map(|v| -v).collect();
         other.mult_add(&x_other, &mut r);
@@ -1075,9 +1035,9 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
         });
         inf(&r) / (rows * inf(&x_other) + inf(&b_other))
     };
-    let dense = RealLu::new(n, block.dense_columns()).map_err(|e| e.to_string())?;
+    let dense = RealLu::new(n, block.dense_columns())?;
     let mut x_dense = b.clone();
-    dense.solve(&mut x_dense).map_err(|e| e.to_string())?;
+    dense.solve(&mut x_dense)?;
     let difference = x_sparse
         .iter()
         .zip(&x_dense)
@@ -1086,12 +1046,10 @@ fn brake_m0_newmark_block_local_sparse_lu_backward_stable(petsc: &Petsc) -> Resu
     let (backward_sparse, backward_dense) = (backward(&x_sparse), backward(&x_dense));
     // (Its zero diagonal stored: the numerical pivot test, not the pattern's.)
     let swap = Csr::from_triplets(2, vec![(0, 0, 0.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 0.0)]);
-    let zero_pivot_seen = LocalLu::new(petsc, &swap).map_err(e)?.is_none();
+    let zero_pivot_seen = LocalLu::new(petsc, &swap)?.is_none();
     let regular = Csr::from_triplets(2, vec![(0, 0, 2.0), (0, 1, 1.0), (1, 0, 1.0), (1, 1, 2.0)]);
-    let mut to_swap = LocalLu::new(petsc, &regular)
-        .map_err(e)?
-        .ok_or("[[2, 1], [1, 2]] met a zero pivot")?;
-    let refactor_zero_pivot_seen = !to_swap.refactor(&swap.values).map_err(e)?;
+    let mut to_swap = LocalLu::new(petsc, &regular)?.ok_or("[[2, 1], [1, 2]] met a zero pivot")?;
+    let refactor_zero_pivot_seen = !to_swap.refactor(&swap.values)?;
     let mut sums = vec![0.0; petsc.size() as usize];
     sums[petsc.rank() as usize] = x_sparse.iter().sum();
     squeal::parallel::sum_in_place(petsc.world(), &mut sums);

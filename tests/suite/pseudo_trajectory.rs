@@ -30,6 +30,7 @@
 //!   -4.4 to 12.2, against the law's scale 1 / lambda = 1), where the contact does no work
 //!   and only the belt's return feeds it. The prediction is a (weak) lower bound here.
 
+use super::TestResult;
 use squeal::contact::kernel::{respond, Observed, Status};
 use squeal::eigen::complex_modes::{solve_dense, Complex};
 use squeal::la::Petsc;
@@ -123,10 +124,10 @@ impl PseudoSystem for Hoffmann {
     }
 }
 
-fn hoffmann(petsc: &Petsc) -> Result<(), String> {
+fn hoffmann(petsc: &Petsc) -> TestResult {
     let system = Hoffmann;
     let rest = system.tangent([static_x(), 0.0], [0.0; 2]);
-    let pairs = solve_dense(2, &rest.kp, &rest.cp).map_err(|e| e.to_string())?;
+    let pairs = solve_dense(2, &rest.kp, &rest.cp)?;
     let index = (0..pairs.len())
         .max_by(|&a, &b| pairs[a].0 .0.total_cmp(&pairs[b].0 .0))
         .ok_or("no mode")?;
@@ -139,8 +140,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         alphas: 2,
         ..Default::default()
     };
-    let p = pseudo_trajectory(&system, "C2", &pairs, index, &tiny, margin)
-        .map_err(|e| e.to_string())?;
+    let p = pseudo_trajectory(&system, "C2", &pairs, index, &tiny, margin)?;
     let worst = p.sweep[0]
         .eigenvalue
         .iter()
@@ -151,19 +151,17 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         &format!("alpha = 1e-12: every phase's eigenvalue vs the closed form {worst:.1e} (asserted 1e-10)"),
     );
     if worst.is_nan() || worst >= 1e-10 {
-        return Err(format!("alpha -> 0: {worst:.3e} from the closed form"));
+        return Err(format!("alpha -> 0: {worst:.3e} from the closed form").into());
     }
 
     let settings = PseudoTrajectorySettings::default();
-    let a = pseudo_trajectory(&system, "C2", &pairs, index, &settings, margin)
-        .map_err(|e| e.to_string())?;
+    let a = pseudo_trajectory(&system, "C2", &pairs, index, &settings, margin)?;
     let other_grid = PseudoTrajectorySettings {
         alpha_range: Some([1.3e-3, 8.0]),
         alphas: 17,
         ..Default::default()
     };
-    let b = pseudo_trajectory(&system, "C2", &pairs, index, &other_grid, margin)
-        .map_err(|e| e.to_string())?;
+    let b = pseudo_trajectory(&system, "C2", &pairs, index, &other_grid, margin)?;
     if std::env::var_os("SQUEAL_DEBUG_PSEUDO").is_some() {
         for p in a.sweep.iter().chain(&b.sweep) {
             let f = p.frequencies_hz();
@@ -178,7 +176,8 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "not bracketed: alpha_sat {:?} / {:?}, alpha_crit {:?}",
             a.alpha_sat, b.alpha_sat, a.alpha_crit
-        ));
+        )
+        .into());
     };
     // Phase 0 is an instant of the motion, not of the eigensolver's output: the mode's
     // coordinates turned by e^{2i} give the same psi (to round-off) and the same study.
@@ -190,8 +189,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         .iter()
         .map(|&(r, i)| (r * c - i * d, r * d + i * c))
         .collect();
-    let t = pseudo_trajectory(&system, "C2", &turned, index, &settings, margin)
-        .map_err(|e| e.to_string())?;
+    let t = pseudo_trajectory(&system, "C2", &turned, index, &settings, margin)?;
     let psi_moved = t
         .psi
         .iter()
@@ -209,14 +207,14 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
     if !(psi_moved <= 1e-12 && rel(sat_t, sat) <= 1e-9) {
         return Err(format!(
             "the phase of the mode's coordinates moves psi by {psi_moved:e} and alpha_sat to {sat_t} from {sat}"
-        ));
+        ).into());
     }
 
     // The transient's limit cycle: the mode's amplitude over the last 10 cycles.
     let record = run(petsc, 0.02, 2.0, 450.0)?;
     let peaks = maxima_at(&record, 1);
     if peaks.len() < 12 {
-        return Err(format!("{} maxima of y: no cycle", peaks.len()));
+        return Err(format!("{} maxima of y: no cycle", peaks.len()).into());
     }
     let from = peaks[peaks.len() - 11];
     let to = *peaks.last().unwrap();
@@ -226,7 +224,7 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         let q = record.q[i];
         [c[0] + q[0] / samples, c[1] + q[1] / samples]
     });
-    let fit = OrbitFit::new(&a.psi, |_| {}).map_err(|e| e.to_string())?;
+    let fit = OrbitFit::new(&a.psi, |_| {})?;
     let fitted: Vec<_> = (from..to)
         .map(|i| {
             let q = record.q[i];
@@ -273,7 +271,8 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "alpha_sat depends on the grid: {sat} vs {sat_b} (tolerance {})",
             settings.tolerance
-        ));
+        )
+        .into());
     }
     // The diagram is drawn at alpha_sat: from the bisection's period within half the
     // tolerance of it, or a period of its own.
@@ -282,7 +281,8 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "the diagram at {} is not at alpha_sat {sat}",
             a.diagram.alpha
-        ));
+        )
+        .into());
     }
     // The periods kept (the sweep's and the bisection's, which the figure draws) straddle
     // alpha_sat within the tolerance: the nearest below decays on average, the nearest above
@@ -308,17 +308,19 @@ fn hoffmann(petsc: &Petsc) -> Result<(), String> {
             kept()
                 .map(|p| (p.alpha, p.mean_damping_ratio))
                 .collect::<Vec<_>>()
-        ));
+        )
+        .into());
     }
     if crit.is_nan() || sat.is_nan() || crit >= sat {
-        return Err(format!("alpha_crit {crit} not below alpha_sat {sat}"));
+        return Err(format!("alpha_crit {crit} not below alpha_sat {sat}").into());
     }
     // The criterion's own claim: below alpha_sat the mode grows on average along its orbit,
     // so no cycle settles there.
     if !(ratio > 0.0 && ratio <= 1.0) {
         return Err(format!(
             "alpha_sat {sat} against the cycle's amplitude {mean}: ratio {ratio} outside (0, 1]"
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -336,16 +338,18 @@ fn brake_scene(pseudo: &str) -> String {
     )
 }
 
-fn run_brake(
-    petsc: &Petsc,
-    name: &str,
-    pseudo: &str,
-) -> Result<squeal::pipeline::RunSummary, String> {
+fn run_brake(petsc: &Petsc, name: &str, pseudo: &str) -> TestResult<squeal::pipeline::RunSummary> {
     let text = brake_scene(pseudo);
-    let scene = squeal::scene::Scene::parse(&text, name).map_err(|e| e.to_string())?;
+    let scene = squeal::scene::Scene::parse(&text, name)?;
     let out = super::common::suite_dir().join(name);
-    squeal::pipeline::run(petsc, &scene, &text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())
+    Ok(squeal::pipeline::run(
+        petsc,
+        &scene,
+        &text,
+        std::path::Path::new("."),
+        &out,
+        &[],
+    )?)
 }
 
 /// The brake: at alpha = 1e-16 m (2e-11 of the gap scale 1 / lambda = 5e-6 m) every phase's
@@ -360,7 +364,7 @@ fn run_brake(
 /// the mean damping ratio at every swept amplitude to 1e-6 of the largest. Until psi's phase
 /// was fixed by the motion (the two rank counts chose opposite signs of C35 at 250 modes, so
 /// their periods started half a period apart) only the amplitudes below alpha_crit agreed.
-fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
+fn brake_pseudo_trajectory(petsc: &Petsc) -> TestResult {
     let tiny = run_brake(
         petsc,
         "pseudo-tiny",
@@ -386,7 +390,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         &format!("brake C35 at alpha = 1e-16 m: every phase vs the complex-modes stage {worst:.1e} (asserted 1e-9)"),
     );
     if worst.is_nan() || worst >= 1e-9 {
-        return Err(format!("alpha -> 0 on the brake: {worst:e} from C35"));
+        return Err(format!("alpha -> 0 on the brake: {worst:e} from C35").into());
     }
     // With the levels of C35 (DESIGN.md §2c) at a microphone 0.5 m in front of the disc.
     let coarse = run_brake(
@@ -422,9 +426,9 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
             .iter()
             .any(|m| (m.name == "C35") != m.alpha_sat.is_some())
     {
-        return Err(format!(
-            "the levels rank {ranked:?}, the unstable modes are {unstable:?}"
-        ));
+        return Err(
+            format!("the levels rank {ranked:?}, the unstable modes are {unstable:?}").into(),
+        );
     }
     let mic = c35.microphones.first().map(|m| m.1).unwrap_or(f64::NAN);
     say(
@@ -437,7 +441,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if !(c35.power_per_unit > 0.0 && c35.power_per_unit.is_finite() && mic.is_finite()) {
-        return Err(format!("C35's levels: {c35:?}"));
+        return Err(format!("C35's levels: {c35:?}").into());
     }
     let levels = vec![
         c35.power_per_unit,
@@ -450,7 +454,8 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "C35: alpha_crit {:?}, alpha_sat {:?}",
             t.alpha_crit, t.alpha_sat
-        ));
+        )
+        .into());
     };
     say(
         petsc,
@@ -460,7 +465,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if !(crit > 0.0 && crit <= sat && sat.is_finite()) {
-        return Err(format!("alpha_crit {crit} and alpha_sat {sat}"));
+        return Err(format!("alpha_crit {crit} and alpha_sat {sat}").into());
     }
     let mut values = vec![crit, sat];
     values.extend(t.sweep.iter().map(|p| p.mean_damping_ratio));
@@ -484,7 +489,7 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if diff.is_nan() || diff > 1e-6 {
-        return Err(format!("2 ranks differ from 1 by {diff:e}"));
+        return Err(format!("2 ranks differ from 1 by {diff:e}").into());
     }
     // The levels: the power per unit amplitude is a sum over the ranks' points (round-off,
     // asserted 1e-10); at alpha_sat it carries alpha_sat's 1e-6 twice; the microphone level
@@ -496,9 +501,9 @@ fn brake_pseudo_trajectory(petsc: &Petsc) -> Result<(), String> {
         &format!("C35's power per 1 um {unit:.1e}, at alpha_sat {sat:.1e} (relative), microphone {db:.1e} dB, {} ranks vs 1", petsc.size()),
     );
     if !(unit <= 1e-10 && sat <= 3e-6 && db <= 1e-6) {
-        return Err(format!(
-            "loudness on 2 ranks differs from 1: {unit:e}, {sat:e}, {db:e} dB"
-        ));
+        return Err(
+            format!("loudness on 2 ranks differs from 1: {unit:e}, {sat:e}, {db:e} dB").into(),
+        );
     }
     Ok(())
 }

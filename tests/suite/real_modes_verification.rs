@@ -9,6 +9,7 @@
 //! lambda^2 = omega a^2 sqrt(rho h / D) = 13.0243, 13.2898, 14.7038, 18.5620, 25.5958 for
 //! n = 0..4 nodal diameters, D = E h^3 / (12 (1 - nu^2)).
 
+use super::TestResult;
 use squeal::eigen::real_modes::RealModeRequest;
 use squeal::la::Petsc;
 use squeal::measure::{exceeds, nan_max, nan_min};
@@ -50,7 +51,7 @@ fn euler_bernoulli_hz(
         / (2.0 * std::f64::consts::PI)
 }
 
-fn cantilever_euler_bernoulli(petsc: &Petsc) -> Result<(), String> {
+fn cantilever_euler_bernoulli(petsc: &Petsc) -> TestResult {
     // Slender (L/h = 40) so that shear and rotary inertia stay below 0.1% (Timoshenko).
     let (l, b, h) = (2.0, 0.1, 0.05);
     let mat = steel();
@@ -76,10 +77,10 @@ fn cantilever_euler_bernoulli(petsc: &Petsc) -> Result<(), String> {
         ));
         // Tolerance: 3D effects of a clamped solid end (Poisson) and shear, about 0.5%.
         if errs.iter().any(|&e| exceeds(e, 0.01)) {
-            return Err(format!("{kind:?}: frequencies {f:?} vs {f_z} {f_y} {f_z2}"));
+            return Err(format!("{kind:?}: frequencies {f:?} vs {f_z} {f_y} {f_z2}").into());
         }
         if let Some(r) = modes.backward_errors.iter().find(|&&r| exceeds(r, 1e-8)) {
-            return Err(format!("{kind:?}: backward error {r:e}"));
+            return Err(format!("{kind:?}: backward error {r:e}").into());
         }
     }
     Ok(())
@@ -105,7 +106,7 @@ fn nodal_diameters(mesh: &squeal::mesh::Mesh, w_outer: &[(usize, f64)]) -> usize
     best.0
 }
 
-fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
+fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> TestResult {
     const LAMBDA2: [f64; 5] = [13.0243, 13.2898, 14.7038, 18.5620, 25.5958];
     let (a, b, h): (f64, f64, f64) = (0.2, 0.1, 0.002);
     let mat = steel();
@@ -140,19 +141,19 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
                 ..Default::default()
             };
             let (system, modes) = solve_modes(petsc, &mesh, &[Clamp::all("inner")], &request)?;
-            let outer = mesh.node_set("outer").map_err(|e| e.to_string())?;
+            let outer = mesh.node_set("outer")?;
             let mut by_diameters = [f64::NAN; 5];
             worst = 0.0;
             line.clear();
             for (i, shape) in modes.shapes.iter().enumerate() {
-                let all = shape.gather_all().map_err(|e| e.to_string())?;
+                let all = shape.gather_all()?;
                 let w: Vec<(usize, f64)> = outer
                     .iter()
                     .map(|&node| (node, all[system.dofs.node_dofs[node][2] as usize]))
                     .collect();
                 let nd = nodal_diameters(&mesh, &w);
                 if nd > 4 {
-                    return Err(format!("mode {i} has {nd} nodal diameters, expected 0..4"));
+                    return Err(format!("mode {i} has {nd} nodal diameters, expected 0..4").into());
                 }
                 by_diameters[nd] = modes.frequencies_hz[i];
                 let err = rel(modes.frequencies_hz[i], to_hz(LAMBDA2[nd]));
@@ -171,7 +172,8 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
         if exceeds(0.5, lowest_order) {
             return Err(format!(
                 "{kind:?}: observed order {lowest_order:.2}: the frequencies do not converge"
-            ));
+            )
+            .into());
         }
         let tol = MODEL + discretization;
         say(
@@ -182,9 +184,7 @@ fn annular_plate_clamped_inner_leissa(petsc: &Petsc) -> Result<(), String> {
             ),
         );
         if exceeds(worst, tol) {
-            return Err(format!(
-                "{kind:?}: worst relative error {worst:.3e} > {tol:.3e}"
-            ));
+            return Err(format!("{kind:?}: worst relative error {worst:.3e} > {tol:.3e}").into());
         }
     }
     Ok(())

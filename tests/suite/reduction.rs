@@ -2,6 +2,7 @@
 //! has the full model's real modes that lie in its basis, and its time response follows the
 //! full model's.
 
+use super::TestResult;
 use squeal::la::Petsc;
 use squeal::measure::{exceeds, nan_max};
 
@@ -32,16 +33,14 @@ fn run(
     petsc: &Petsc,
     text: &str,
     name: &str,
-) -> Result<(squeal::pipeline::RunSummary, Vec<f64>, Vec<f64>), String> {
-    let scene = squeal::scene::Scene::parse(text, name).map_err(|e| e.to_string())?;
+) -> TestResult<(squeal::pipeline::RunSummary, Vec<f64>, Vec<f64>)> {
+    let scene = squeal::scene::Scene::parse(text, name)?;
     let out = super::common::suite_dir().join(name);
-    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())?;
+    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])?;
     let read = |name: &str| {
         hdf5::File::open(out.join("results.h5"))
             .and_then(|f| f.dataset(name))
             .and_then(|d| d.read_raw::<f64>())
-            .map_err(|e| e.to_string())
     };
     let torque = read("transient/braking_torque")?;
     let velocity = read("transient/sensors/pad/velocity")?;
@@ -63,7 +62,7 @@ fn run(
 /// truncation gave 3.8e-2 of it, for an absolute error twice today's). The kept zone (elements touching the
 /// contact points: linings, the disc under the pads, the joints' contact patches) is 1,998
 /// of 5,754 DOF on this small brake.
-fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
+fn reduced_brake(petsc: &Petsc) -> TestResult {
     let (full, reference, reference_velocity) = run(petsc, &scene(60, false), "reduction-full")?;
     let largest_velocity = reference_velocity
         .iter()
@@ -110,20 +109,18 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
                 "{modes} modes: reduced real modes differ from the full ones by {:e} ({} compared)",
                 r.mode_error,
                 r.mode_check.len()
-            ));
+            )
+            .into());
         }
         if exceeds(r.static_error, 1e-10) || exceeds(r.orthonormality, 1e-8) {
             return Err(format!(
                 "static state represented to {:e}, orthonormality {:e}",
                 r.static_error, r.orthonormality
-            ));
+            )
+            .into());
         }
         if r.kept + r.modal >= r.full_dofs || r.full_dofs != full.dofs {
-            return Err(format!(
-                "no reduction: {} of {}",
-                r.kept + r.modal,
-                r.full_dofs
-            ));
+            return Err(format!("no reduction: {} of {}", r.kept + r.modal, r.full_dofs).into());
         }
         // The reduced unknowns are spread over the ranks (split by stored entries), not
         // left where the full model's partition put the kept zone.
@@ -131,7 +128,7 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
         let smallest = rows.iter().copied().min().unwrap_or(0) as f64;
         let mean = (r.kept + r.modal) as f64 / rows.len() as f64;
         if rows.iter().sum::<usize>() != r.kept + r.modal || smallest < 0.25 * mean {
-            return Err(format!("reduced unknowns per rank {rows:?}: unbalanced"));
+            return Err(format!("reduced unknowns per rank {rows:?}: unbalanced").into());
         }
         errors.push(error);
         velocity_errors.push(velocity_error);
@@ -139,13 +136,13 @@ fn reduced_brake(petsc: &Petsc) -> Result<(), String> {
     if !(velocity_errors[1] < velocity_errors[0] && velocity_errors[1] < 0.1) {
         return Err(format!(
             "reduced vs full pad velocity error {velocity_errors:?}: expected to fall below 0.1 with 120 modes"
-        ));
+        ).into());
     }
     // NaN fails: partial_cmp gives None.
     if errors[1].partial_cmp(&errors[0]) != Some(std::cmp::Ordering::Less) {
         return Err(format!(
             "reduced vs full torque error {errors:?} (of the fluctuation): expected to fall from 60 to 120 modes"
-        ));
+        ).into());
     }
     Ok(())
 }

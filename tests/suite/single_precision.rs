@@ -15,6 +15,7 @@
 //! 1e-6, recomputed 4 times in 200 steps, 5.2e-9 to 5.7e-9; without any recomputation the
 //! first case drifted to 4.2e-7 and 4.6e-7 (the test fails there).
 
+use super::TestResult;
 use std::path::{Path, PathBuf};
 
 use squeal::io::user_matrices::{load_sum, MatrixTerm};
@@ -37,7 +38,7 @@ fn data_dir() -> PathBuf {
 }
 
 /// The weighted sum of brake-m0 matrices.
-fn matrix<'p>(petsc: &'p Petsc, terms: &[(&str, f64)]) -> Result<SparseMatrix<'p>, String> {
+fn matrix<'p>(petsc: &'p Petsc, terms: &[(&str, f64)]) -> TestResult<SparseMatrix<'p>> {
     let terms: Vec<MatrixTerm> = terms
         .iter()
         .map(|&(file, coefficient)| MatrixTerm {
@@ -46,9 +47,7 @@ fn matrix<'p>(petsc: &'p Petsc, terms: &[(&str, f64)]) -> Result<SparseMatrix<'p
             speed_power: 0,
         })
         .collect();
-    Ok(load_sum(petsc, &terms, &data_dir())
-        .map_err(|e| e.to_string())?
-        .matrix)
+    Ok(load_sum(petsc, &terms, &data_dir())?.matrix)
 }
 
 /// 200 steps of 1 us under a load F sin(2 pi f t) on every DOF: f = 20 kHz at a tolerance of
@@ -58,7 +57,7 @@ fn matrix<'p>(petsc: &'p Petsc, terms: &[(&str, f64)]) -> Result<SparseMatrix<'p
 /// happen for this case to test the bound). At every accepted state
 /// |z_carried - (M a + C v + K q)| <= tolerance x |F| (the load's amplitude: the steps'
 /// reference force max(|f|, |z|) reaches |F| and passes through 0 with the load).
-fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
+fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> TestResult {
     let mut skipped_some = false;
     for (frequency, tolerance) in [(2.0e4, 1e-8), (500.0, 1e-6)] {
         let run = drift_under_load(petsc, frequency, tolerance)?;
@@ -73,7 +72,7 @@ fn carried_linear_force_is_the_true_one(petsc: &Petsc) -> Result<(), String> {
             return Err(format!(
                 "{frequency} Hz: the carried linear force is {:e} of the load's amplitude off the model's (tolerance {tolerance:e})",
                 run.worst
-            ));
+            ).into());
         }
         skipped_some |= frequency < 1e3 && run.recomputations < 200;
     }
@@ -93,8 +92,7 @@ struct LoadedRun {
     recomputations: usize,
 }
 
-fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> Result<LoadedRun, String> {
-    let e = |e: LaError| e.to_string();
+fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> TestResult<LoadedRun> {
     let omega_disc = 4.0 * std::f64::consts::PI;
     let m = matrix(petsc, &[("M.mtx.gz", 1.0)])?;
     let k = matrix(petsc, &[("K1.mtx.gz", 1.0), ("KR.mtx.gz", 1.0)])?;
@@ -104,21 +102,20 @@ fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> Result<Loa
         tolerance,
         ..Default::default()
     };
-    let j = jacobian(&settings, &m, Damping::Matrix(&c), &k, None).map_err(e)?;
+    let j = jacobian(&settings, &m, Damping::Matrix(&c), &k, None)?;
     let factor = Jacobian {
-        factor: DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_newmark_")
-            .map_err(e)?,
+        factor: DirectSolver::factorize_single(petsc, &j, Factorization::Lu, "m0_newmark_")?,
         extra: None,
         matrix: Some(j),
     };
     // The load: entries of both signs and several magnitudes, ~1 N.
-    let mut load = m.new_vector().map_err(e)?;
+    let mut load = m.new_vector()?;
     let range = load.ownership();
-    for (i, x) in load.local_mut().map_err(e)?.iter_mut().enumerate() {
+    for (i, x) in load.local_mut()?.iter_mut().enumerate() {
         let i = (range.start + i) as f64;
         *x = (0.37 * i).sin() * (1.0 + 3.0 * (i / 500.0).cos().powi(2));
     }
-    let amplitude = load.norm2().map_err(e)?;
+    let amplitude = load.norm2()?;
     let mut forces = |t: f64, _: &Vector, _: &Vector, f: &mut Vector| -> Result<(), LaError> {
         f.copy_from(&load)?;
         f.scale((2.0 * std::f64::consts::PI * frequency * t).sin())
@@ -126,38 +123,37 @@ fn drift_under_load(petsc: &Petsc, frequency: f64, tolerance: f64) -> Result<Loa
     let mut state = State {
         time: 0.0,
         step: 0,
-        q: m.new_vector().map_err(e)?,
-        v: m.new_vector().map_err(e)?,
-        a: m.new_vector().map_err(e)?,
+        q: m.new_vector()?,
+        v: m.new_vector()?,
+        a: m.new_vector()?,
         linear: None,
     };
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "m0_mass_").map_err(e)?;
-    initial_acceleration(&m, Damping::Matrix(&c), &k, &mut state, &mut forces, &mass).map_err(e)?;
-    let mut integrator = Newmark::new(settings, &m, Damping::Matrix(&c), &k, &factor).map_err(e)?;
-    let mut z = m.new_vector().map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "m0_mass_")?;
+    initial_acceleration(&m, Damping::Matrix(&c), &k, &mut state, &mut forces, &mass)?;
+    let mut integrator = Newmark::new(settings, &m, Damping::Matrix(&c), &k, &factor)?;
+    let mut z = m.new_vector()?;
     let mut run = LoadedRun {
         worst: 0.0,
         iterations: 0,
         recomputations: 0,
     };
     for _ in 0..200 {
-        let report = integrator
-            .step(&mut state, &mut forces)
-            .map_err(|e| e.to_string())?;
+        let report = integrator.step(&mut state, &mut forces)?;
         run.iterations += report.iterations;
         run.recomputations += report.linear_force_calls - 1;
-        m.mult(&state.a, &mut z).map_err(e)?;
-        c.mult_add(&state.v, &mut z).map_err(e)?;
-        k.mult_add(&state.q, &mut z).map_err(e)?;
+        m.mult(&state.a, &mut z)?;
+        c.mult_add(&state.v, &mut z)?;
+        k.mult_add(&state.q, &mut z)?;
         let carried = state.linear.as_ref().ok_or("no carried linear force")?;
-        z.axpy(-1.0, carried).map_err(e)?;
+        z.axpy(-1.0, carried)?;
         // NaN propagates through max as the other operand: kept by a separate check.
-        let drift = z.norm2().map_err(e)? / amplitude;
+        let drift = z.norm2()? / amplitude;
         if !drift.is_finite() {
             return Err(format!(
                 "{frequency} Hz: the carried linear force is not finite at t = {:e}",
                 state.time
-            ));
+            )
+            .into());
         }
         run.worst = squeal::measure::nan_max(run.worst, drift);
     }

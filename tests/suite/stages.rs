@@ -1,6 +1,7 @@
 //! The stages called one by one, as a program built on squeal would (DESIGN.md §3): no scene
 //! run, no file written. The preloaded 6k brake of the suite (mu 0.4, 20 bar, disc turning).
 
+use super::TestResult;
 use squeal::measure::{nan_max, nan_min};
 use std::path::Path;
 
@@ -44,17 +45,15 @@ struct SmallBrake<'p> {
     preload: squeal::stages::statics::Preloaded<'p>,
 }
 
-fn small_brake<'p>(petsc: &'p Petsc) -> Result<SmallBrake<'p>, String> {
-    let e = |e: RunError| e.to_string();
-    let scene = Scene::parse(BRAKE, "stages test").map_err(|e| e.to_string())?;
+fn small_brake<'p>(petsc: &'p Petsc) -> TestResult<SmallBrake<'p>> {
+    let scene = Scene::parse(BRAKE, "stages test")?;
     let mut timings = Timings::default();
     let (model, _, ops) =
-        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings).map_err(e)?;
+        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings)?;
     let model = model.ok_or("a brake model")?;
     let statics = scene.statics.as_ref().ok_or("[statics]")?;
     let contact = scene.contact.clone().unwrap_or_default();
-    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)
-        .map_err(e)?;
+    let preload = stages::statics::preload(petsc, &model, &ops, &contact, statics, &mut timings)?;
     Ok(SmallBrake {
         scene,
         model,
@@ -67,8 +66,7 @@ fn small_brake<'p>(petsc: &'p Petsc) -> Result<SmallBrake<'p>, String> {
 /// reduced tangent's real modes equal the full ones to the eigensolver's tolerance (modes
 /// solved to 1e-10; asserted 1e-9 relative), the static state lies in span(T) through the
 /// static shape (1e-10), and the stage keeps every contact point.
-fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
-    let e = |e: RunError| e.to_string();
+fn reduction_stage(petsc: &Petsc) -> TestResult {
     let SmallBrake {
         model,
         ops,
@@ -80,22 +78,19 @@ fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
         tolerance: 1e-10,
         ..Default::default()
     };
-    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
-    let settings: ReductionSettings = toml::from_str("").map_err(|e| e.to_string())?;
-    let reduced = stages::reduce::reduce(petsc, &settings, &model, &ops, &preload, &modes, &[])
-        .map_err(|e| e.to_string())?;
+    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request)?;
+    let settings: ReductionSettings = toml::from_str("")?;
+    let reduced = stages::reduce::reduce(petsc, &settings, &model, &ops, &preload, &modes, &[])?;
     let mode_error = reduced.mode_error();
     if reduced.mode_check.len() != 30 || mode_error.is_nan() || mode_error > 1e-9 {
         return Err(format!(
             "reduced vs full real modes: {} compared, largest relative gap {mode_error:e}",
             reduced.mode_check.len()
-        ));
+        )
+        .into());
     }
     if reduced.static_error.is_nan() || reduced.static_error > 1e-10 {
-        return Err(format!(
-            "static state in span(T) to {:e}",
-            reduced.static_error
-        ));
+        return Err(format!("static state in span(T) to {:e}", reduced.static_error).into());
     }
     if reduced.contact.points().len() != preload.contact.points().len() {
         return Err("the reduced contact model lost points".into());
@@ -107,8 +102,7 @@ fn reduction_stage(petsc: &Petsc) -> Result<(), String> {
 /// route of the complex-mode stage: the same eigenvalues to round-off (asserted 1e-12 relative
 /// in s), and the same unstable modes. A friction sweep stage run afterwards leaves the static
 /// state it was given bit for bit unchanged (it works on its own copy of the laws).
-fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
-    let e = |e: RunError| e.to_string();
+fn stability_at_static_state(petsc: &Petsc) -> TestResult {
     let SmallBrake {
         scene,
         model,
@@ -121,7 +115,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         count: 30,
         ..Default::default()
     };
-    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request).map_err(e)?;
+    let modes = stages::modes::real_modes(petsc, &ops, Some(&preload), &request)?;
     let settings = ComplexModeSettings {
         method: Route::Projected,
         ..Default::default()
@@ -135,8 +129,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         Some(&preload),
         Some(&modes),
         &mut timings,
-    )
-    .map_err(e)?;
+    )?;
     let nominal = &nominal.first().ok_or("no projected route")?.modes;
     let world = petsc.world();
     let stability = ProjectedStability::new(
@@ -145,11 +138,8 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         &modes,
         &preload.state.contact,
         damping,
-    )
-    .map_err(|e| e.to_string())?;
-    let pairs = stability
-        .modes_at(world, &preload.contact, &preload.state.contact)
-        .map_err(|e| e.to_string())?;
+    )?;
+    let pairs = stability.modes_at(world, &preload.contact, &preload.state.contact)?;
     let mut worst = 0.0f64;
     for m in nominal {
         let s = m.eigenvalue;
@@ -163,7 +153,8 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "stability at the static state vs the projected route: {} modes, largest gap {worst:e}",
             nominal.len()
-        ));
+        )
+        .into());
     }
     let unstable = |ratios: &mut dyn Iterator<Item = f64>| ratios.filter(|z| *z < -1e-6).count();
     let from_pairs = unstable(
@@ -174,9 +165,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
     );
     let from_stage = unstable(&mut nominal.iter().map(|m| m.damping_ratio));
     if from_pairs < from_stage {
-        return Err(format!(
-            "unstable modes: stage {from_stage}, recipe {from_pairs}"
-        ));
+        return Err(format!("unstable modes: stage {from_stage}, recipe {from_pairs}").into());
     }
     let sweep = SweepSettings {
         parameter: SweepParameter::Mu,
@@ -191,7 +180,7 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
     // The static state the sweep is given, bit for bit: displacement, load, contact state,
     // laws and disc speed.
     let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
-    let snapshot = |p: &stages::statics::Preloaded| -> Result<_, String> {
+    let snapshot = |p: &stages::statics::Preloaded| -> TestResult<_> {
         let c = &p.state.contact;
         let observed: Vec<f64> = c
             .observed
@@ -204,8 +193,8 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
             .flat_map(|r| [r.pressure, r.stiffness, r.traction[0], r.traction[1]])
             .collect();
         Ok((
-            bits(&p.state.displacement.local().map_err(|e| e.to_string())?),
-            bits(&p.load.local().map_err(|e| e.to_string())?),
+            bits(&p.state.displacement.local()?),
+            bits(&p.load.local()?),
             bits(&observed),
             bits(&response),
             format!("{:?}", p.contact.interfaces()),
@@ -213,18 +202,14 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
         ))
     };
     let before = snapshot(&preload)?;
-    stages::sweep::sweep(petsc, &sweep, &settings, &damping, statics, &preload, input)
-        .map_err(|e| e.to_string())?;
+    stages::sweep::sweep(petsc, &sweep, &settings, &damping, statics, &preload, input)?;
     if snapshot(&preload)? != before {
         return Err("the sweep changed the static state it was given".into());
     }
     for itf in preload.contact.interfaces() {
         if let FrictionLaw::Coulomb { mu, .. } = itf.friction {
             if mu != 0.4 {
-                return Err(format!(
-                    "after the sweep '{}' has mu {mu}, not 0.4",
-                    itf.name
-                ));
+                return Err(format!("after the sweep '{}' has mu {mu}, not 0.4", itf.name).into());
             }
         }
     }
@@ -233,16 +218,15 @@ fn stability_at_static_state(petsc: &Petsc) -> Result<(), String> {
 
 /// A structured block has no contact interfaces: the statics stage refuses it with an error
 /// that names the scene key, on every rank.
-fn statics_without_interfaces(petsc: &Petsc) -> Result<(), String> {
+fn statics_without_interfaces(petsc: &Petsc) -> TestResult {
     let text = "[model]\nsource = \"block\"\nelement = \"hex8\"\nsize = [0.1, 0.02, 0.01]\n\
                 cells = [4, 2, 2]\nclamp = [\"u0\"]\n\
                 material = { name = \"steel\", density = 7850.0, elasticity = { model = \"isotropic\", e = 2.1e11, nu = 0.3 } }\n\
                 [statics]\n";
-    let scene = Scene::parse(text, "block").map_err(|e| e.to_string())?;
+    let scene = Scene::parse(text, "block")?;
     let mut timings = Timings::default();
     let (model, _, ops) =
-        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings)
-            .map_err(|e| e.to_string())?;
+        stages::operators::from_scene(petsc, &scene, Path::new("."), &mut timings)?;
     let model = model.ok_or("a block model")?;
     let statics = scene.statics.as_ref().ok_or("[statics]")?;
     match stages::statics::preload(
@@ -257,7 +241,7 @@ fn statics_without_interfaces(petsc: &Petsc) -> Result<(), String> {
             key: "statics",
             message,
         }) if message.contains("interfaces") => Ok(()),
-        Err(other) => Err(format!("wrong error: {other}")),
+        Err(other) => Err(format!("wrong error: {other}").into()),
         Ok(_) => Err("a model without interfaces was preloaded".into()),
     }
 }

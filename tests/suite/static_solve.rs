@@ -12,6 +12,7 @@
 //! - the discretization, estimated by Richardson from the mesh twice as coarse with order 2
 //!   (trilinear elements): |delta(2h) - delta(h)| / 3.
 
+use super::TestResult;
 use squeal::fem::petsc::assemble_system_as;
 use squeal::la::{DirectSolver, Factorization, MatrixFormat, Petsc};
 use squeal::measure::exceeds;
@@ -28,7 +29,7 @@ pub fn tests() -> Vec<super::NamedTest> {
     )]
 }
 
-fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
+fn cantilever_tip_load_three_formats(petsc: &Petsc) -> TestResult {
     let (l, b, h): (f64, f64, f64) = (2.0, 0.1, 0.05);
     let n = [80, 4, 2];
     let (e, p): (f64, f64) = (2.1e11, 1000.0);
@@ -69,13 +70,14 @@ fn cantilever_tip_load_three_formats(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "tip deflection {} vs Euler-Bernoulli {exact} (tolerance {tol:.2e})",
             tips[0]
-        ));
+        )
+        .into());
     }
     // Cholesky and LU round differently; measured 1.6e-10 apart on this slender beam (its
     // stiffness has a condition number near 1e9), so 1e-8 bounds round-off, not modelling.
     for t in &tips[1..] {
         if exceeds(rel(*t, tips[0]), 1e-8) {
-            return Err(format!("formats disagree: {tips:?}"));
+            return Err(format!("formats disagree: {tips:?}").into());
         }
     }
     Ok(())
@@ -90,11 +92,10 @@ fn tip_deflection(
     p: f64,
     format: MatrixFormat,
     kind: Factorization,
-) -> Result<(f64, f64, String), String> {
+) -> TestResult<(f64, f64, String)> {
     let [_, b, h] = size;
     let mesh = block(size, n, ElementKind::Hex8I, steel());
-    let system = assemble_system_as(petsc, &mesh, &[Clamp::all("u0")], Some(format))
-        .map_err(|e| e.to_string())?;
+    let system = assemble_system_as(petsc, &mesh, &[Clamp::all("u0")], Some(format))?;
     // Consistent nodal forces of a uniform shear traction P / (b h) on the end face:
     // bilinear faces on a uniform grid give each node its share of the tributary area.
     let (dy, dz) = (b / n[1] as f64, h / n[2] as f64);
@@ -105,11 +106,11 @@ fn tip_deflection(
             d
         }
     };
-    let mut f = system.stiffness.new_vector().map_err(|e| e.to_string())?;
+    let mut f = system.stiffness.new_vector()?;
     {
-        let mut local = f.local_mut().map_err(|e| e.to_string())?;
+        let mut local = f.local_mut()?;
         let first = system.dofs.owned_dofs().start;
-        for &node in mesh.node_set("u1").map_err(|e| e.to_string())? {
+        for &node in mesh.node_set("u1")? {
             let d = system.dofs.node_dofs[node][2];
             if d >= 0 && system.dofs.owned_dofs().contains(&(d as usize)) {
                 let x = mesh.coords[node];
@@ -117,12 +118,11 @@ fn tip_deflection(
             }
         }
     }
-    let mut u = f.duplicate().map_err(|e| e.to_string())?;
-    let solver = DirectSolver::factorize(petsc, &system.stiffness, kind, "static_")
-        .map_err(|e| e.to_string())?;
-    solver.solve(&f, &mut u).map_err(|e| e.to_string())?;
-    let all = u.gather_all().map_err(|e| e.to_string())?;
-    let face = mesh.node_set("u1").map_err(|e| e.to_string())?;
+    let mut u = f.duplicate()?;
+    let solver = DirectSolver::factorize(petsc, &system.stiffness, kind, "static_")?;
+    solver.solve(&f, &mut u)?;
+    let all = u.gather_all()?;
+    let face = mesh.node_set("u1")?;
     let tip: f64 = face
         .iter()
         .map(|&nd| all[system.dofs.node_dofs[nd][2] as usize])

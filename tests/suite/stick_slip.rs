@@ -19,6 +19,7 @@
 //! (eps = 6.25e-4). The step h = 1e-3 resolves the band crossings (the sliding speed crosses
 //! eps in about eps / |x''| = 4e-3 s at the slip onset).
 
+use super::TestResult;
 use squeal::contact::law::FrictionLaw;
 use squeal::la::{DirectSolver, Factorization, Petsc, Vector};
 use squeal::time::adaptive::{AdaptiveNewmark, Adaptivity, Closures, Flow, StepControl};
@@ -50,7 +51,7 @@ fn closed_form() -> (f64, f64) {
     )
 }
 
-fn belt_stick_slip(petsc: &Petsc) -> Result<(), String> {
+fn belt_stick_slip(petsc: &Petsc) -> TestResult {
     let (period, amplitude) = closed_form();
     let mut errors = Vec::new();
     let mut fine = (0.0, 0.0);
@@ -75,16 +76,12 @@ fn belt_stick_slip(petsc: &Petsc) -> Result<(), String> {
     for w in errors.windows(2) {
         let shrinks = |a: f64, b: f64| a.is_finite() && b.is_finite() && b * 1.5 <= a;
         if !shrinks(w[0].0, w[1].0) || !shrinks(w[0].1, w[1].1) {
-            return Err(format!(
-                "errors do not shrink with the regularization: {errors:?}"
-            ));
+            return Err(format!("errors do not shrink with the regularization: {errors:?}").into());
         }
     }
     let finest = errors[errors.len() - 1];
     if !(finest.0 < 0.02 && finest.1 < 0.02) {
-        return Err(format!(
-            "finest regularization: errors {finest:?} above 2 %"
-        ));
+        return Err(format!("finest regularization: errors {finest:?} above 2 %").into());
     }
     // The same law with a 4x longer step and Jacobians that never carry the friction: its
     // slope through gamma / (beta h) (about 400 N s/m x 500 1/s) matches the inertia term
@@ -111,7 +108,8 @@ fn belt_stick_slip(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "h = 4e-3: {} Newton-Krylov retries, period {p} vs {p_fine}, amplitude {a} vs {a_fine}",
             control.krylov_retries
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -123,8 +121,7 @@ fn run(
     eps: f64,
     step: f64,
     frictionless_jacobian: bool,
-) -> Result<(f64, f64, StepControl), String> {
-    let e = |e: squeal::la::LaError| e.to_string();
+) -> TestResult<(f64, f64, StepControl)> {
     let law = FrictionLaw::Stribeck {
         mu_static: MU_S,
         mu_kinetic: MU_K,
@@ -153,11 +150,11 @@ fn run(
         let v = s.v.gather_all()?[0];
         Ok(ns.gamma / (ns.beta * ns.step) * law.traction(1.0, V - v).d_speed)
     };
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_")?;
     // Riding on the belt: the stick phase starts the cycle (from rest the mass would
     // oscillate about x_k without ever reaching the belt's speed, a pure-slip orbit).
     let mut state = one_dof_state(petsc, 0.0, V)?;
-    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass)?;
     // The fixed J knows nothing of the friction (the sliding start has none); refreshed ones
     // carry it at their state, unless `frictionless_jacobian` (then only the linearization
     // does, and the Newton-Krylov retries must carry the steps).
@@ -170,7 +167,7 @@ fn run(
     };
     let mut linearize = |ns: &NewmarkSettings, s: &State| {
         let c = damping_at(ns, s)?;
-        let op = tridiagonal(petsc, &[c], &[]).map_err(squeal::la::LaError::Invalid)?;
+        let op = tridiagonal(petsc, &[c], &[])?;
         Ok(Box::new(op) as Box<dyn squeal::la::TangentChange + '_>)
     };
     let mut maxima = Vec::new();
@@ -218,11 +215,10 @@ fn run(
         &mut state,
         5.2 * period,
         &mut control,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let n = maxima.len();
     if n < 4 || extremes.len() < 4 {
-        return Err(format!("eps {eps}: {n} maxima of x in 5 cycles"));
+        return Err(format!("eps {eps}: {n} maxima of x in 5 cycles").into());
     }
     let amplitude = (extremes[extremes.len() - 1] - extremes[extremes.len() - 2]).abs();
     Ok((maxima[n - 1] - maxima[n - 2], amplitude, control))

@@ -18,6 +18,7 @@
 //!   h = 1e-3), energy stays within 1e-5 of its initial value (measured <= 7e-7), at most 2
 //!   fixed-Jacobian iterations per step.
 
+use super::TestResult;
 use squeal::la::Preallocation;
 use squeal::la::{
     DirectSolver, Factorization, MatrixFormat, Operator, Petsc, SparseMatrix, Vector,
@@ -110,7 +111,7 @@ pub fn tests() -> Vec<super::NamedTest> {
 /// most 6; and its 200 steps agree with the linear Newmark solution (J exact, one
 /// iteration per step) to 1e-9 relative (the iterations' tolerance, amplified by at most the
 /// condition of the 200 steps' propagation).
-fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
+fn anderson_terminates_like_gmres(petsc: &Petsc) -> TestResult {
     let SpringChain { k, m, masses, .. } = spring_chain(petsc)?;
     let n = masses.len();
     let held: Vec<f64> = (0..n)
@@ -130,7 +131,7 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
         ..Default::default()
     };
     let steps = 200;
-    let run = |mock: Option<&SparseMatrix>, anderson: usize| -> Result<(usize, Vec<f64>), String> {
+    let run = |mock: Option<&SparseMatrix>, anderson: usize| -> TestResult<(usize, Vec<f64>)> {
         let mut last = Vec::new();
         let most = integrate(
             petsc,
@@ -142,7 +143,7 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
             steps,
             &mut |_t, q, _v, f| held_force(q, f),
             |s| {
-                last = s.q.gather_all().map_err(|e| e.to_string())?;
+                last = s.q.gather_all()?;
                 Ok(())
             },
         )?
@@ -169,12 +170,10 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
     if exact_iterations > 1 || most > 6 {
         return Err(format!(
             "{exact_iterations} iterations with the exact J (1 expected), {most} Anderson corrections (at most 6)"
-        ));
+        ).into());
     }
     if error.is_nan() || error > 1e-9 {
-        return Err(format!(
-            "Anderson's steps differ from the exact J's by {error:e}"
-        ));
+        return Err(format!("Anderson's steps differ from the exact J's by {error:e}").into());
     }
     Ok(())
 }
@@ -183,10 +182,9 @@ fn anderson_terminates_like_gmres(petsc: &Petsc) -> Result<(), String> {
 /// h = 0.3) stops the adaptive run at the first step that sees it (step 11, t = 3.3) with
 /// TimeError::NotFinite, naming that step and time, and without refreshes, retries or cuts
 /// (no smaller step can make a NaN finite). The steps before it are accepted as usual.
-fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
+fn nan_stops_the_run(petsc: &Petsc) -> TestResult {
     use squeal::time::adaptive::{AdaptiveNewmark, Adaptivity, Closures, StepControl};
     use squeal::time::newmark::TimeError;
-    let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
     let settings = NewmarkSettings {
@@ -202,9 +200,9 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
         }
         Ok(())
     };
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_")?;
     let mut state = one_dof_state(petsc, 1.0, 0.0)?;
-    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass)?;
     let mut factorize = |ns: &NewmarkSettings, _at: Option<&State>, _retired| {
         one_dof_jacobian(petsc, ns, &m, &k, 1.0, false)
     };
@@ -248,12 +246,10 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
     );
     match result {
         Err(TimeError::NotFinite { step: 11, time, .. }) if (time - 3.3).abs() < 1e-12 => {}
-        other => return Err(format!("expected NotFinite at step 11, t = 3.3: {other:?}")),
+        other => return Err(format!("expected NotFinite at step 11, t = 3.3: {other:?}").into()),
     }
     if accepted != 10 || control.cuts + control.refreshes + control.krylov_retries > 0 {
-        return Err(format!(
-            "{accepted} steps accepted (10 expected), {control:?}"
-        ));
+        return Err(format!("{accepted} steps accepted (10 expected), {control:?}").into());
     }
     Ok(())
 }
@@ -279,7 +275,7 @@ fn nan_stops_the_run(petsc: &Petsc) -> Result<(), String> {
 /// factor as preconditioner; one GMRES iteration in 1-DOF) takes the full Newton's place: the
 /// same steps, none cut, and no full-Newton retry, whose iterates would be the same (each of
 /// which costs a factorization).
-fn step_cutting(petsc: &Petsc) -> Result<(), String> {
+fn step_cutting(petsc: &Petsc) -> TestResult {
     let plain = cut_and_restore(petsc, false, false)?;
     let refreshed = cut_and_restore(petsc, true, false)?;
     let krylov = cut_and_restore(petsc, true, true)?;
@@ -291,18 +287,17 @@ fn step_cutting(petsc: &Petsc) -> Result<(), String> {
     {
         return Err(format!(
             "Newton-Krylov should replace the full Newton: {krylov:?} vs {refreshed:?}"
-        ));
+        )
+        .into());
     }
     if plain.cuts == 0 || plain.restores == 0 || plain.refreshes != 0 {
-        return Err(format!("expected cuts and restores: {plain:?}"));
+        return Err(format!("expected cuts and restores: {plain:?}").into());
     }
     if refreshed.refreshes == 0
         || refreshed.full_newton_retries == 0
         || refreshed.cuts >= plain.cuts
     {
-        return Err(format!(
-            "refresh should replace cuts: {refreshed:?} vs {plain:?}"
-        ));
+        return Err(format!("refresh should replace cuts: {refreshed:?} vs {plain:?}").into());
     }
     Ok(())
 }
@@ -311,9 +306,8 @@ fn cut_and_restore(
     petsc: &Petsc,
     refresh: bool,
     krylov: bool,
-) -> Result<squeal::time::adaptive::StepControl, String> {
+) -> TestResult<squeal::time::adaptive::StepControl> {
     use squeal::time::adaptive::{AdaptiveNewmark, Closures};
-    let e = |e: squeal::la::LaError| e.to_string();
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
     let settings = NewmarkSettings {
@@ -324,9 +318,9 @@ fn cut_and_restore(
     };
     let g0: f64 = 2.0;
     let mut forces = contact_force;
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_")?;
     let mut state = one_dof_state(petsc, g0, 0.0)?;
-    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass)?;
     // The contact stiffness the current factor was built with.
     let factored = std::cell::Cell::new(1.0);
     let mut factorize = |ns: &NewmarkSettings, at: Option<&State>, _retired| {
@@ -341,7 +335,7 @@ fn cut_and_restore(
     // The tangent's change since the factor.
     let mut linearize = |_: &NewmarkSettings, s: &State| {
         let tangent = (-s.q.gather_all()?[0]).exp() - factored.get();
-        let op = tridiagonal(petsc, &[tangent], &[]).map_err(squeal::la::LaError::Invalid)?;
+        let op = tridiagonal(petsc, &[tangent], &[])?;
         Ok(Box::new(op) as Box<dyn squeal::la::TangentChange + '_>)
     };
     let mut oscillation = Oscillation::released_at(g0);
@@ -386,8 +380,7 @@ fn cut_and_restore(
         &mut state,
         30.0,
         &mut control,
-    )
-    .map_err(|e| e.to_string())?;
+    )?;
     let period = oscillation.period().ok_or("fewer than two maxima")?;
     let energy_error = oscillation.energy_error;
     say(
@@ -417,7 +410,8 @@ fn cut_and_restore(
         return Err(format!(
             "refresh {refresh}: end time {}, period {period}, energy error {energy_error:e}",
             state.time
-        ));
+        )
+        .into());
     }
     Ok(control)
 }
@@ -427,23 +421,20 @@ fn cut_and_restore(
 /// dynamics, so 200 steps of 2 us keep the braking torque and every interface's normal force
 /// to 1e-8 relative (any inconsistency between the static and dynamic force paths, the
 /// Newmark start or the fixed-Jacobian iterations would show), in at most 2 iterations a step.
-fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
+fn brake_transient_at_rest(petsc: &Petsc) -> TestResult {
     let text = "[model]\nsource = \"brake\"\ntarget_dofs = 12000\npressure_bar = 20.0\n\
         [contact]\ndisc_speed = 6.2832\n\
         [contact.sliding]\nnormal = { law = \"exponential\", p0 = 1.0e6, lambda = 2.0e5 }\n\
         friction = { law = \"coulomb\", mu = 0.4, slip_speed = 1.0e-3 }\n\
         [statics]\n[real_modes]\ncount = 4\n\
         [transient]\nstep = 2.0e-6\nsteps = 200\nmode = 2\namplitude = 0.0\n";
-    let scene = squeal::scene::Scene::parse(text, "transient-rest").map_err(|e| e.to_string())?;
+    let scene = squeal::scene::Scene::parse(text, "transient-rest")?;
     let out = super::common::suite_dir().join("transient-rest");
-    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])
-        .map_err(|e| e.to_string())?;
+    let run = squeal::pipeline::run(petsc, &scene, text, std::path::Path::new("."), &out, &[])?;
     let t = run.transient.as_ref().ok_or("no transient summary")?;
-    let file = hdf5::File::open(out.join("results.h5")).map_err(|e| e.to_string())?;
-    let read = |name: &str| -> Result<Vec<f64>, String> {
-        file.dataset(name)
-            .and_then(|d| d.read_raw::<f64>())
-            .map_err(|e| e.to_string())
+    let file = hdf5::File::open(out.join("results.h5"))?;
+    let read = |name: &str| -> TestResult<Vec<f64>> {
+        Ok(file.dataset(name).and_then(|d| d.read_raw::<f64>())?)
     };
     let mut worst = 0.0f64;
     let mut signals = vec!["transient/braking_torque".to_string()];
@@ -474,7 +465,8 @@ fn brake_transient_at_rest(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "signals drift by {worst:e}; max iterations {}; steps {}",
             t.max_iterations, t.steps
-        ));
+        )
+        .into());
     }
     Ok(())
 }
@@ -490,7 +482,7 @@ pub(super) fn tridiagonal<'p>(
     petsc: &'p Petsc,
     diag: &[f64],
     off: &[f64],
-) -> Result<SparseMatrix<'p>, String> {
+) -> Result<SparseMatrix<'p>, squeal::la::LaError> {
     let n = diag.len();
     let local = rows(petsc, n);
     let p = Preallocation {
@@ -499,8 +491,7 @@ pub(super) fn tridiagonal<'p>(
         diag_upper: vec![3; local.len()],
         off_upper: vec![2; local.len()],
     };
-    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p)
-        .map_err(|e| e.to_string())?;
+    let mut a = SparseMatrix::new(petsc, MatrixFormat::Aij, 1, local.len(), &p)?;
     for i in local {
         let mut cols = vec![i as i32];
         let mut vals = vec![diag[i]];
@@ -512,20 +503,19 @@ pub(super) fn tridiagonal<'p>(
             cols.push(i as i32 + 1);
             vals.push(off[i]);
         }
-        a.add_values(&[i as i32], &cols, &vals)
-            .map_err(|e| e.to_string())?;
+        a.add_values(&[i as i32], &cols, &vals)?;
     }
-    a.assemble().map_err(|e| e.to_string())?;
+    a.assemble()?;
     Ok(a)
 }
 
-pub(super) fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> Result<Vector<'p>, String> {
+pub(super) fn vector<'p>(petsc: &'p Petsc, values: &[f64]) -> TestResult<Vector<'p>> {
     let local = rows(petsc, values.len());
-    Vector::from_local(petsc, &values[local]).map_err(|e| e.to_string())
+    Ok(Vector::from_local(petsc, &values[local])?)
 }
 
 /// A 1-DOF state at rest in acceleration (set by `initial_acceleration`) at (q0, v0).
-pub(super) fn one_dof_state<'p>(petsc: &'p Petsc, q0: f64, v0: f64) -> Result<State<'p>, String> {
+pub(super) fn one_dof_state<'p>(petsc: &'p Petsc, q0: f64, v0: f64) -> TestResult<State<'p>> {
     Ok(State {
         time: 0.0,
         step: 0,
@@ -549,7 +539,7 @@ pub(super) fn one_dof_jacobian<'f, 'p>(
 where
     'p: 'f,
 {
-    let mock = tridiagonal(petsc, &[tangent], &[]).map_err(squeal::la::LaError::Invalid)?;
+    let mock = tridiagonal(petsc, &[tangent], &[])?;
     let j = jacobian(ns, m, Damping::None, k, Some(&mock))?;
     Ok(Jacobian {
         factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
@@ -578,17 +568,16 @@ fn integrate<'p>(
     q0: &[f64],
     steps: usize,
     forces: &mut Forces<'_, 'p>,
-    mut observe: impl FnMut(&State<'p>) -> Result<(), String>,
-) -> Result<IterationCounts, String> {
-    let e = |e: squeal::la::LaError| e.to_string();
-    let j = jacobian(&settings, m, Damping::None, k, mock).map_err(e)?;
+    mut observe: impl FnMut(&State<'p>) -> TestResult,
+) -> TestResult<IterationCounts> {
+    let j = jacobian(&settings, m, Damping::None, k, mock)?;
     let factor = Jacobian {
-        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?,
+        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
         extra: mock.map(|x| Box::new(x) as Box<dyn Operator<'p> + '_>),
         matrix: None,
     };
-    let mass = DirectSolver::factorize(petsc, m, Factorization::Lu, "mass_").map_err(e)?;
-    let mut integrator = Newmark::new(settings, m, Damping::None, k, &factor).map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, m, Factorization::Lu, "mass_")?;
+    let mut integrator = Newmark::new(settings, m, Damping::None, k, &factor)?;
     let zeros = vec![0.0; q0.len()];
     let mut state = State {
         time: 0.0,
@@ -598,7 +587,7 @@ fn integrate<'p>(
         a: vector(petsc, &zeros)?,
         linear: None,
     };
-    initial_acceleration(m, Damping::None, k, &mut state, forces, &mass).map_err(e)?;
+    initial_acceleration(m, Damping::None, k, &mut state, forces, &mass)?;
     observe(&state)?;
     let mut counts = IterationCounts {
         most: 0,
@@ -615,7 +604,7 @@ fn integrate<'p>(
         } else {
             integrator.step(&mut state, forces)
         };
-        let report = step.map_err(|e| e.to_string())?;
+        let report = step?;
         counts.most = counts.most.max(report.iterations);
         counts.total += report.iterations;
         counts.on_step_error += usize::from(report.on_step_error);
@@ -629,13 +618,13 @@ fn no_force<'f, 'p>() -> Box<Forces<'f, 'p>> {
 }
 
 /// First component of a distributed vector (row 0 lives on rank 0), broadcast to all ranks.
-fn first(petsc: &Petsc, v: &Vector) -> Result<f64, String> {
-    let all = v.gather_all().map_err(|e| e.to_string())?;
+fn first(petsc: &Petsc, v: &Vector) -> TestResult<f64> {
+    let all = v.gather_all()?;
     let _ = petsc;
     Ok(all[0])
 }
 
-fn linear_oscillator_period(petsc: &Petsc) -> Result<(), String> {
+fn linear_oscillator_period(petsc: &Petsc) -> TestResult {
     let (omega, h) = (1.0f64, 0.5f64);
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[omega * omega], &[])?;
@@ -672,12 +661,12 @@ fn linear_oscillator_period(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if exceeds(worst, 1e-12) {
-        return Err(format!("discrete solution off cos(n theta) by {worst:e}"));
+        return Err(format!("discrete solution off cos(n theta) by {worst:e}").into());
     }
     Ok(())
 }
 
-fn second_order_convergence(petsc: &Petsc) -> Result<(), String> {
+fn second_order_convergence(petsc: &Petsc) -> TestResult {
     let m = tridiagonal(petsc, &[2.0], &[])?;
     let k = tridiagonal(petsc, &[8.0], &[])?; // omega = 2
     let t_end = 3.0;
@@ -718,7 +707,7 @@ fn second_order_convergence(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if rates.iter().any(|r| exceeds((r - 2.0).abs(), 0.05)) {
-        return Err(format!("convergence rates {rates:?}, expected 2"));
+        return Err(format!("convergence rates {rates:?}, expected 2").into());
     }
     Ok(())
 }
@@ -733,7 +722,7 @@ struct SpringChain<'p> {
     m: SparseMatrix<'p>,
 }
 
-fn spring_chain<'p>(petsc: &'p Petsc) -> Result<SpringChain<'p>, String> {
+fn spring_chain<'p>(petsc: &'p Petsc) -> TestResult<SpringChain<'p>> {
     let n = 12;
     let masses: Vec<f64> = (0..n).map(|i| 1.0 + 0.3 * (i % 4) as f64).collect();
     let springs: Vec<f64> = (0..n).map(|i| 1e4 * (1.0 + 0.5 * (i % 3) as f64)).collect();
@@ -753,7 +742,7 @@ fn spring_chain<'p>(petsc: &'p Petsc) -> Result<SpringChain<'p>, String> {
     })
 }
 
-fn chain_energy(petsc: &Petsc) -> Result<(), String> {
+fn chain_energy(petsc: &Petsc) -> TestResult {
     let SpringChain { k, m, masses, .. } = spring_chain(petsc)?;
     let n = masses.len();
     let q0: Vec<f64> = (0..n).map(|i| 1e-3 * ((i as f64) * 0.7).sin()).collect();
@@ -762,15 +751,11 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
         tolerance: 1e-12,
         ..Default::default()
     };
-    let (mut kq, mut mv) = (
-        k.new_vector().map_err(|e| e.to_string())?,
-        k.new_vector().map_err(|e| e.to_string())?,
-    );
-    let mut energy = |s: &State| -> Result<f64, String> {
-        let e = |e: squeal::la::LaError| e.to_string();
-        k.mult(&s.q, &mut kq).map_err(e)?;
-        m.mult(&s.v, &mut mv).map_err(e)?;
-        Ok(0.5 * (kq.dot(&s.q).map_err(e)? + mv.dot(&s.v).map_err(e)?))
+    let (mut kq, mut mv) = (k.new_vector()?, k.new_vector()?);
+    let mut energy = |s: &State| -> TestResult<f64> {
+        k.mult(&s.q, &mut kq)?;
+        m.mult(&s.v, &mut mv)?;
+        Ok(0.5 * (kq.dot(&s.q)? + mv.dot(&s.v)?))
     };
     let mut e0 = None;
     let mut drift = 0.0f64;
@@ -795,7 +780,7 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
         &format!("12-DOF chain, 10,000 steps: max relative energy change {drift:.1e}"),
     );
     if exceeds(drift, 1e-10) {
-        return Err(format!("energy drift {drift:e}"));
+        return Err(format!("energy drift {drift:e}").into());
     }
     Ok(())
 }
@@ -808,8 +793,7 @@ fn chain_energy(petsc: &Petsc) -> Result<(), String> {
 /// the band): the measured ratio of mode 1 matches zeta = 0.02 to 1e-4 (measured 3.7e-6; average acceleration's
 /// period error at omega h = 0.02 is ~3e-5), and mode 5 keeps its energy (the modes stay uncoupled:
 /// Phi is M-orthonormal).
-fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
-    let e = |e: squeal::la::LaError| e.to_string();
+fn modal_damping_decay<'p>(petsc: &'p Petsc) -> TestResult {
     let SpringChain {
         masses,
         diag,
@@ -828,7 +812,7 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
             a[(i + 1) * n + i] = v;
         }
     }
-    let (values, vectors) = squeal::la::lapack::eigen_symmetric(n, a).map_err(|e| e.to_string())?;
+    let (values, vectors) = squeal::la::lapack::eigen_symmetric(n, a)?;
     let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|&x, &y| values[x].total_cmp(&values[y]));
     let omega: Vec<f64> = order.iter().map(|&j| values[j].sqrt()).collect();
@@ -866,8 +850,8 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
         ..Default::default()
     };
     let q0: Vec<f64> = (0..n).map(|i| 1e-3 * (phi[0][i] + phi[4][i])).collect();
-    let modal_energy = |s: &State, j: usize, w: f64| -> Result<f64, String> {
-        let (q, v) = (s.q.gather_all().map_err(e)?, s.v.gather_all().map_err(e)?);
+    let modal_energy = |s: &State, j: usize, w: f64| -> TestResult<f64> {
+        let (q, v) = (s.q.gather_all()?, s.v.gather_all()?);
         let proj = |x: &[f64]| (0..n).map(|i| masses[i] * phi[j][i] * x[i]).sum::<f64>();
         let (a, da) = (proj(&q), proj(&v));
         Ok(0.5 * (da * da + w * w * a * a))
@@ -911,10 +895,11 @@ fn modal_damping_decay<'p>(petsc: &'p Petsc) -> Result<(), String> {
         return Err(format!(
             "mode 1 decays at zeta {measured} over {} periods (expected {zeta})",
             at_periods.len()
-        ));
+        )
+        .into());
     }
     if exceeds(kept, 1e-8) {
-        return Err(format!("undamped mode 5 lost {kept:e} of its energy"));
+        return Err(format!("undamped mode 5 lost {kept:e} of its energy").into());
     }
     Ok(())
 }
@@ -980,7 +965,7 @@ fn oscillate(
     settings: NewmarkSettings,
     g0: f64,
     steps: usize,
-) -> Result<(Oscillation, IterationCounts), String> {
+) -> TestResult<(Oscillation, IterationCounts)> {
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[0.0], &[])?;
     let mock = tridiagonal(petsc, &[1.0], &[])?;
@@ -1005,7 +990,7 @@ fn oscillate(
     Ok((oscillation, counts))
 }
 
-fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
+fn exponential_contact_periods(petsc: &Petsc) -> TestResult {
     let references: [(f64, f64); 4] = [
         (0.1, 6.28571843),
         (0.5, 6.33908502),
@@ -1032,7 +1017,7 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
             rel(period, reference)
         ));
         if exceeds(rel(period, reference), 1e-5) || exceeds(energy_error, 1e-5) {
-            return Err(report.join("; "));
+            return Err(report.join("; ").into());
         }
     }
     for line in report {
@@ -1053,10 +1038,10 @@ fn exponential_contact_periods(petsc: &Petsc) -> Result<(), String> {
 /// Xie's truncation error are both asymptotic), for kappa = 0.1 and 0.01, and its largest
 /// energy error within (1 + 2 kappa) of the converged run's. It must take fewer iterations and
 /// accept steps on the criterion, or the criterion was not what the run used.
-fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), String> {
+fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> TestResult {
     let (g0, reference, h) = (2.0, 6.88757415, 0.05);
     let steps = (3.2 * reference / h) as usize;
-    let run = |kappa: f64| -> Result<(f64, f64, IterationCounts), String> {
+    let run = |kappa: f64| -> TestResult<(f64, f64, IterationCounts)> {
         let settings = NewmarkSettings {
             step: h,
             tolerance: 1e-12,
@@ -1089,7 +1074,7 @@ fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), St
             || counts.total >= converged.total
             || counts.on_step_error == 0
         {
-            return Err(report.join("; "));
+            return Err(report.join("; ").into());
         }
     }
     for line in report {
@@ -1111,15 +1096,15 @@ fn step_error_criterion_keeps_the_contact_period(petsc: &Petsc) -> Result<(), St
 /// (static) value, asserted 1e-9; the pad velocity, which has no static part, 2.2e-7 of its
 /// largest value, asserted 1e-5). Then resumed with `steps = 100`: it ends at once, its
 /// stream as it was.
-fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
+fn restart_continues_the_interrupted_run(petsc: &Petsc) -> TestResult {
     let scene = |steps: usize| {
         small_brake_scene(
             steps,
             "mode = 2\namplitude = 1.0e-8\nstate_interval = 2.0e-5\ncheckpoint_every = 50",
         )
     };
-    let go = |text: &str, dir: &str, restart: bool| -> Result<std::path::PathBuf, String> {
-        let s = squeal::scene::Scene::parse(text, dir).map_err(|e| e.to_string())?;
+    let go = |text: &str, dir: &str, restart: bool| -> TestResult<std::path::PathBuf> {
+        let s = squeal::scene::Scene::parse(text, dir)?;
         let out = super::common::suite_dir().join(dir);
         let options = squeal::pipeline::RunOptions {
             restart,
@@ -1133,18 +1118,17 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
             &out,
             &[],
             &options,
-        )
-        .map_err(|e| e.to_string())?;
+        )?;
         Ok(out)
     };
     let whole = go(&scene(120), "restart-whole", false)?;
     go(&scene(80), "restart-resumed", false)?;
     let resumed = go(&scene(120), "restart-resumed", true)?;
-    let read = |dir: &std::path::Path, name: &str| -> Result<Vec<f64>, String> {
-        hdf5::File::open(dir.join("results.h5"))
+    let read = |dir: &std::path::Path, name: &str| -> TestResult<Vec<f64>> {
+        Ok(hdf5::File::open(dir.join("results.h5"))
             .and_then(|f| f.dataset(&format!("transient/{name}")))
             .and_then(|d| d.read_raw::<f64>())
-            .map_err(|e| format!("{name}: {e}"))
+            .map_err(|e| format!("{name}: {e}"))?)
     };
     let mut report = Vec::new();
     let mut failures = Vec::new();
@@ -1162,7 +1146,8 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
                 "{name}: {} rows uninterrupted, {} resumed",
                 a.len(),
                 b.len()
-            ));
+            )
+            .into());
         }
         let scale = nan_max(
             a.iter().map(|x| x.abs()).fold(0.0, nan_max),
@@ -1185,9 +1170,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
             }
         ));
         if petsc.size() == 1 && !identical {
-            return Err(format!(
-                "1 rank: {name} differs by {diff:e} after the restart"
-            ));
+            return Err(format!("1 rank: {name} differs by {diff:e} after the restart").into());
         }
         // A velocity is pure vibration: it carries the shapes' tolerance undiluted.
         let bound = if name.contains("velocity") {
@@ -1208,7 +1191,8 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "wall_seconds after the restart: {} rows, not a non-decreasing series from 0",
             wall.len()
-        ));
+        )
+        .into());
     }
     // Resumed again asking for fewer steps than it has (100 of 120, as a user ending a long
     // run at its last checkpoint to get its [post] analyses): no step is taken and nothing
@@ -1228,7 +1212,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
         &format!("restart at step 80 of 120: {}", report.join("; ")),
     );
     if !failures.is_empty() {
-        return Err(format!("the resumed run: {}", failures.join("; ")));
+        return Err(format!("the resumed run: {}", failures.join("; ")).into());
     }
     Ok(())
 }
@@ -1248,7 +1232,7 @@ fn restart_continues_the_interrupted_run(petsc: &Petsc) -> Result<(), String> {
 /// small-amplitude regime (the state moves ~1e-7 m from the static one) the latter's
 /// iterations are the full Newton's: at most 2 % more over the 100 steps (a wrong or partial
 /// tangent, such as the mock's missing friction coupling, needs more).
-fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
+fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> TestResult {
     let variants = [("first_jacobian = \"mock\"\n", "mock"), ("", "newton")];
     let (fixed, full) = against_full_newton(petsc, 1.0e-7, &variants)?;
     if fixed
@@ -1259,14 +1243,15 @@ fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
             "the full Newton should factorize more: {} vs {:?}",
             full.factorizations,
             fixed.iter().map(|f| f.factorizations).collect::<Vec<_>>()
-        ));
+        )
+        .into());
     }
     let consistent = fixed[1].mean_iterations;
     if exceeds(consistent, 1.02 * full.mean_iterations) {
         return Err(format!(
             "the consistent first Jacobian took {consistent} iterations per step against the full Newton's {}: it is not the static state's tangent",
             full.mean_iterations
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -1279,7 +1264,7 @@ fn fixed_jacobian_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
 /// default): the same trajectory as the full Newton to the same bound (1e-5 of the torque
 /// fluctuation and of the largest pad velocity), with at least one step retried that way and
 /// fewer factorizations than iterations of the full Newton.
-fn updated_factor_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
+fn updated_factor_follows_full_newton(petsc: &Petsc) -> TestResult {
     // The mock first J (no friction coupling) stalls within 4 iterations here; the
     // consistent one does not, and the retries are what this test is about.
     let keys = "max_iterations = 4\nfirst_jacobian = \"mock\"\n";
@@ -1289,7 +1274,7 @@ fn updated_factor_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
         return Err(format!(
             "expected updated-factor retries and fewer factorizations than the full Newton: {} retries, {} vs {} factorizations",
             updated.updated_retries, updated.factorizations, full.factorizations
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -1306,7 +1291,7 @@ fn updated_factor_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
 /// 1e-10 |f|: 2e-6 of it); asserted 0.1 + 1e-3. (The trajectory alone cannot tell: the global
 /// iteration converges on the global residual whatever the elimination moved.) The unknowns
 /// fall into several independent parts (5 per elimination), each solved on one rank.
-fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String> {
+fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> TestResult {
     // The mock first J stalls within 4 iterations here (the updated factor's test).
     let keys =
         "max_iterations = 4\neliminate_points = 64\nanderson = 5\nfirst_jacobian = \"mock\"\n";
@@ -1331,7 +1316,7 @@ fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String>
         return Err(format!(
             "after an elimination the global residual on its unknowns is {:e} of the target, above the local tolerance 0.1: the local residual is not the global one's rows",
             counts.worst_mismatch
-        ));
+        ).into());
     }
     if eliminated.updated_retries == 0
         || counts.eliminations == 0
@@ -1345,7 +1330,7 @@ fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String>
             counts.unconverged,
             eliminated.factorizations,
             full.factorizations
-        ));
+        ).into());
     }
     // On 2 ranks the parts are solved on different ranks and their moves combined: the
     // mismatch above covers that only where the unknowns split.
@@ -1353,7 +1338,7 @@ fn eliminated_iteration_follows_full_newton(petsc: &Petsc) -> Result<(), String>
         return Err(format!(
             "expected the eliminated unknowns to fall into several independent parts (the split this test covers): {} parts in {} eliminations",
             counts.parts, counts.eliminations
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -1372,27 +1357,27 @@ fn against_full_newton(
         Vec<squeal::report::summary::TransientSummary>,
         squeal::report::summary::TransientSummary,
     ),
-    String,
+    Box<dyn std::error::Error>,
 > {
-    let run = |keys: &str, newton: &str, tag: &str| {
+    let run = |keys: &str, newton: &str, tag: &str| -> TestResult<_> {
         let text = small_brake_scene(
             100,
             &format!(
                 "{keys}mode = 2\namplitude = {amplitude:e}\ntolerance = 1.0e-10\nnewton = \"{newton}\"\nstate_interval = 0.0"
             ),
         );
-        let s = squeal::scene::Scene::parse(&text, newton).map_err(|e| e.to_string())?;
+        let s = squeal::scene::Scene::parse(&text, newton)?;
         let out = super::common::suite_dir().join(format!("{tag}-{newton}"));
-        let summary = squeal::pipeline::run(petsc, &s, &text, std::path::Path::new("."), &out, &[])
-            .map_err(|e| e.to_string())?;
-        let read = |name: &str| -> Result<Vec<f64>, String> {
-            hdf5::File::open(out.join("results.h5"))
+        let summary =
+            squeal::pipeline::run(petsc, &s, &text, std::path::Path::new("."), &out, &[])?;
+        let read = |name: &str| -> TestResult<Vec<f64>> {
+            Ok(hdf5::File::open(out.join("results.h5"))
                 .and_then(|f| f.dataset(&format!("transient/{name}")))
                 .and_then(|d| d.read_raw::<f64>())
-                .map_err(|e| format!("{name}: {e}"))
+                .map_err(|e| format!("{name}: {e}"))?)
         };
         let t = summary.transient.ok_or("no transient")?;
-        Ok::<_, String>((read("braking_torque")?, read("sensors/pad/velocity")?, t))
+        Ok((read("braking_torque")?, read("sensors/pad/velocity")?, t))
     };
     let full = run("", "full", variants[0].1)?;
     let fluctuation = full
@@ -1426,7 +1411,7 @@ fn against_full_newton(
         if exceeds(torque_error, 1e-5) || exceeds(velocity_error, 1e-5) {
             return Err(format!(
                 "{tag}: modified vs full Newton: torque {torque_error:e}, velocity {velocity_error:e}"
-            ));
+            ).into());
         }
         summaries.push(fixed.2);
     }
@@ -1448,13 +1433,8 @@ fn small_brake_scene(steps: usize, transient: &str) -> String {
 }
 
 /// Runs a scene in the suite's directory and reads series of its transient.
-fn run_series(
-    petsc: &Petsc,
-    text: &str,
-    dir: &str,
-    names: &[&str],
-) -> Result<Vec<Vec<f64>>, String> {
-    let scene = squeal::scene::Scene::parse(text, dir).map_err(|e| e.to_string())?;
+fn run_series(petsc: &Petsc, text: &str, dir: &str, names: &[&str]) -> TestResult<Vec<Vec<f64>>> {
+    let scene = squeal::scene::Scene::parse(text, dir)?;
     let out = super::common::suite_dir().join(dir);
     squeal::pipeline::run_with(
         petsc,
@@ -1464,15 +1444,14 @@ fn run_series(
         &out,
         &[],
         &squeal::pipeline::RunOptions::default(),
-    )
-    .map_err(|e| e.to_string())?;
-    let file = hdf5::File::open(out.join("results.h5")).map_err(|e| e.to_string())?;
+    )?;
+    let file = hdf5::File::open(out.join("results.h5"))?;
     names
         .iter()
         .map(|name| {
             file.dataset(&format!("transient/{name}"))
                 .and_then(|d| d.read_raw::<f64>())
-                .map_err(|e| format!("{name}: {e}"))
+                .map_err(|e| format!("{name}: {e}").into())
         })
         .collect()
 }
@@ -1489,7 +1468,7 @@ fn run_series(
 /// step's displacement increment), so v = 2 (q1 - q0) / h - v0 may differ by 2 tau of itself
 /// per step, and these add at most linearly: bound 2 tau x 100 steps = 2e-6 of the largest pad
 /// velocity (measured 4e-7 to 1.3e-6 on 4 oversubscribed ranks, varying from run to run).
-fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
+fn random_start_agrees_across_ranks(petsc: &Petsc) -> TestResult {
     let text = small_brake_scene(
         100,
         "state_interval = 0.0\ncheckpoint_every = 0\nstart = \"random\"\nseed = 7\namplitude = 1.0e-8",
@@ -1531,7 +1510,8 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
             return Err(format!(
                 "{name}: {} ranks differ from 1 by {diff:e} of its scale (bound {bound:e})",
                 petsc.size()
-            ));
+            )
+            .into());
         }
     }
     say(
@@ -1550,7 +1530,7 @@ fn random_start_agrees_across_ranks(petsc: &Petsc) -> Result<(), String> {
 /// at t = 0: v_sensor . I = I^T T M_r^-1 T^T I > 0 (M positive definite). (2) Linearity of
 /// the small-amplitude response: twice the impulse gives twice the pad velocity over 40 steps,
 /// to 1e-4 of its largest value (the contact is nonlinear; at these amplitudes barely).
-fn impulse_start(petsc: &Petsc) -> Result<(), String> {
+fn impulse_start(petsc: &Petsc) -> TestResult {
     let run = |scale: f64, dir: &str| {
         let start = format!(
             "state_interval = 0.0\ncheckpoint_every = 0\nstart = \"impulse\"\n[transient.impulse]\npoint = [0.12, 0.0, 0.0295]\nvalue = [0.0, {:e}, {:e}]",
@@ -1583,14 +1563,14 @@ fn impulse_start(petsc: &Petsc) -> Result<(), String> {
         ),
     );
     if along.is_nan() || along <= 0.0 {
-        return Err(format!(
-            "the sensor does not move along the impulse: v0 . I = {along:e}"
-        ));
+        return Err(
+            format!("the sensor does not move along the impulse: v0 . I = {along:e}").into(),
+        );
     }
     if nonlinearity.is_nan() || nonlinearity >= 1e-4 {
-        return Err(format!(
-            "twice the impulse is not twice the response: {nonlinearity:e}"
-        ));
+        return Err(
+            format!("twice the impulse is not twice the response: {nonlinearity:e}").into(),
+        );
     }
     Ok(())
 }

@@ -6,6 +6,7 @@
 //! (Hughes, The Finite Element Method, §9.1; the suite's
 //! `newmark_linear_oscillator_period_elongation_hughes` checks it to 1e-12).
 
+use super::TestResult;
 use squeal::la::{DirectSolver, Factorization, Operator, Petsc, Vector};
 use squeal::measure::{exceeds, nan_max};
 use squeal::time::newmark::{
@@ -48,7 +49,7 @@ const TOLERANCE: f64 = 1e-5;
 /// predictor's residual (~omega h x 0.2 = 0.03) is accepted without a correction, and the
 /// steps degenerate to constant acceleration, far outside the bound (asserted too: it is
 /// why the vibration's reference exists).
-fn small_vibration_on_a_large_preload(petsc: &Petsc) -> Result<(), String> {
+fn small_vibration_on_a_large_preload(petsc: &Petsc) -> TestResult {
     let omega = (K + CONTACT).sqrt();
     let theta = 2.0 * (omega * H / 2.0).atan();
     let bound = 1e-4;
@@ -80,13 +81,13 @@ fn small_vibration_on_a_large_preload(petsc: &Petsc) -> Result<(), String> {
     if exceeds(e_vibration, bound) {
         return Err(format!(
             "against the vibration's force the run is off the closed form by {e_vibration:e} a (bound {bound:e})"
-        ));
+        ).into());
     }
     // The contrast: the same tolerance against the whole force does not resolve it.
     if e_total.is_nan() || e_total <= 100.0 * bound {
         return Err(format!(
             "against the whole force the run is off by only {e_total:e} a: the test no longer shows what the vibration's reference is for"
-        ));
+        ).into());
     }
     Ok(())
 }
@@ -97,8 +98,7 @@ struct Run {
     iterations: usize,
 }
 
-fn run(petsc: &Petsc, against_vibration: bool) -> Result<Run, String> {
-    let e = |e: squeal::la::LaError| e.to_string();
+fn run(petsc: &Petsc, against_vibration: bool) -> TestResult<Run> {
     let settings = NewmarkSettings {
         step: H,
         tolerance: TOLERANCE,
@@ -107,9 +107,9 @@ fn run(petsc: &Petsc, against_vibration: bool) -> Result<Run, String> {
     let m = tridiagonal(petsc, &[1.0], &[])?;
     let k = tridiagonal(petsc, &[K], &[])?;
     let tangent = tridiagonal(petsc, &[CONTACT], &[])?;
-    let j = jacobian(&settings, &m, Damping::None, &k, Some(&tangent)).map_err(e)?;
+    let j = jacobian(&settings, &m, Damping::None, &k, Some(&tangent))?;
     let factor = Jacobian {
-        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_").map_err(e)?,
+        factor: DirectSolver::factorize(petsc, &j, Factorization::Lu, "time_")?,
         extra: Some(Box::new(&tangent) as Box<dyn Operator<'_> + '_>),
         matrix: None,
     };
@@ -122,13 +122,11 @@ fn run(petsc: &Petsc, against_vibration: bool) -> Result<Run, String> {
         }
         Ok(())
     };
-    let mut integrator = Newmark::new(settings, &m, Damping::None, &k, &factor).map_err(e)?;
+    let mut integrator = Newmark::new(settings, &m, Damping::None, &k, &factor)?;
     if against_vibration {
-        integrator
-            .judge_against_equilibrium(&vector(petsc, &[K * Q_STATIC])?)
-            .map_err(e)?;
+        integrator.judge_against_equilibrium(&vector(petsc, &[K * Q_STATIC])?)?;
     }
-    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_").map_err(e)?;
+    let mass = DirectSolver::factorize(petsc, &m, Factorization::Lu, "mass_")?;
     let mut state = State {
         time: 0.0,
         step: 0,
@@ -137,14 +135,12 @@ fn run(petsc: &Petsc, against_vibration: bool) -> Result<Run, String> {
         a: vector(petsc, &[0.0])?,
         linear: None,
     };
-    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass).map_err(e)?;
-    let first = |v: &Vector| v.gather_all().map(|all| all[0]).map_err(e);
+    initial_acceleration(&m, Damping::None, &k, &mut state, &mut forces, &mass)?;
+    let first = |v: &Vector| v.gather_all().map(|all| all[0]);
     let mut displacement = vec![first(&state.q)?];
     let mut iterations = 0;
     for _ in 0..STEPS {
-        let report = integrator
-            .step(&mut state, &mut forces)
-            .map_err(|e| e.to_string())?;
+        let report = integrator.step(&mut state, &mut forces)?;
         iterations += report.iterations;
         displacement.push(first(&state.q)?);
     }
