@@ -128,10 +128,15 @@ fn default_scene_runs_end_to_end_on_two_ranks_with_its_report_and_labelled_figur
     }
     let results = dir.join("results");
     check_paraview(&results);
-    // Every complex-mode row (60 modes and the 4 unstable again, 3 values each) and the
+    // Every row of the real modes (60 x 3 values), the complex modes (60 modes and the 4
+    // unstable again, 3 values each), the dynamic stability (5 headline modes, 10 values
+    // each), the pseudo trajectory (1 mode, 6 values), the ~22 stage timings and the
     // verdict's three figures.
     let compared = report_numbers::check_report_numbers(&results);
-    assert!(compared >= 3 * 64 + 3, "{compared} values compared");
+    assert!(
+        compared >= 3 * 60 + 3 * 64 + 5 * 10 + 6 + 20 + 3,
+        "{compared} values compared"
+    );
     // The verdict's mode has its picture in the report.
     let html = std::fs::read_to_string(results.join("report.html")).unwrap();
     assert!(

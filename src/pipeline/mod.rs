@@ -185,6 +185,7 @@ pub fn run_with(
     write_views(petsc, &a, link.as_ref().ok(), frames.as_ref(), output)?;
     let seconds_output = seconds_output + start.elapsed().as_secs_f64();
     timings.stages.push(("output".into(), seconds_output));
+    timings.slowest_rank(petsc.world());
     end_on_write_failure(report::write_timings(&file, &timings), RESULTS);
     drop(file);
     // Reported after the results are written: the steps before the failure are kept.

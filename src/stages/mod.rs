@@ -190,4 +190,24 @@ impl Timings {
         }
         out
     }
+
+    /// Each stage's time as the slowest rank's: the stage's wall time, and one value on every
+    /// rank, so that results.h5 (written by all) and the report (by rank 0) state the same.
+    ///
+    /// # Collective
+    pub fn slowest_rank(&mut self, comm: &mpi::topology::SimpleCommunicator) {
+        use mpi::collective::{CommunicatorCollectives, SystemOperation};
+        // Every stage is collective, so every rank has the same list; should one ever differ,
+        // each rank keeps its own times rather than pairing unlike stages.
+        let count = self.stages.len() as f64;
+        if crate::parallel::max(comm, count) != -crate::parallel::max(comm, -count) {
+            return;
+        }
+        let local: Vec<f64> = self.stages.iter().map(|(_, s)| *s).collect();
+        let mut slowest = vec![0.0; local.len()];
+        comm.all_reduce_into(&local[..], &mut slowest[..], SystemOperation::max());
+        for ((_, seconds), s) in self.stages.iter_mut().zip(slowest) {
+            *seconds = s;
+        }
+    }
 }
