@@ -24,7 +24,7 @@
 //!   the least stable of its two roots with Im(s) > 0 (the mode and its coupling partner are
 //!   the model's only modes), their damping ratios averaged over the phases. Every swept
 //!   period's mean damping ratio agrees to 1e-7 (the roots' round-off: at a double root a
-//!   perturbation eps ||A|| moves a root by sqrt(eps ||A||) ~ 3e-8; measured 1e-13..1e-15),
+//!   perturbation eps ||A|| moves a root by sqrt(eps ||A||) ~ 3e-8; measured 5.5e-16),
 //!   and alpha_sat lies within the bisection's tolerance of the reference's crossing, found
 //!   by bisection to 1e-12 in the same bracket of the same grid (measured 9.2e-4 of 1e-2);
 //! - against the transient: the amplitude of the same mode in the limit cycle over its last 10
