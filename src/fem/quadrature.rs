@@ -58,6 +58,17 @@ pub fn hex_rule(n: usize) -> Rule {
 /// (Duffy) map x = u, y = v (1 - u), z = w (1 - u)(1 - v) with Jacobian (1 - u)^2 (1 - v) and
 /// n Gauss points per direction on [0, 1]^3. A polynomial of degree p becomes one of degree
 /// p + 2 in u, so n points integrate degree 2n - 3 exactly (n = 3: degree 3, n = 4: degree 5).
+/// The symmetric 4-point rule on the unit tetrahedron, exact to degree 2 (the rule of Abaqus'
+/// and CalculiX' C3D10).
+pub fn tet_rule_4_points() -> Rule {
+    let a = 0.585_410_196_624_968_5;
+    let b = 0.138_196_601_125_010_5;
+    Rule {
+        points: vec![[b, b, b], [a, b, b], [b, a, b], [b, b, a]],
+        weights: vec![1.0 / 24.0; 4],
+    }
+}
+
 pub fn tet_rule(n: usize) -> Rule {
     let (p, w) = gauss_legendre(n);
     let map = |t: f64| 0.5 * (t + 1.0);

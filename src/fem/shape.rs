@@ -5,22 +5,28 @@ use super::quadrature::{hex_rule, tet_rule, Rule};
 use crate::mesh::element::{ElementKind, HEX_CORNERS, HEX_EDGES, TET_EDGES};
 
 impl ElementKind {
-    /// Rule for the stiffness (exact for affine geometry where possible).
+    /// Rule for the stiffness: the rule Abaqus and CalculiX integrate the same element with
+    /// (C3D8, C3D8I: 2x2x2; C3D20: 3x3x3; C3D20R: 2x2x2; C3D10: 4 points; C3D4: exact), so
+    /// that an imported deck's K is the one its authors' solver assembles (tests/ccx_reference).
     pub fn stiffness_rule(self) -> Rule {
         match self {
             ElementKind::Hex8 | ElementKind::Hex8I => hex_rule(2),
             ElementKind::Hex20 => hex_rule(3),
-            ElementKind::Tet10 => tet_rule(3),
+            ElementKind::Hex20R => hex_rule(2),
+            ElementKind::Tet10 => super::quadrature::tet_rule_4_points(),
             ElementKind::Tet4 => tet_rule(2),
         }
     }
 
-    /// Rule for the consistent mass (degree 2p integrand).
+    /// Rule for the consistent mass, on the stiffness' points where CalculiX takes them
+    /// (C3D20R on 2x2x2, C3D10 on 4 points): exact to degree 2p - 2 at least, which keeps
+    /// the eigenvalues' O(h^2p) convergence (Strang and Fix, ch. 6.3).
     pub fn mass_rule(self) -> Rule {
         match self {
             ElementKind::Hex8 | ElementKind::Hex8I => hex_rule(2),
             ElementKind::Hex20 => hex_rule(3),
-            ElementKind::Tet10 => tet_rule(4),
+            ElementKind::Hex20R => hex_rule(2),
+            ElementKind::Tet10 => super::quadrature::tet_rule_4_points(),
             ElementKind::Tet4 => tet_rule(3),
         }
     }
@@ -40,7 +46,7 @@ impl ElementKind {
                     ];
                 }
             }
-            ElementKind::Hex20 => {
+            ElementKind::Hex20 | ElementKind::Hex20R => {
                 for (a, c) in HEX_CORNERS.iter().enumerate() {
                     let (fx, fy, fz) = (1.0 + c[0] * x, 1.0 + c[1] * y, 1.0 + c[2] * z);
                     let s = c[0] * x + c[1] * y + c[2] * z - 2.0;

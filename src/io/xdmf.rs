@@ -21,7 +21,7 @@ use crate::mesh::Mesh;
 pub fn mixed_code(kind: ElementKind) -> u64 {
     match kind {
         ElementKind::Hex8 | ElementKind::Hex8I => 0x9,
-        ElementKind::Hex20 => 0x30,
+        ElementKind::Hex20 | ElementKind::Hex20R => 0x30,
         ElementKind::Tet10 => 0x26,
         ElementKind::Tet4 => 0x6,
     }

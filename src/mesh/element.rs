@@ -13,6 +13,11 @@ pub enum ElementKind {
     Hex8I,
     /// Serendipity quadratic hexahedron.
     Hex20,
+    /// Serendipity quadratic hexahedron with reduced (2x2x2) integration (Abaqus C3D20R):
+    /// softer than Hex20, free of locking, with hourglass modes that a single element shows
+    /// and a mesh of several suppresses.
+    #[serde(rename = "hex20r")]
+    Hex20R,
     /// Quadratic tetrahedron.
     Tet10,
     /// Linear tetrahedron (constant strain; stiff in bending: for imported meshes, C3D4).
@@ -73,13 +78,13 @@ impl ElementKind {
         let f = face as usize - 1;
         let (corners, edges): (Vec<usize>, &[[usize; 2]]) = match self {
             ElementKind::Hex8 | ElementKind::Hex8I => (HEX_FACES[f].to_vec(), &[]),
-            ElementKind::Hex20 => (HEX_FACES[f].to_vec(), &HEX_EDGES),
+            ElementKind::Hex20 | ElementKind::Hex20R => (HEX_FACES[f].to_vec(), &HEX_EDGES),
             ElementKind::Tet4 => (TET_FACES[f].to_vec(), &[]),
             ElementKind::Tet10 => (TET_FACES[f].to_vec(), &TET_EDGES),
         };
         let mut out = corners.clone();
         if !edges.is_empty() {
-            let first_mid = if matches!(self, ElementKind::Hex20) {
+            let first_mid = if matches!(self, ElementKind::Hex20 | ElementKind::Hex20R) {
                 8
             } else {
                 4
@@ -107,7 +112,7 @@ impl ElementKind {
     pub fn nodes(self) -> usize {
         match self {
             ElementKind::Hex8 | ElementKind::Hex8I => 8,
-            ElementKind::Hex20 => 20,
+            ElementKind::Hex20 | ElementKind::Hex20R => 20,
             ElementKind::Tet10 => 10,
             ElementKind::Tet4 => 4,
         }
@@ -118,6 +123,7 @@ impl ElementKind {
             ElementKind::Hex8 => "hex8",
             ElementKind::Hex8I => "hex8i",
             ElementKind::Hex20 => "hex20",
+            ElementKind::Hex20R => "hex20r",
             ElementKind::Tet10 => "tet10",
             ElementKind::Tet4 => "tet4",
         }
@@ -127,7 +133,7 @@ impl ElementKind {
     pub fn reference_nodes(self) -> Vec<[f64; 3]> {
         match self {
             ElementKind::Hex8 | ElementKind::Hex8I => HEX_CORNERS.to_vec(),
-            ElementKind::Hex20 => {
+            ElementKind::Hex20 | ElementKind::Hex20R => {
                 let mut v = HEX_CORNERS.to_vec();
                 for [a, b] in HEX_EDGES {
                     let (p, q) = (HEX_CORNERS[a], HEX_CORNERS[b]);

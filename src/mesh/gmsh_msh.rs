@@ -71,7 +71,7 @@ fn element_type(t: u32) -> Option<(Option<ElementKind>, usize, usize)> {
 /// Permutation `abaqus[i] = gmsh[perm[i]]` of a quadratic element's nodes.
 fn permutation(kind: ElementKind) -> Vec<usize> {
     let (ours, theirs, first): (&[[usize; 2]], &[[usize; 2]], usize) = match kind {
-        ElementKind::Hex20 => (&HEX_EDGES, &GMSH_HEX_EDGES, 8),
+        ElementKind::Hex20 | ElementKind::Hex20R => (&HEX_EDGES, &GMSH_HEX_EDGES, 8),
         ElementKind::Tet10 => (&TET_EDGES, &GMSH_TET_EDGES, 4),
         _ => return (0..kind.nodes()).collect(),
     };

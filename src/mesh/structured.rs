@@ -96,7 +96,7 @@ pub fn structured(
     for (nodes, local) in &cells {
         match kind {
             ElementKind::Hex8 | ElementKind::Hex8I => connectivity.extend_from_slice(nodes),
-            ElementKind::Hex20 => {
+            ElementKind::Hex20 | ElementKind::Hex20R => {
                 connectivity.extend_from_slice(nodes);
                 for [a, b] in HEX_EDGES {
                     let m = add_mid(nodes[a], nodes[b], local[a], local[b], &mut params);

@@ -1,5 +1,5 @@
 //! Abaqus input files (`.inp`), the subset that describes a solid model: `*NODE`, `*ELEMENT`
-//! (C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D4), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE`
+//! (C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D4, each integrated as CalculiX does: `fem::shape`), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE`
 //! (element-face based), `*MATERIAL` with `*ELASTIC` (isotropic or engineering constants) and
 //! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (zero values), `*INCLUDE`, `*CONTACT PAIR` with
 //! `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis steps and output requests are
@@ -91,8 +91,8 @@ fn element_kind(abaqus: &str) -> Option<ElementKind> {
     match abaqus {
         "C3D8" => Some(ElementKind::Hex8),
         "C3D8I" => Some(ElementKind::Hex8I),
-        // Reduced integration is not reproduced: C3D20R is read as a fully integrated Hex20.
-        "C3D20" | "C3D20R" => Some(ElementKind::Hex20),
+        "C3D20" => Some(ElementKind::Hex20),
+        "C3D20R" => Some(ElementKind::Hex20R),
         "C3D10" => Some(ElementKind::Tet10),
         "C3D4" => Some(ElementKind::Tet4),
         _ => None,
@@ -104,6 +104,7 @@ fn abaqus_type(kind: ElementKind) -> &'static str {
         ElementKind::Hex8 => "C3D8",
         ElementKind::Hex8I => "C3D8I",
         ElementKind::Hex20 => "C3D20",
+        ElementKind::Hex20R => "C3D20R",
         ElementKind::Tet10 => "C3D10",
         ElementKind::Tet4 => "C3D4",
     }

@@ -8,13 +8,41 @@ use super::abaqus_type;
 use crate::mesh::material::Elasticity;
 use crate::mesh::Mesh;
 
+/// A number in at most 20 characters, the longest field CalculiX reads: the shorter of its
+/// decimal and exponent forms that read back exactly (Rust's shortest round-trip digits) when
+/// one fits, else the most digits that fit: at least 12 decimals (a relative change below
+/// 5e-13; 15 decimals, 5e-16, for the coordinates of a model in metres).
+fn field(x: f64) -> String {
+    let (decimal, exponent) = (format!("{x}"), format!("{x:e}"));
+    let exact = if decimal.len() <= exponent.len() {
+        decimal
+    } else {
+        exponent
+    };
+    if exact.len() <= 20 {
+        return exact;
+    }
+    (1..17)
+        .rev()
+        .map(|digits| format!("{x:.digits$e}"))
+        .find(|s| s.len() <= 20)
+        .unwrap_or(exact)
+}
+
 /// Writes a mesh (with clamps and surfaces) as an Abaqus input file; ids are 1-based
-/// positions.
+/// positions; numbers in fields CalculiX reads too (`field`).
 pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::io::Result<()> {
     let mut s = String::new();
     s += "*HEADING\nwritten by squeal\n*NODE, NSET=ALLNODES\n";
     for (i, x) in mesh.coords.iter().enumerate() {
-        let _ = writeln!(s, "{}, {:.17e}, {:.17e}, {:.17e}", i + 1, x[0], x[1], x[2]);
+        let _ = writeln!(
+            s,
+            "{}, {}, {}, {}",
+            i + 1,
+            field(x[0]),
+            field(x[1]),
+            field(x[2])
+        );
     }
     let mut next = 1;
     for block in &mesh.blocks {
@@ -52,7 +80,7 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         let _ = writeln!(s, "*MATERIAL, NAME={}", m.name);
         match m.elasticity {
             Elasticity::Isotropic { e, nu } => {
-                let _ = writeln!(s, "*ELASTIC\n{e:.17e}, {nu:.17e}");
+                let _ = writeln!(s, "*ELASTIC\n{}, {}", field(e), field(nu));
             }
             Elasticity::Orthotropic {
                 e1,
@@ -65,13 +93,19 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
                 g13,
                 g23,
             } => {
+                let first: Vec<String> = [e1, e2, e3, nu12, nu13, nu23, g12, g13]
+                    .into_iter()
+                    .map(field)
+                    .collect();
                 let _ = writeln!(
                     s,
-                    "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{e1:.17e}, {e2:.17e}, {e3:.17e}, {nu12:.17e}, {nu13:.17e}, {nu23:.17e}, {g12:.17e}, {g13:.17e}\n{g23:.17e}"
+                    "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n{}\n{}",
+                    first.join(", "),
+                    field(g23)
                 );
             }
         }
-        let _ = writeln!(s, "*DENSITY\n{:.17e}", m.density);
+        let _ = writeln!(s, "*DENSITY\n{}", field(m.density));
     }
     for block in &mesh.blocks {
         let _ = writeln!(
@@ -91,4 +125,37 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         }
     }
     std::fs::write(path, s)
+}
+
+#[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml)
+mod tests {
+    use super::field;
+
+    #[test]
+    fn fields_fit_20_characters_and_read_back_exactly_when_they_can() {
+        for x in [
+            0.0,
+            2.1e11,
+            0.3,
+            7850.0,
+            0.12345678901234568,
+            -0.12345678901234568,
+            1e-300,
+        ] {
+            let f = field(x);
+            assert!(f.len() <= 20, "{f}");
+            assert_eq!(f.parse::<f64>().unwrap(), x, "{f}");
+        }
+        // 17 digits do not fit: as many decimals as fit, within half a unit of the last.
+        for (x, decimals) in [(-1.2345678901234567e-10, 13), (0.0012345678901234567, 15)] {
+            let f = field(x);
+            assert!(f.len() <= 20, "{f}");
+            let bound = 0.5 * 10f64.powi(-decimals);
+            assert!(
+                (f.parse::<f64>().unwrap() - x).abs() <= bound * x.abs(),
+                "{f}"
+            );
+        }
+    }
 }

@@ -337,7 +337,7 @@ impl Grid {
         kind: ElementKind,
         select: &dyn Fn([usize; 3]) -> Option<usize>,
     ) -> usize {
-        let quadratic = kind == ElementKind::Hex20;
+        let quadratic = matches!(kind, ElementKind::Hex20 | ElementKind::Hex20R);
         let order = if quadratic { 2 } else { 1 };
         let lattice = self.lattice(order);
         let cells = self.cells();
@@ -367,11 +367,11 @@ impl Grid {
         assert!(
             matches!(
                 kind,
-                ElementKind::Hex8 | ElementKind::Hex8I | ElementKind::Hex20
+                ElementKind::Hex8 | ElementKind::Hex8I | ElementKind::Hex20 | ElementKind::Hex20R
             ),
             "the brake generator makes hexahedra"
         );
-        let quadratic = kind == ElementKind::Hex20;
+        let quadratic = matches!(kind, ElementKind::Hex20 | ElementKind::Hex20R);
         let order = if quadratic { 2 } else { 1 };
         let lattice = self.lattice(order);
         let cells = self.cells();

@@ -314,12 +314,12 @@ impl BrakeSpec {
         }
         if !matches!(
             self.element,
-            ElementKind::Hex8 | ElementKind::Hex8I | ElementKind::Hex20
+            ElementKind::Hex8 | ElementKind::Hex8I | ElementKind::Hex20 | ElementKind::Hex20R
         ) {
             return Err(InvalidSetting::new(
                 "model.element",
                 format!(
-                    " = '{}': the brake generator makes hexahedra: hex8i, hex8 or hex20",
+                    " = '{}': the brake generator makes hexahedra: hex8i, hex8, hex20 or hex20r",
                     self.element.name()
                 ),
             ));

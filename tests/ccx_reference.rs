@@ -1,0 +1,196 @@
+//! Imported decks against an independent solver: CalculiX (`ccx` 2.20, Debian's
+//! calculix-ccx, installed by scripts/setup) reads the same Abaqus-dialect deck and solves its
+//! `*FREQUENCY` step; squeal reads the deck (the step is skipped) and solves its real modes.
+//!
+//! The deck: a steel cantilever 0.2 x 0.04 x 0.02 m (E 210 GPa, nu 0.3, rho 7850 kg/m^3)
+//! clamped at x = 0, meshed with each element type, its lowest 10 frequencies compared. Where
+//! both codes integrate the element alike (the same shape functions and Gauss rule for K and
+//! M), the frequencies are the same discrete eigenvalues: they must agree to what the two
+//! eigensolvers and ccx's printed digits resolve. ccx prints frequencies with 7 significant
+//! digits (E14.7) and its ARPACK run converges them to about that; squeal's are converged to
+//! 1e-10. Asserted: 1e-6 relative. Where the rules differ, the test prints the measured
+//! difference and states the reason next to the element.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use squeal::mesh::abaqus_inp::write;
+use squeal::mesh::material::Material;
+use squeal::mesh::structured::block;
+use squeal::mesh::ElementKind;
+
+fn squeal() -> &'static str {
+    env!("CARGO_BIN_EXE_squeal")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("squeal-ccx-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+const MODES: usize = 10;
+
+/// The cantilever deck meshed with `kind`, with ccx's frequency step appended.
+fn cantilever_deck(dir: &Path, kind: ElementKind, cells: [usize; 3]) -> PathBuf {
+    let steel = Material::isotropic("steel", 2.1e11, 0.3, 7850.0);
+    let mesh = block([0.2, 0.04, 0.02], cells, kind, steel);
+    let path = dir.join("cantilever.inp");
+    write(&path, &mesh, &[("u0".to_string(), [true; 3])]).unwrap();
+    let mut text = std::fs::read_to_string(&path).unwrap();
+    text += &format!("*STEP\n*FREQUENCY\n{}\n*END STEP\n", MODES + 2);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// ccx's frequencies (cycles/time) from the .dat file's eigenvalue table.
+fn ccx_frequencies(deck: &Path) -> Vec<f64> {
+    let dir = deck.parent().unwrap();
+    let stem = deck.file_stem().unwrap().to_str().unwrap();
+    let out = Command::new("ccx")
+        .arg("-i")
+        .arg(stem)
+        .current_dir(dir)
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .expect("ccx runs (scripts/setup installs calculix-ccx)");
+    assert!(
+        out.status.success(),
+        "ccx failed: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let dat = std::fs::read_to_string(dir.join(format!("{stem}.dat"))).unwrap();
+    // After "E I G E N V A L U E   O U T P U T": a header, then
+    // "mode  eigenvalue  omega (rad/time)  f (cycles/time)  imaginary part".
+    let table = dat
+        .split("E I G E N V A L U E   O U T P U T")
+        .nth(1)
+        .expect("an eigenvalue table in ccx's .dat");
+    table
+        .lines()
+        .filter_map(|l| {
+            let v: Vec<&str> = l.split_whitespace().collect();
+            let mode: usize = v.first()?.parse().ok()?;
+            let f: f64 = v.get(3)?.parse().ok()?;
+            (mode >= 1).then_some(f)
+        })
+        .take_while(|f| f.is_finite())
+        .collect()
+}
+
+/// squeal's real-mode frequencies of the same deck, run as a user runs it.
+fn squeal_frequencies(deck: &Path) -> Vec<f64> {
+    let dir = deck.parent().unwrap();
+    let scene = dir.join("scene.toml");
+    std::fs::write(
+        &scene,
+        format!(
+            "[model]\nsource = \"abaqus\"\nfile = \"{}\"\n[real_modes]\ncount = {}\n",
+            deck.file_name().unwrap().to_str().unwrap(),
+            MODES + 2
+        ),
+    )
+    .unwrap();
+    let out = Command::new(squeal())
+        .args(["run", "scene.toml", "-o", "out"])
+        .current_dir(dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "squeal failed: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    hdf5::File::open(dir.join("out/results.h5"))
+        .and_then(|f| f.dataset("modes/real/frequency"))
+        .and_then(|d| d.read_raw::<f64>())
+        .unwrap()
+}
+
+/// The largest relative difference of the lowest MODES frequencies; NaN-safe (NaN fails).
+fn compare(name: &str, kind: ElementKind, cells: [usize; 3]) -> f64 {
+    let dir = scratch(name);
+    let deck = cantilever_deck(&dir, kind, cells);
+    let ccx = ccx_frequencies(&deck);
+    let ours = squeal_frequencies(&deck);
+    assert!(
+        ccx.len() >= MODES && ours.len() >= MODES,
+        "{name}: {} ccx and {} squeal frequencies",
+        ccx.len(),
+        ours.len()
+    );
+    let mut worst = 0.0f64;
+    for k in 0..MODES {
+        let d = (ours[k] - ccx[k]).abs() / ccx[k];
+        worst = if d.is_nan() || d > worst { d } else { worst };
+        println!(
+            "  {name} mode {}: {:.4} Hz, ccx {:.4} Hz",
+            k + 1,
+            ours[k],
+            ccx[k]
+        );
+    }
+    println!(
+        "{name}: {} DOF-deck, f1 {:.6} Hz (ccx {:.6}), f{MODES} {:.3} Hz (ccx {:.3}); largest relative difference {worst:.2e}",
+        kind.name(),
+        ours[0],
+        ccx[0],
+        ours[MODES - 1],
+        ccx[MODES - 1]
+    );
+    worst
+}
+
+/// Asserts the frequencies agree to 1e-6 (the module's bound); NaN fails.
+fn assert_same_discretisation(name: &str, kind: ElementKind, cells: [usize; 3]) {
+    let worst = compare(name, kind, cells);
+    assert!(
+        worst <= 1e-6,
+        "{name}: squeal vs ccx frequencies differ by {worst:e} (bound 1e-6)"
+    );
+}
+
+/// C3D8: trilinear, 2x2x2 Gauss for K and M in both.
+#[test]
+fn c3d8_cantilever_frequencies_equal_calculix() {
+    assert_same_discretisation("c3d8", ElementKind::Hex8, [10, 2, 2]);
+}
+
+/// C3D20: serendipity quadratic, 3x3x3 Gauss for K and M in both.
+#[test]
+fn c3d20_cantilever_frequencies_equal_calculix() {
+    assert_same_discretisation("c3d20", ElementKind::Hex20, [5, 1, 1]);
+}
+
+/// C3D20R: the stiffness on 2x2x2 Gauss points in both. Two elements across the section at
+/// least: a single one has zero-energy (hourglass) modes under this rule, in both codes.
+#[test]
+fn c3d20r_cantilever_frequencies_equal_calculix() {
+    assert_same_discretisation("c3d20r", ElementKind::Hex20R, [10, 2, 2]);
+}
+
+/// C3D10: quadratic tetrahedra (six per hexahedral cell), K and M on the 4-point rule in both.
+#[test]
+fn c3d10_cantilever_frequencies_equal_calculix() {
+    assert_same_discretisation("c3d10", ElementKind::Tet10, [5, 1, 1]);
+}
+
+/// Not the same discretisation, so only measured (printed) and required finite:
+/// - C3D8I: squeal's incompatible modes are Wilson-Taylor's 9 with Taylor's correction;
+///   CalculiX's C3D8I is formulated otherwise (not identified here). Measured: 5.4e-4 at the
+///   first mode, 7.6e-2 at the 10th; squeal softer in the first two bending modes, stiffer above.
+/// - C3D4: squeal integrates K (constant) and M exactly; CalculiX's C3D4 frequencies are
+///   1.0e-3 (1st) to 7.0e-2 (10th) higher on the same deck, which the mass rule alone does
+///   not explain (a one-point mass gives 15 % the other way).
+#[test]
+fn c3d8i_and_c3d4_against_calculix_measured() {
+    for (name, kind, cells) in [
+        ("c3d8i", ElementKind::Hex8I, [10, 2, 2]),
+        ("c3d4", ElementKind::Tet4, [10, 2, 2]),
+    ] {
+        let worst = compare(name, kind, cells);
+        assert!(worst.is_finite(), "{name}: {worst}");
+    }
+}
