@@ -164,3 +164,69 @@ fn malformed_files_name_file_and_line() {
     let e = error_of(&TWO_HEXES.replace("PAD_FACE, DISC_FACE", "PAD_FACE, ROTOR"));
     assert!(e.contains("'ROTOR'"), "{e}");
 }
+
+/// What pre-processors write, read as Abaqus reads it: parameter values by their start
+/// (TYPE=ISO, TYPE=ENGINEERING), several *ELEMENT keywords of one ELSET into one block (a
+/// deck of 256 such keywords imported and then failed writing results.h5 with a misleading
+/// HDF5 message), padded element lines (the element's nodes first), and the keywords of other
+/// analyses' steps skipped with a line each for the log.
+#[test]
+fn pre_processor_decks_are_read_as_abaqus_reads_them() {
+    let text = TWO_HEXES
+        .replace("*ELASTIC\n1.1e11", "*ELASTIC, TYPE=ISO\n1.1e11")
+        .replace("TYPE=ENGINEERING CONSTANTS", "type=Engineering")
+        .replace("ELSET=PAD\n", "ELSET=DISC\n")
+        .replace("*SOLID SECTION, ELSET=PAD, MATERIAL=LINING\n", "")
+        .replace("PAD_FACE, DISC_FACE", "DISC_FACE, DISC_FACE")
+        .replace("2, S6", "DISC, S6")
+        .replace("1, 1, 2, 3, 4, 5, 6, 7, 8", "1, 1, 2, 3, 4, 5, 6, 7, 8, 0, 0")
+        .replace(
+            "*END STEP",
+            "*END STEP\n*STEP\n*STEADY STATE DYNAMICS\n100., 5000., 20\n*MODAL DAMPING\n1, 10, 0.02\n*END STEP\n*INITIAL CONDITIONS, TYPE=TEMP\nLEFT, 20.",
+        );
+    let path = scratch("preprocessor.inp");
+    std::fs::write(&path, &text).unwrap();
+    let m = read(&path).unwrap();
+    assert_eq!(m.mesh.blocks.len(), 1, "one ELSET, one block");
+    assert_eq!(m.mesh.blocks[0].name, "DISC");
+    assert_eq!(m.mesh.element_count(), 2);
+    assert_eq!(m.mesh.blocks[0].element(0), [0, 1, 2, 3, 4, 5, 6, 7]);
+    assert!(matches!(
+        m.mesh.materials[0].elasticity,
+        Elasticity::Isotropic { e, .. } if e == 1.1e11
+    ));
+    assert!(
+        m.notes
+            .iter()
+            .any(|n| n.contains("2 node ids more") && n.contains("first 8")),
+        "{:?}",
+        m.notes
+    );
+    let skipped = m.skipped_notes();
+    for keyword in [
+        "STEADY STATE DYNAMICS",
+        "MODAL DAMPING",
+        "INITIAL CONDITIONS",
+    ] {
+        assert!(
+            skipped
+                .iter()
+                .any(|n| n.starts_with(&format!("*{keyword} skipped"))),
+            "{keyword}: {skipped:?}"
+        );
+    }
+    assert_eq!(
+        m.element_types,
+        vec![("DISC".to_string(), "C3D8I".to_string(), 2)]
+    );
+    // Initial stresses would change K: refused, naming the line.
+    let stressed = text.replace("TYPE=TEMP", "TYPE=STRESS");
+    let e = error_of(&stressed);
+    assert!(
+        e.contains("INITIAL CONDITIONS") && e.contains("could change the model"),
+        "{e}"
+    );
+    // An abbreviation that fits two values is refused rather than guessed.
+    let e = error_of(&TWO_HEXES.replace("TYPE=ENGINEERING CONSTANTS", "TYPE=ORTHO"));
+    assert!(e.contains("TYPE=ORTHO"), "{e}");
+}

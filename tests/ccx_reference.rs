@@ -39,6 +39,17 @@ fn cantilever_deck(dir: &Path, kind: ElementKind, cells: [usize; 3]) -> PathBuf 
     let path = dir.join("cantilever.inp");
     write(&path, &mesh, &[("u0".to_string(), [true; 3])]).unwrap();
     let mut text = std::fs::read_to_string(&path).unwrap();
+    if kind == ElementKind::Hex8 {
+        // As pre-processors write it: an *ELEMENT keyword per element, all of one ELSET.
+        let keyword = "*ELEMENT, TYPE=C3D8, ELSET=solid\n";
+        let (head, rest) = text.split_once(keyword).unwrap();
+        let (elements, tail) = rest.split_at(rest.find("\n*").unwrap() + 1);
+        let split: String = elements
+            .lines()
+            .map(|l| format!("{keyword}{l}\n"))
+            .collect();
+        text = format!("{head}{split}{tail}");
+    }
     text += &format!("*STEP\n*FREQUENCY\n{}\n*END STEP\n", MODES + 2);
     std::fs::write(&path, text).unwrap();
     path
@@ -152,7 +163,8 @@ fn assert_same_discretisation(name: &str, kind: ElementKind, cells: [usize; 3]) 
     );
 }
 
-/// C3D8: trilinear, 2x2x2 Gauss for K and M in both.
+/// C3D8: trilinear, 2x2x2 Gauss for K and M in both; the deck has an *ELEMENT keyword per
+/// element (one ELSET), which both read as one set.
 #[test]
 fn c3d8_cantilever_frequencies_equal_calculix() {
     assert_same_discretisation("c3d8", ElementKind::Hex8, [10, 2, 2]);

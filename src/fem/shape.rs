@@ -31,6 +31,18 @@ impl ElementKind {
         }
     }
 
+    /// The rules in words, for the log.
+    pub fn rule_description(self) -> &'static str {
+        match self {
+            ElementKind::Hex8 => "2x2x2 Gauss points for K and M",
+            ElementKind::Hex8I => "2x2x2 Gauss points, 9 incompatible modes condensed",
+            ElementKind::Hex20 => "3x3x3 Gauss points for K and M",
+            ElementKind::Hex20R => "reduced: 2x2x2 Gauss points for K and M",
+            ElementKind::Tet10 => "4 points for K and M",
+            ElementKind::Tet4 => "K exact (constant strain), M exact",
+        }
+    }
+
     /// Shape functions `n[a]` and their reference gradients `dn[a]` at `xi`.
     pub fn eval(self, xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
         let [x, y, z] = xi;

@@ -56,7 +56,30 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
                     components: *components,
                 })
                 .collect();
+            let mut notes = inp.skipped_notes();
+            notes.extend(inp.notes.iter().cloned());
+            for (block, abaqus, count) in &inp.element_types {
+                let kind = inp
+                    .mesh
+                    .blocks
+                    .iter()
+                    .find(|b| &b.name == block)
+                    .map(|b| b.kind);
+                if let Some(kind) = kind {
+                    let modified = if abaqus == "C3D10M" {
+                        " (C3D10M read as C3D10: its own mass and contact treatment are not reproduced)"
+                    } else {
+                        ""
+                    };
+                    notes.push(format!(
+                        "{block}: {count} {abaqus} as {}, {}{modified}",
+                        kind.name(),
+                        kind.rule_description()
+                    ));
+                }
+            }
             let mut m = Model::plain(inp.mesh, clamps);
+            m.notes = notes;
             m.interfaces = inp
                 .contact_pairs
                 .iter()

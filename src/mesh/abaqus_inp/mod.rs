@@ -56,6 +56,40 @@ pub struct InpModel {
     pub contact_pairs: Vec<ContactPair>,
     /// Keywords skipped (line, keyword), for the log.
     pub skipped: Vec<(usize, String)>,
+    /// Per mesh block: its name, the Abaqus element type read into it and its element count.
+    pub element_types: Vec<(String, String, usize)>,
+    /// What the log should say of the reading (padded element lines).
+    pub notes: Vec<String>,
+}
+
+impl InpModel {
+    /// The log's lines on the skipped keywords: one per keyword, with its lines.
+    pub fn skipped_notes(&self) -> Vec<String> {
+        let mut by_keyword: Vec<(String, Vec<usize>)> = Vec::new();
+        for (line, keyword) in &self.skipped {
+            match by_keyword.iter_mut().find(|(k, _)| k == keyword) {
+                Some((_, lines)) => lines.push(*line),
+                None => by_keyword.push((keyword.clone(), vec![*line])),
+            }
+        }
+        by_keyword
+            .into_iter()
+            .map(|(keyword, lines)| {
+                let shown: Vec<String> = lines.iter().take(5).map(usize::to_string).collect();
+                let more = if lines.len() > 5 {
+                    format!(" and {} more", lines.len() - 5)
+                } else {
+                    String::new()
+                };
+                let why = match keyword.as_str() {
+                    "CLOAD" | "DLOAD" | "DSLOAD" => "loads of the deck's steps are not read: the scene's pressure is the preload",
+                    "TEMPERATURE" | "INITIAL CONDITIONS" => "temperatures do not change K or M (no thermal expansion)",
+                    _ => "steps, procedures and outputs do not change K, M or the contact",
+                };
+                format!("*{keyword} skipped (line {}{more}): {why}", shown.join(", "))
+            })
+            .collect()
+    }
 }
 
 /// Keywords of steps, outputs and bookkeeping: skipping them cannot change K or M.
@@ -85,7 +119,36 @@ const SAFE_TO_SKIP: &[&str] = &[
     "PHYSICAL CONSTANTS",
     "FILE FORMAT",
     "PARAMETER",
+    // Procedures of other analyses: their steps do not change the model data.
+    "STEADY STATE DYNAMICS",
+    "MODAL DYNAMIC",
+    "MODAL DAMPING",
+    "COMPLEX FREQUENCY",
+    "SELECT EIGENMODES",
+    "DYNAMIC",
+    "BUCKLE",
+    "DESIGN RESPONSE",
+    "SENSITIVITY",
+    "OBJECTIVE",
+    // Temperatures: squeal's materials have no thermal expansion.
+    "TEMPERATURE",
 ];
+
+/// The one of `options` that `value` (any case) abbreviates, as Abaqus matches parameter
+/// values by their start (TYPE=ISO is TYPE=ISOTROPIC); None when none or several do.
+pub(super) fn abbreviates<'o>(value: &str, options: &[&'o str]) -> Option<&'o str> {
+    let v = value.trim().to_uppercase();
+    if let Some(exact) = options.iter().find(|o| **o == v) {
+        return Some(exact);
+    }
+    let mut found = options
+        .iter()
+        .filter(|o| !v.is_empty() && o.starts_with(&v));
+    match (found.next(), found.next()) {
+        (Some(o), None) => Some(o),
+        _ => None,
+    }
+}
 
 fn element_kind(abaqus: &str) -> Option<ElementKind> {
     match abaqus {
@@ -93,7 +156,8 @@ fn element_kind(abaqus: &str) -> Option<ElementKind> {
         "C3D8I" => Some(ElementKind::Hex8I),
         "C3D20" => Some(ElementKind::Hex20),
         "C3D20R" => Some(ElementKind::Hex20R),
-        "C3D10" => Some(ElementKind::Tet10),
+        // C3D10M (modified, for contact) is read as C3D10, which the log says.
+        "C3D10" | "C3D10M" => Some(ElementKind::Tet10),
         "C3D4" => Some(ElementKind::Tet4),
         _ => None,
     }

@@ -6,16 +6,22 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 
-use super::{element_kind, parse_keyword, InpError, Keyword, SAFE_TO_SKIP};
+use super::{abbreviates, element_kind, parse_keyword, InpError, Keyword, SAFE_TO_SKIP};
 use crate::mesh::material::Elasticity;
 use crate::mesh::ElementKind;
 
 /// An *ELEMENT block as read: kind, its ELSET, connectivity by Abaqus node ids, element ids.
+/// Every *ELEMENT keyword of one type and ELSET adds to the same block.
 pub(super) struct RawBlock {
+    /// The Abaqus element type as written (upper case).
+    pub abaqus: String,
     pub kind: ElementKind,
     pub elset: Option<String>,
     pub connectivity: Vec<i64>,
     pub ids: Vec<i64>,
+    /// Node ids beyond the element's on its lines (ignored), and the first line with some.
+    pub extra_ids: usize,
+    pub first_extra_line: usize,
 }
 
 /// A material as read: name, density, elasticity.
@@ -208,9 +214,8 @@ impl Parser {
                 }
             }
             "SURFACE" => {
-                let ty = param("TYPE")
-                    .unwrap_or_else(|| "ELEMENT".into())
-                    .to_uppercase();
+                let ty = param("TYPE").unwrap_or_else(|| "ELEMENT".into());
+                let ty = abbreviates(&ty, &["ELEMENT", "NODE"]).unwrap_or(&ty);
                 if ty != "ELEMENT" {
                     return Err(at.syntax(format!(
                         "*SURFACE TYPE={ty} is not supported: use element-face surfaces (TYPE=ELEMENT)"
@@ -254,6 +259,15 @@ impl Parser {
                     .ok_or_else(|| at.syntax("*FRICTION outside a *SURFACE INTERACTION".into()))?,
             ),
             "CONTACT PAIR" => Mode::ContactPair(need("INTERACTION")?),
+            // Initial temperatures are safe to skip; initial stresses would change K.
+            "INITIAL CONDITIONS"
+                if param("TYPE")
+                    .and_then(|t| abbreviates(&t, &["TEMPERATURE"]))
+                    .is_some() =>
+            {
+                self.raw.skipped.push((at.line, kw.name.clone()));
+                Mode::Skip
+            }
             name if SAFE_TO_SKIP.contains(&name) => {
                 self.raw.skipped.push((at.line, name.to_string()));
                 Mode::Skip
@@ -280,17 +294,29 @@ impl Parser {
         let ty = ty.to_uppercase();
         let kind = element_kind(&ty).ok_or_else(|| {
             at.syntax(format!(
-                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10 or C3D4)"
+                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D10M or C3D4)"
             ))
         })?;
-        self.raw.blocks.push(RawBlock {
-            kind,
-            elset,
-            connectivity: Vec::new(),
-            ids: Vec::new(),
-        });
+        // Pre-processors often write one *ELEMENT keyword per few hundred elements of the same
+        // set: they are one block.
+        let same = |b: &RawBlock| b.abaqus == ty && b.elset == elset;
+        let block = match self.raw.blocks.iter().position(same) {
+            Some(b) => b,
+            None => {
+                self.raw.blocks.push(RawBlock {
+                    abaqus: ty,
+                    kind,
+                    elset,
+                    connectivity: Vec::new(),
+                    ids: Vec::new(),
+                    extra_ids: 0,
+                    first_extra_line: 0,
+                });
+                self.raw.blocks.len() - 1
+            }
+        };
         Ok(Mode::Element {
-            block: self.raw.blocks.len() - 1,
+            block,
             pending: Vec::new(),
         })
     }
@@ -307,14 +333,13 @@ impl Parser {
             .params
             .get("TYPE")
             .cloned()
-            .unwrap_or_else(|| "ISOTROPIC".into())
-            .to_uppercase();
-        let engineering = match ty.as_str() {
-            "ISOTROPIC" => false,
-            "ENGINEERING CONSTANTS" => true,
-            other => {
+            .unwrap_or_else(|| "ISOTROPIC".into());
+        let engineering = match abbreviates(&ty, &["ISOTROPIC", "ENGINEERING CONSTANTS"]) {
+            Some("ISOTROPIC") => false,
+            Some(_) => true,
+            None => {
                 return Err(at.syntax(format!(
-                    "*ELASTIC TYPE={other} is not supported (ISOTROPIC or ENGINEERING CONSTANTS)"
+                    "*ELASTIC TYPE={ty} is not supported (ISOTROPIC or ENGINEERING CONSTANTS)"
                 )))
             }
         };
@@ -434,15 +459,23 @@ fn element(
     if pending.len() < need && continued {
         return Ok(());
     }
-    if pending.len() != need {
+    if pending.len() < need {
         return Err(at.syntax(format!(
             "expected an element id and {} node ids, found {} numbers",
             block.kind.nodes(),
             pending.len()
         )));
     }
+    // Ids beyond the element's (some pre-processors pad the line): the first ones are the
+    // element's nodes, as other readers take them; the count goes to the log.
+    if pending.len() > need {
+        if block.extra_ids == 0 {
+            block.first_extra_line = at.line;
+        }
+        block.extra_ids += pending.len() - need;
+    }
     block.ids.push(pending[0]);
-    block.connectivity.extend_from_slice(&pending[1..]);
+    block.connectivity.extend_from_slice(&pending[1..need]);
     pending.clear();
     Ok(())
 }

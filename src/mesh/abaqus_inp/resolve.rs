@@ -38,6 +38,16 @@ impl RawInp {
         let element_material = r.sections(&self, &material_ids)?;
         for block in &self.blocks {
             r.block(&self, block, &element_material)?;
+            if block.extra_ids > 0 {
+                r.model.notes.push(format!(
+                    "{} {}: element lines carry {} node ids more than the element has (from line {}); each element takes its first {}",
+                    block.abaqus,
+                    block.elset.as_deref().unwrap_or("(no ELSET)"),
+                    block.extra_ids,
+                    block.first_extra_line,
+                    block.kind.nodes()
+                ));
+            }
         }
         r.node_sets(&self)?;
         r.boundaries(&self)?;
@@ -153,11 +163,18 @@ impl Resolver<'_> {
         let one_material = by_material.len() <= 1;
         for (m, (connectivity, eids)) in by_material {
             let mesh = &self.model.mesh;
-            let name = match &block.elset {
+            let mut name = match &block.elset {
                 Some(s) if one_material => s.clone(),
                 Some(s) => format!("{s}-{}", mesh.materials[m].name),
                 None => format!("block{}-{}", mesh.blocks.len(), mesh.materials[m].name),
             };
+            // One ELSET with several element types: a block per type, named apart.
+            if mesh.blocks.iter().any(|b| b.name == name) {
+                name = format!("{name}-{}", block.abaqus.to_lowercase());
+            }
+            self.model
+                .element_types
+                .push((name.clone(), block.abaqus.clone(), eids.len()));
             for id in eids {
                 self.elem_index.insert(id, self.elem_index.len());
             }
