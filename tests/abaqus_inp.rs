@@ -226,7 +226,48 @@ fn pre_processor_decks_are_read_as_abaqus_reads_them() {
         e.contains("INITIAL CONDITIONS") && e.contains("could change the model"),
         "{e}"
     );
-    // An abbreviation that fits two values is refused rather than guessed.
-    let e = error_of(&TWO_HEXES.replace("TYPE=ENGINEERING CONSTANTS", "TYPE=ORTHO"));
-    assert!(e.contains("TYPE=ORTHO"), "{e}");
+    // A form that is not read is refused, naming it.
+    let e = error_of(&TWO_HEXES.replace("TYPE=ENGINEERING CONSTANTS", "TYPE=TRACTION"));
+    assert!(
+        e.contains("TYPE=TRACTION") && e.contains("bad.inp:35"),
+        "{e}"
+    );
+}
+
+/// *ELASTIC, TYPE=ORTHO (the nine D constants, Abaqus' Voigt order 11, 22, 33, 12, 13, 23)
+/// gives the D of the same engineering constants, mapped onto squeal's (xx, yy, zz, xy, yz,
+/// zx) order: D1313 is squeal's zx shear, D2323 its yz.
+#[test]
+fn orthotropic_d_constants_give_the_engineering_constants_d() {
+    let engineering = scratch("eng.inp");
+    std::fs::write(&engineering, TWO_HEXES).unwrap();
+    let m = read(&engineering).unwrap();
+    let d = m.mesh.materials[1].stiffness_matrix();
+    // Abaqus order: D1111, D1122, D2222, D1133, D2233, D3333, D1212, D1313, D2323.
+    let values = [
+        d[0][0], d[0][1], d[1][1], d[0][2], d[1][2], d[2][2], d[3][3], d[5][5], d[4][4],
+    ];
+    let line: Vec<String> = values.iter().map(|v| format!("{v:e}")).collect();
+    let ortho = TWO_HEXES.replace(
+        "*ELASTIC, TYPE=ENGINEERING CONSTANTS\n6e9, 6e9, 2e9, 0.25, 0.1, 0.1, 2.4e9, 1e9,\n1e9",
+        &format!(
+            "*ELASTIC, TYPE=ORTHO\n{},\n{}",
+            line[..8].join(", "),
+            line[8]
+        ),
+    );
+    assert_ne!(ortho, TWO_HEXES);
+    let p = scratch("ortho.inp");
+    std::fs::write(&p, &ortho).unwrap();
+    let back = read(&p).unwrap().mesh.materials[1].stiffness_matrix();
+    for i in 0..6 {
+        for j in 0..6 {
+            assert!(
+                (back[i][j] - d[i][j]).abs() <= 1e-12 * d[0][0],
+                "D[{i}][{j}]: {} vs {}",
+                back[i][j],
+                d[i][j]
+            );
+        }
+    }
 }

@@ -5,6 +5,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::dense::invert_spd;
 
+// A model holds a handful of materials: the 288-byte variant costs nothing worth boxing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "model", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Elasticity {
@@ -23,7 +25,15 @@ pub enum Elasticity {
         g13: f64,
         g23: f64,
     },
+    /// The constitutive matrix itself (Pa), in this module's Voigt order (xx, yy, zz, xy, yz,
+    /// zx) with engineering shear strains: Abaqus' TYPE=ORTHOTROPIC and ANISOTROPIC.
+    /// Symmetric positive definite.
+    Anisotropic { d: [[f64; 6]; 6] },
 }
+
+/// Abaqus' Voigt position (11, 22, 33, 12, 13, 23) of each of this module's (xx, yy, zz, xy,
+/// yz, zx) and back: the orders differ in the last two.
+pub const FROM_ABAQUS_VOIGT: [usize; 6] = [0, 1, 2, 3, 5, 4];
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -43,7 +53,7 @@ pub enum MaterialError {
         value: f64,
         rule: &'static str,
     },
-    #[error("material '{material}': the orthotropic constants do not give a positive definite compliance (check the Poisson ratios against the moduli)")]
+    #[error("material '{material}': the elastic constants do not give a positive definite stiffness (check the Poisson ratios against the moduli, or the matrix' entries)")]
     NotPositiveDefinite { material: String },
 }
 
@@ -114,6 +124,23 @@ impl Material {
                     });
                 }
             }
+            Elasticity::Anisotropic { d } => {
+                for (i, row) in d.iter().enumerate() {
+                    for (j, &v) in row.iter().enumerate() {
+                        if !v.is_finite() {
+                            return Err(bad("d", v, "finite constants (Pa)"));
+                        }
+                        if (v - d[j][i]).abs() > 1e-12 * (v.abs() + d[j][i].abs()) {
+                            return Err(bad("d", v, "a symmetric constitutive matrix"));
+                        }
+                    }
+                }
+                if invert_spd(&d).is_none() {
+                    return Err(MaterialError::NotPositiveDefinite {
+                        material: self.name.clone(),
+                    });
+                }
+            }
         }
         Ok(())
     }
@@ -136,6 +163,9 @@ impl Material {
                 g13,
                 g23,
             } => (e1, e2, e3, nu12, nu13, nu23, g12, g13, g23),
+            Elasticity::Anisotropic { d } => {
+                return invert_spd(&d).expect("validated anisotropic material");
+            }
         };
         s[0][0] = 1.0 / e1;
         s[1][1] = 1.0 / e2;
@@ -172,6 +202,7 @@ impl Material {
             Elasticity::Orthotropic { .. } => {
                 invert_spd(&self.compliance()).expect("validated orthotropic material")
             }
+            Elasticity::Anisotropic { d } => d,
         }
     }
 }

@@ -96,7 +96,7 @@ enum Mode {
     Surface(String),
     Elastic {
         material: usize,
-        engineering: bool,
+        form: ElasticForm,
         values: Vec<f64>,
     },
     Density(usize),
@@ -334,18 +334,26 @@ impl Parser {
             .get("TYPE")
             .cloned()
             .unwrap_or_else(|| "ISOTROPIC".into());
-        let engineering = match abbreviates(&ty, &["ISOTROPIC", "ENGINEERING CONSTANTS"]) {
-            Some("ISOTROPIC") => false,
-            Some(_) => true,
+        let forms = [
+            "ISOTROPIC",
+            "ENGINEERING CONSTANTS",
+            "ORTHOTROPIC",
+            "ANISOTROPIC",
+        ];
+        let form = match abbreviates(&ty, &forms) {
+            Some("ISOTROPIC") => ElasticForm::Isotropic,
+            Some("ENGINEERING CONSTANTS") => ElasticForm::Engineering,
+            Some("ORTHOTROPIC") => ElasticForm::Orthotropic,
+            Some(_) => ElasticForm::Anisotropic,
             None => {
                 return Err(at.syntax(format!(
-                    "*ELASTIC TYPE={ty} is not supported (ISOTROPIC or ENGINEERING CONSTANTS)"
+                    "*ELASTIC TYPE={ty} is not supported (ISOTROPIC, ENGINEERING CONSTANTS, ORTHOTROPIC or ANISOTROPIC)"
                 )))
             }
         };
         Ok(Mode::Elastic {
             material: m,
-            engineering,
+            form,
             values: Vec::new(),
         })
     }
@@ -393,13 +401,13 @@ impl Parser {
             }
             Mode::Elastic {
                 material,
-                engineering,
+                form,
                 values,
             } => {
                 for f in &fields {
                     values.push(at.num(f)?);
                 }
-                if let Some(e) = elasticity(values, *engineering, at)? {
+                if let Some(e) = elasticity(values, *form, at)? {
                     raw.materials[*material].elasticity = Some(e);
                     values.clear();
                 }
@@ -518,31 +526,79 @@ fn set(
     Ok(())
 }
 
-/// The elasticity once its values are complete (engineering constants take two lines: 8
-/// values, then G23), else None.
-fn elasticity(values: &[f64], engineering: bool, at: At) -> Result<Option<Elasticity>, InpError> {
-    if engineering {
-        if values.len() < 9 {
-            return Ok(None);
+/// The forms of *ELASTIC and how many constants each takes (before a temperature).
+#[derive(Clone, Copy)]
+pub(super) enum ElasticForm {
+    Isotropic,
+    Engineering,
+    Orthotropic,
+    Anisotropic,
+}
+
+impl ElasticForm {
+    fn constants(self) -> usize {
+        match self {
+            ElasticForm::Isotropic => 2,
+            ElasticForm::Engineering | ElasticForm::Orthotropic => 9,
+            ElasticForm::Anisotropic => 21,
         }
-        return Ok(Some(Elasticity::Orthotropic {
-            e1: values[0],
-            e2: values[1],
-            e3: values[2],
-            nu12: values[3],
-            nu13: values[4],
-            nu23: values[5],
-            g12: values[6],
-            g13: values[7],
-            g23: values[8],
-        }));
     }
-    if values.len() < 2 {
-        return Err(at.syntax("expected 'E, nu'".into()));
+}
+
+/// Abaqus' ORTHOTROPIC (D1111, D1122, D2222, D1133, D2233, D3333, D1212, D1313, D2323) and
+/// ANISOTROPIC (the upper triangle column by column: D1111, D1122, D2222, D1133, D2233,
+/// D3333, D1112, D2212, D3312, D1212, ...) constants as (row, column) in Abaqus' Voigt order.
+fn abaqus_d_positions(form: ElasticForm) -> Vec<(usize, usize)> {
+    match form {
+        ElasticForm::Orthotropic => vec![
+            (0, 0),
+            (0, 1),
+            (1, 1),
+            (0, 2),
+            (1, 2),
+            (2, 2),
+            (3, 3),
+            (4, 4),
+            (5, 5),
+        ],
+        _ => (0..6).flat_map(|j| (0..=j).map(move |i| (i, j))).collect(),
     }
-    Ok(Some(Elasticity::Isotropic {
-        e: values[0],
-        nu: values[1],
+}
+
+/// The elasticity once its values are complete (the 9 and 21 constants take two and three
+/// lines of 8), else None. A trailing temperature is ignored.
+fn elasticity(values: &[f64], form: ElasticForm, at: At) -> Result<Option<Elasticity>, InpError> {
+    use crate::mesh::material::FROM_ABAQUS_VOIGT;
+    let n = form.constants();
+    if values.len() < n {
+        return match form {
+            ElasticForm::Isotropic => Err(at.syntax("expected 'E, nu'".into())),
+            _ => Ok(None),
+        };
+    }
+    let v = values;
+    Ok(Some(match form {
+        ElasticForm::Isotropic => Elasticity::Isotropic { e: v[0], nu: v[1] },
+        ElasticForm::Engineering => Elasticity::Orthotropic {
+            e1: v[0],
+            e2: v[1],
+            e3: v[2],
+            nu12: v[3],
+            nu13: v[4],
+            nu23: v[5],
+            g12: v[6],
+            g13: v[7],
+            g23: v[8],
+        },
+        ElasticForm::Orthotropic | ElasticForm::Anisotropic => {
+            let mut d = [[0.0; 6]; 6];
+            for (k, (i, j)) in abaqus_d_positions(form).into_iter().enumerate() {
+                let (p, q) = (FROM_ABAQUS_VOIGT[i], FROM_ABAQUS_VOIGT[j]);
+                d[p][q] = v[k];
+                d[q][p] = v[k];
+            }
+            Elasticity::Anisotropic { d }
+        }
     }))
 }
 

@@ -104,6 +104,16 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
                     field(g23)
                 );
             }
+            Elasticity::Anisotropic { d } => {
+                // The upper triangle column by column, in Abaqus' Voigt order, 8 per line.
+                use crate::mesh::material::FROM_ABAQUS_VOIGT as V;
+                let values: Vec<String> = (0..6)
+                    .flat_map(|j| (0..=j).map(move |i| (i, j)))
+                    .map(|(i, j)| field(d[V[i]][V[j]]))
+                    .collect();
+                let lines: Vec<String> = values.chunks(8).map(|c| c.join(", ")).collect();
+                let _ = writeln!(s, "*ELASTIC, TYPE=ANISOTROPIC\n{}", lines.join("\n"));
+            }
         }
         let _ = writeln!(s, "*DENSITY\n{}", field(m.density));
     }
