@@ -138,9 +138,9 @@ fn error_of(text: &str) -> String {
 fn malformed_files_name_file_and_line() {
     let e = error_of(&TWO_HEXES.replace(
         "*NSET, NSET=LEFT, GENERATE",
-        "*ORIENTATION, NAME=O\n*NSET, NSET=LEFT, GENERATE",
+        "*EQUATION\n*NSET, NSET=LEFT, GENERATE",
     ));
-    assert!(e.contains("bad.inp:21") && e.contains("ORIENTATION"), "{e}");
+    assert!(e.contains("bad.inp:21") && e.contains("EQUATION"), "{e}");
     let e = error_of(&TWO_HEXES.replace("3, 1., 1., 0.", "3, 1., one, 0."));
     assert!(e.contains("bad.inp:7") && e.contains("'one'"), "{e}");
     let e = error_of(&TWO_HEXES.replace("TYPE=C3D8I, ELSET=PAD", "TYPE=S4R, ELSET=PAD"));
@@ -270,4 +270,36 @@ fn orthotropic_d_constants_give_the_engineering_constants_d() {
             );
         }
     }
+}
+
+/// *ORIENTATION on a *SOLID SECTION: read into the block (the axes, the extra rotation), and
+/// what does not define axes refused with the line.
+#[test]
+fn orientations_are_read_and_bad_ones_refused() {
+    let oriented = TWO_HEXES.replace(
+        "*SOLID SECTION, ELSET=PAD, MATERIAL=LINING",
+        "*ORIENTATION, NAME=PADAXES, SYSTEM=CYL\n0., 0., 0., 0., 1., 0.\n3, 10.\n*SOLID SECTION, ELSET=PAD, MATERIAL=LINING, ORIENTATION=padaxes",
+    );
+    let path = scratch("oriented.inp");
+    std::fs::write(&path, &oriented).unwrap();
+    let m = read(&path).unwrap();
+    let o = m.mesh.blocks[1].orientation.expect("the pad's orientation");
+    assert_eq!(m.mesh.orientations[o].name, "PADAXES");
+    assert_eq!(m.mesh.orientations[o].extra_rotation, Some((2, 10.0)));
+    assert_eq!(m.mesh.blocks[0].orientation, None);
+    // The pad's centroid (1.5, 0.5, 0.5) is off the y axis; one on it is refused.
+    let on_axis = oriented.replace("0., 0., 0., 0., 1., 0.", "1.5, 0., 0.5, 1.5, 1., 0.5");
+    let e = error_of(&on_axis);
+    assert!(
+        e.contains("centroid on the axis") && e.contains("PADAXES"),
+        "{e}"
+    );
+    let e = error_of(&oriented.replace("SYSTEM=CYL", "SYSTEM=SPHERICAL"));
+    assert!(e.contains("SPHERICAL") && e.contains("bad.inp:"), "{e}");
+    let e = error_of(&oriented.replace("SYSTEM=CYL", "SYSTEM=CYL, DEFINITION=NODES"));
+    assert!(e.contains("DEFINITION=NODES"), "{e}");
+    let e = error_of(&oriented.replace("ORIENTATION=padaxes", "ORIENTATION=other"));
+    assert!(e.contains("'other'") && e.contains("*ORIENTATION"), "{e}");
+    let e = error_of(&oriented.replace("0., 0., 0., 0., 1., 0.", "0., 0., 0., 0., 0., 0."));
+    assert!(e.contains("do not define axes"), "{e}");
 }

@@ -106,7 +106,9 @@ pub fn assemble_blocks<S: MatrixSink, T: MatrixSink<Error = S::Error>>(
             offset += block.len();
             continue;
         }
-        let mut kernel = ElementKernel::new(block.kind, &mesh.materials[block.material]);
+        let orientation = block.orientation.map(|o| &mesh.orientations[o]);
+        let material = &mesh.materials[block.material];
+        let mut kernel = ElementKernel::oriented(block.kind, material, orientation);
         let n = kernel.order();
         let (mut ke, mut me) = (vec![0.0; n * n], vec![0.0; n * n]);
         for e in 0..block.len() {

@@ -7,6 +7,7 @@
 use super::quadrature::Rule;
 use crate::dense::{cholesky, cholesky_solve, inverse3};
 use crate::mesh::material::Material;
+use crate::mesh::orientation::{to_global, Orientation};
 use crate::mesh::ElementKind;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -116,7 +117,10 @@ fn mirror_upper(k: &mut [f64], n: usize) {
 /// work arrays (one per thread of assembly).
 pub struct ElementKernel {
     kind: ElementKind,
+    /// D in the global axes (with a uniform orientation, rotated once).
     d: [[f64; 6]; 6],
+    /// A cylindrical orientation and the material's local D: D rotated at each point.
+    varying: Option<(Orientation, [[f64; 6]; 6])>,
     density: f64,
     stiff: Tabulated,
     mass: Tabulated,
@@ -126,9 +130,31 @@ pub struct ElementKernel {
 
 impl ElementKernel {
     pub fn new(kind: ElementKind, material: &Material) -> Self {
+        Self::oriented(kind, material, None)
+    }
+
+    /// The kernel of a material whose constants refer to `orientation`'s local axes. The
+    /// reader has checked that the axes are defined at every element's centroid.
+    pub fn oriented(
+        kind: ElementKind,
+        material: &Material,
+        orientation: Option<&Orientation>,
+    ) -> Self {
+        let local = material.stiffness_matrix();
+        let (d, varying) = match orientation {
+            None => (local, None),
+            Some(o) if o.is_uniform() => {
+                let axes = o
+                    .axes_at([0.0; 3])
+                    .expect("a checked rectangular orientation");
+                (to_global(&local, &axes), None)
+            }
+            Some(o) => (local, Some((o.clone(), local))),
+        };
         ElementKernel {
             kind,
-            d: material.stiffness_matrix(),
+            d,
+            varying,
             density: material.density,
             stiff: Tabulated::new(kind, kind.stiffness_rule()),
             mass: Tabulated::new(kind, kind.mass_rule()),
@@ -167,10 +193,36 @@ impl ElementKernel {
             for (g, d) in self.grads.iter_mut().zip(dn) {
                 *g = physical(d, &jinv);
             }
-            add_btdb(k, &self.grads, &self.d, w * det);
+            let d = self.d_at(&self.stiff.n[p], x);
+            add_btdb(k, &self.grads, &d, w * det);
         }
         mirror_upper(k, n3);
         Ok(())
+    }
+
+    /// D at the point with shape-function values `n` of the element with nodes `x`: the
+    /// global one, or the local one turned into the cylindrical axes there (at the centroid
+    /// where the point lies on the axis).
+    fn d_at(&self, n: &[f64], x: &[[f64; 3]]) -> [[f64; 6]; 6] {
+        let Some((o, local)) = &self.varying else {
+            return self.d;
+        };
+        let at = |w: &dyn Fn(usize) -> f64| {
+            let mut p = [0.0; 3];
+            for (a, xa) in x.iter().enumerate() {
+                for i in 0..3 {
+                    p[i] += w(a) * xa[i];
+                }
+            }
+            p
+        };
+        let point = at(&|a| n[a]);
+        let centroid = at(&|_| 1.0 / x.len() as f64);
+        let axes = o
+            .axes_at(point)
+            .or_else(|| o.axes_at(centroid))
+            .expect("a cylindrical orientation checked off its axis at the centroids");
+        to_global(local, &axes)
     }
 
     /// Hex8 with Wilson's incompatible bubbles P_i = 1 - xi_i^2, in Taylor's form (gradients
@@ -206,7 +258,8 @@ impl ElementKernel {
                 let g = physical(&d, &j0inv);
                 self.grads[8 + i] = [g[0] * scale, g[1] * scale, g[2] * scale];
             }
-            add_btdb(&mut self.work, &self.grads, &self.d, w * det);
+            let d = self.d_at(&self.stiff.n[p][..8], x);
+            add_btdb(&mut self.work, &self.grads, &d, w * det);
         }
         mirror_upper(&mut self.work, N3);
         // Condense: rows/cols 0..24 compatible (c), 24..33 incompatible (i).

@@ -451,6 +451,7 @@ impl RawMsh {
                 kind: *kind,
                 material: index,
                 connectivity: Vec::new(),
+                orientation: None,
             });
         }
         for (b, nodes, _) in pending {

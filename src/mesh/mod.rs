@@ -7,6 +7,7 @@ pub mod clamp;
 pub mod element;
 pub mod gmsh_msh;
 pub mod material;
+pub mod orientation;
 pub mod partition;
 pub mod structured;
 
@@ -45,6 +46,9 @@ pub struct ElementBlock {
     pub material: usize,
     /// Node indices, `kind.nodes()` per element.
     pub connectivity: Vec<usize>,
+    /// Index into `Mesh::orientations`: the axes the material's constants refer to (None:
+    /// the global axes).
+    pub orientation: Option<usize>,
 }
 
 impl ElementBlock {
@@ -71,6 +75,8 @@ pub struct Mesh {
     /// Element-face surfaces: (global element index, face 1..6 in Abaqus numbering; 1..4 for
     /// tetrahedra). Global element indices run over the blocks in order.
     pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
+    /// Material orientations the blocks refer to.
+    pub orientations: Vec<orientation::Orientation>,
 }
 
 impl Mesh {
@@ -168,7 +174,9 @@ impl Mesh {
     pub fn append(&mut self, other: Mesh) {
         let node_offset = self.coords.len();
         let element_offset = self.element_count();
+        let orientation_offset = self.orientations.len();
         self.coords.extend(other.coords);
+        self.orientations.extend(other.orientations);
         for block in other.blocks {
             let material = &other.materials[block.material];
             let index = match self.materials.iter().position(|m| m.name == material.name) {
@@ -183,6 +191,7 @@ impl Mesh {
                 kind: block.kind,
                 material: index,
                 connectivity: block.connectivity.iter().map(|n| n + node_offset).collect(),
+                orientation: block.orientation.map(|o| o + orientation_offset),
             });
         }
         for (name, nodes) in other.node_sets {

@@ -130,10 +130,12 @@ pub fn structured(
             kind,
             material: 0,
             connectivity,
+            orientation: None,
         }],
         materials: vec![material],
         node_sets: Default::default(),
         surfaces: Default::default(),
+        orientations: Vec::new(),
     };
     if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);

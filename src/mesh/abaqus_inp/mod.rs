@@ -1,10 +1,12 @@
 //! Abaqus input files (`.inp`), the subset that describes a solid model: `*NODE`, `*ELEMENT`
-//! (C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D4, each integrated as CalculiX does: `fem::shape`), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE`
-//! (element-face based), `*MATERIAL` with `*ELASTIC` (isotropic or engineering constants) and
-//! `*DENSITY`, `*SOLID SECTION`, `*BOUNDARY` (zero values), `*INCLUDE`, `*CONTACT PAIR` with
-//! `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis steps and output requests are
-//! reported and skipped; anything else that could change the model is an error naming the
-//! line. A writer produces the same subset, so a generated model opens in other tools.
+//! (C3D8, C3D8I, C3D20, C3D20R, C3D10 and C3D10M, C3D4, each integrated as CalculiX does:
+//! `fem::shape`), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE` (element-face based),
+//! `*MATERIAL` with `*ELASTIC` (isotropic, engineering constants, orthotropic, anisotropic)
+//! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values),
+//! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis
+//! steps and output requests are reported and skipped; anything else that could change the
+//! model is an error naming the line. A writer produces the same subset, so a generated model
+//! opens in other tools (CalculiX reads it: tests/ccx_reference.rs).
 
 mod raw;
 mod resolve;

@@ -31,10 +31,21 @@ pub(super) struct RawMaterial {
     pub elasticity: Option<Elasticity>,
 }
 
-/// A *SOLID SECTION: element set, material, line.
+/// A *SOLID SECTION: element set, material, orientation, line.
 pub(super) struct RawSection {
     pub elset: String,
     pub material: String,
+    pub orientation: Option<String>,
+    pub line: usize,
+}
+
+/// An *ORIENTATION as read: name, cylindrical or rectangular, its numbers (a, b[, origin]),
+/// the extra rotation's line (axis 1..3, degrees), and the keyword's line.
+pub(super) struct RawOrientation {
+    pub name: String,
+    pub cylindrical: bool,
+    pub points: Vec<f64>,
+    pub rotation: Option<(usize, f64)>,
     pub line: usize,
 }
 
@@ -71,6 +82,7 @@ pub(super) struct RawInp {
     pub nsets: BTreeMap<String, Vec<i64>>,
     pub materials: Vec<RawMaterial>,
     pub sections: Vec<RawSection>,
+    pub orientations: Vec<RawOrientation>,
     pub boundaries: Vec<RawBoundary>,
     pub surfaces: BTreeMap<String, Vec<RawFace>>,
     /// Surface interactions with their friction coefficient.
@@ -101,6 +113,8 @@ enum Mode {
     },
     Density(usize),
     Section,
+    /// The orientation's index and how many of its data lines were read.
+    Orientation(usize, usize),
     Boundary,
     Friction(String),
     ContactPair(String),
@@ -234,18 +248,15 @@ impl Parser {
             }
             "ELASTIC" | "DENSITY" => self.material_keyword(kw, at)?,
             "SOLID SECTION" => {
-                if kw.params.contains_key("ORIENTATION") {
-                    return Err(at.syntax(
-                        "*SOLID SECTION with ORIENTATION is not supported: orthotropic axes are the global axes".into(),
-                    ));
-                }
                 self.raw.sections.push(RawSection {
                     elset: need("ELSET")?,
                     material: need("MATERIAL")?,
+                    orientation: param("ORIENTATION"),
                     line: at.line,
                 });
                 Mode::Section
             }
+            "ORIENTATION" => self.orientation_keyword(kw, need("NAME")?, at)?,
             "BOUNDARY" => Mode::Boundary,
             "SURFACE INTERACTION" => {
                 let name = need("NAME")?;
@@ -277,8 +288,8 @@ impl Parser {
                     file: at.file.clone(),
                     line: at.line,
                     keyword: other.to_string(),
-                    hint: "remove it or flatten the model (parts/instances, orientations, \
-                           shells and beams are not read)"
+                    hint: "remove it or flatten the model (parts/instances, ties, equations, \
+                           couplings, shells and beams are not read)"
                         .into(),
                 })
             }
@@ -319,6 +330,44 @@ impl Parser {
             block,
             pending: Vec::new(),
         })
+    }
+
+    /// *ORIENTATION: SYSTEM=RECTANGULAR (default) or CYLINDRICAL, DEFINITION=COORDINATES.
+    fn orientation_keyword(
+        &mut self,
+        kw: &Keyword,
+        name: String,
+        at: At,
+    ) -> Result<Mode, InpError> {
+        let system = kw
+            .params
+            .get("SYSTEM")
+            .cloned()
+            .unwrap_or_else(|| "RECTANGULAR".into());
+        let cylindrical = match abbreviates(&system, &["RECTANGULAR", "CYLINDRICAL", "SPHERICAL"]) {
+            Some("RECTANGULAR") => false,
+            Some("CYLINDRICAL") => true,
+            _ => {
+                return Err(at.syntax(format!(
+                    "*ORIENTATION SYSTEM={system} is not supported (RECTANGULAR or CYLINDRICAL)"
+                )))
+            }
+        };
+        if let Some(d) = kw.params.get("DEFINITION") {
+            if abbreviates(d, &["COORDINATES", "NODES", "OFFSET TO NODES"]) != Some("COORDINATES") {
+                return Err(at.syntax(format!(
+                    "*ORIENTATION DEFINITION={d} is not supported: give the points' coordinates (DEFINITION=COORDINATES)"
+                )));
+            }
+        }
+        self.raw.orientations.push(RawOrientation {
+            name,
+            cylindrical,
+            points: Vec::new(),
+            rotation: None,
+            line: at.line,
+        });
+        Ok(Mode::Orientation(self.raw.orientations.len() - 1, 0))
     }
 
     /// *ELASTIC or *DENSITY of the current material.
@@ -369,6 +418,36 @@ impl Parser {
         match &mut self.mode {
             Mode::None => return Err(at.syntax("data line outside a keyword".into())),
             Mode::Skip | Mode::Section => {}
+            Mode::Orientation(o, read) => {
+                let orientation = &mut raw.orientations[*o];
+                match *read {
+                    0 => {
+                        if !(fields.len() == 6 || fields.len() == 9) {
+                            return Err(at.syntax(
+                                "expected 'a1, a2, a3, b1, b2, b3[, c1, c2, c3]' (the points a, b and the origin)".into(),
+                            ));
+                        }
+                        for f in &fields {
+                            orientation.points.push(at.num(f)?);
+                        }
+                    }
+                    1 => {
+                        let axis = at.int(fields.first().copied().unwrap_or(""))?;
+                        let angle = match fields.get(1) {
+                            Some(f) => at.num(f)?,
+                            None => 0.0,
+                        };
+                        if !(1..=3).contains(&axis) {
+                            return Err(at.syntax(format!(
+                                "the extra rotation's axis is {axis}: use 1, 2 or 3"
+                            )));
+                        }
+                        orientation.rotation = Some((axis as usize - 1, angle));
+                    }
+                    _ => return Err(at.syntax("*ORIENTATION takes two data lines".into())),
+                }
+                *read += 1;
+            }
             Mode::Node(nset) => node(raw, nset.as_deref(), &fields, at)?,
             Mode::Element { block, pending } => element(
                 &mut raw.blocks[*block],

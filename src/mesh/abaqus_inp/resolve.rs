@@ -9,6 +9,7 @@ use std::path::Path;
 use super::raw::{RawBlock, RawInp};
 use super::{ContactPair, InpError, InpModel};
 use crate::mesh::material::Material;
+use crate::mesh::orientation::{Orientation, System};
 use crate::mesh::ElementBlock;
 
 /// The resolution's state: the model so far and the maps from Abaqus ids.
@@ -35,7 +36,8 @@ impl RawInp {
             }
         }
         let material_ids = r.materials(&self)?;
-        let element_material = r.sections(&self, &material_ids)?;
+        let orientation_ids = r.orientations(&self)?;
+        let element_material = r.sections(&self, &material_ids, &orientation_ids)?;
         for block in &self.blocks {
             r.block(&self, block, &element_material)?;
             if block.extra_ids > 0 {
@@ -49,6 +51,7 @@ impl RawInp {
                 ));
             }
         }
+        r.check_orientations()?;
         r.node_sets(&self)?;
         r.boundaries(&self)?;
         r.surfaces(&self)?;
@@ -99,12 +102,79 @@ impl Resolver<'_> {
         Ok(ids)
     }
 
-    /// Each element's material, from the *SOLID SECTION lines.
+    /// The orientations, their axes checked; their indices by upper-case name.
+    fn orientations(&mut self, raw: &RawInp) -> Result<HashMap<String, usize>, InpError> {
+        let mut ids = HashMap::new();
+        for o in &raw.orientations {
+            let p = &o.points;
+            let point = |k: usize| [p[3 * k], p[3 * k + 1], p[3 * k + 2]];
+            let system = if o.cylindrical {
+                System::Cylindrical {
+                    a: point(0),
+                    b: point(1),
+                }
+            } else {
+                let origin = if p.len() == 9 { point(2) } else { [0.0; 3] };
+                System::Rectangular {
+                    a: point(0),
+                    b: point(1),
+                    origin,
+                }
+            };
+            let orientation = Orientation {
+                name: o.name.clone(),
+                system,
+                extra_rotation: o.rotation,
+            };
+            let defined = match orientation.system {
+                System::Rectangular { .. } => orientation.axes_at([0.0; 3]).is_some(),
+                System::Cylindrical { a, b } => a != b && p.len() == 6,
+            };
+            if p.is_empty() || !defined {
+                return Err(self.error(format!(
+                    "line {}: *ORIENTATION {}: its points do not define axes (a rectangular system needs a away from the origin and b off that line; a cylindrical one two distinct points a, b on its axis and no origin)",
+                    o.line, o.name
+                )));
+            }
+            ids.insert(o.name.to_uppercase(), self.model.mesh.orientations.len());
+            self.model.mesh.orientations.push(orientation);
+        }
+        Ok(ids)
+    }
+
+    /// Every element of a block on a cylindrical orientation has its centroid off the axis,
+    /// where the local axes are defined (`ElementKernel` falls back to it at points on it).
+    fn check_orientations(&self) -> Result<(), InpError> {
+        let mesh = &self.model.mesh;
+        let mut x = Vec::new();
+        for block in &mesh.blocks {
+            let Some(o) = block.orientation.map(|o| &mesh.orientations[o]) else {
+                continue;
+            };
+            for e in 0..block.len() {
+                mesh.element_coords(block.element(e), &mut x);
+                let n = x.len() as f64;
+                let c = [0, 1, 2].map(|i| x.iter().map(|p| p[i]).sum::<f64>() / n);
+                if o.axes_at(c).is_none() {
+                    return Err(self.error(format!(
+                        "block {}: element {} has its centroid on the axis of the cylindrical *ORIENTATION {}, where no radial direction exists",
+                        block.name,
+                        e + 1,
+                        o.name
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Each element's material and orientation, from the *SOLID SECTION lines.
     fn sections(
         &self,
         raw: &RawInp,
         material_ids: &HashMap<String, usize>,
-    ) -> Result<HashMap<i64, usize>, InpError> {
+        orientation_ids: &HashMap<String, usize>,
+    ) -> Result<HashMap<i64, (usize, Option<usize>)>, InpError> {
         let mut element_material = HashMap::new();
         for s in &raw.sections {
             let (elset, material, line) = (&s.elset, &s.material, s.line);
@@ -113,6 +183,14 @@ impl Resolver<'_> {
                     "line {line}: *SOLID SECTION names material '{material}', which is not defined"
                 ))
             })?;
+            let o = match &s.orientation {
+                Some(name) => Some(*orientation_ids.get(&name.to_uppercase()).ok_or_else(|| {
+                    self.error(format!(
+                        "line {line}: *SOLID SECTION names orientation '{name}', which no *ORIENTATION defines"
+                    ))
+                })?),
+                None => None,
+            };
             let ids = raw
                 .elsets
                 .get(elset)
@@ -129,7 +207,7 @@ impl Resolver<'_> {
                     ))
                 })?;
             for id in ids {
-                element_material.insert(id, m);
+                element_material.insert(id, (m, o));
             }
         }
         Ok(element_material)
@@ -141,10 +219,11 @@ impl Resolver<'_> {
         &mut self,
         raw: &RawInp,
         block: &RawBlock,
-        element_material: &HashMap<i64, usize>,
+        element_material: &HashMap<i64, (usize, Option<usize>)>,
     ) -> Result<(), InpError> {
         let nn = block.kind.nodes();
-        let mut by_material: BTreeMap<usize, (Vec<usize>, Vec<i64>)> = BTreeMap::new();
+        type Section = (usize, Option<usize>);
+        let mut by_material: BTreeMap<Section, (Vec<usize>, Vec<i64>)> = BTreeMap::new();
         for (e, id) in block.ids.iter().enumerate() {
             let m = *element_material.get(id).ok_or_else(|| {
                 self.error(format!("element {id} has no *SOLID SECTION (no material)"))
@@ -161,16 +240,22 @@ impl Resolver<'_> {
             entry.1.push(*id);
         }
         let one_material = by_material.len() <= 1;
-        for (m, (connectivity, eids)) in by_material {
+        for ((m, o), (connectivity, eids)) in by_material {
             let mesh = &self.model.mesh;
             let mut name = match &block.elset {
                 Some(s) if one_material => s.clone(),
                 Some(s) => format!("{s}-{}", mesh.materials[m].name),
                 None => format!("block{}-{}", mesh.blocks.len(), mesh.materials[m].name),
             };
-            // One ELSET with several element types: a block per type, named apart.
+            // One ELSET with several element types or orientations: blocks named apart.
             if mesh.blocks.iter().any(|b| b.name == name) {
                 name = format!("{name}-{}", block.abaqus.to_lowercase());
+            }
+            let base = name.clone();
+            let mut k = 2;
+            while mesh.blocks.iter().any(|b| b.name == name) {
+                name = format!("{base}-{k}");
+                k += 1;
             }
             self.model
                 .element_types
@@ -183,6 +268,7 @@ impl Resolver<'_> {
                 kind: block.kind,
                 material: m,
                 connectivity,
+                orientation: o,
             });
         }
         Ok(())

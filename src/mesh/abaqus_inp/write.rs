@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::abaqus_type;
 use crate::mesh::material::Elasticity;
+use crate::mesh::orientation::System;
 use crate::mesh::Mesh;
 
 /// A number in at most 20 characters, the longest field CalculiX reads: the shorter of its
@@ -117,10 +118,29 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         }
         let _ = writeln!(s, "*DENSITY\n{}", field(m.density));
     }
-    for block in &mesh.blocks {
+    for o in &mesh.orientations {
+        let (system, points) = match o.system {
+            System::Rectangular { a, b, origin } => ("RECTANGULAR", vec![a, b, origin]),
+            System::Cylindrical { a, b } => ("CYLINDRICAL", vec![a, b]),
+        };
+        let numbers: Vec<String> = points.iter().flatten().map(|&v| field(v)).collect();
         let _ = writeln!(
             s,
-            "*SOLID SECTION, ELSET={}, MATERIAL={}",
+            "*ORIENTATION, NAME={}, SYSTEM={system}\n{}",
+            o.name,
+            numbers.join(", ")
+        );
+        if let Some((axis, degrees)) = o.extra_rotation {
+            let _ = writeln!(s, "{}, {}", axis + 1, field(degrees));
+        }
+    }
+    for block in &mesh.blocks {
+        let orientation = block.orientation.map_or(String::new(), |o| {
+            format!(", ORIENTATION={}", mesh.orientations[o].name)
+        });
+        let _ = writeln!(
+            s,
+            "*SOLID SECTION, ELSET={}, MATERIAL={}{orientation}",
             block.name, mesh.materials[block.material].name
         );
     }

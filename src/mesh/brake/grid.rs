@@ -438,6 +438,7 @@ impl Grid {
                 kind,
                 material: mesh.materials.len() - 1,
                 connectivity,
+                orientation: None,
             });
         }
         let coarse_cell = fine_cell
