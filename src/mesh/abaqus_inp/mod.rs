@@ -8,6 +8,7 @@
 //! model is an error naming the line. A writer produces the same subset, so a generated model
 //! opens in other tools (CalculiX reads it: tests/ccx_reference.rs).
 
+mod elastic;
 mod raw;
 mod resolve;
 mod write;
