@@ -90,22 +90,8 @@ fn run_and_kill(dir: &Path) -> usize {
     let written = Instant::now();
     let since = first.elapsed().unwrap_or_default();
     std::thread::sleep(Duration::from_millis(300).saturating_sub(since));
-    let ranks = String::from_utf8(
-        Command::new("pgrep")
-            .args(["-P", &mpirun.id().to_string()])
-            .output()
-            .unwrap()
-            .stdout,
-    )
-    .unwrap();
-    let pids: Vec<&str> = ranks.split_whitespace().collect();
-    assert_eq!(pids.len(), 2, "ranks of mpirun {}: {ranks}", mpirun.id());
-    for pid in &pids {
-        Command::new("kill").args(["-KILL", pid]).status().unwrap();
-    }
+    kill_ranks(&mut mpirun);
     let at_kill = written.elapsed().as_secs_f64();
-    let status = mpirun.wait().unwrap();
-    assert!(!status.success(), "a killed run ended well");
     println!("killed {at_kill:.2} s after the first checkpoint appeared");
     // How far it had come: rows of the stored time (written in chunks as the run goes; 0
     // when the killed file does not open).
@@ -115,17 +101,25 @@ fn run_and_kill(dir: &Path) -> usize {
         .unwrap_or(0)
 }
 
+/// Runs the scene of `dir` to its end on `ranks` ranks (`extra` after `-o out`); it must
+/// succeed.
+fn run_to_end(ranks: usize, dir: &Path, extra: &[&str]) {
+    let mut args = vec!["run", "scene.toml", "-o", "out"];
+    args.extend_from_slice(extra);
+    let out = launch::squeal_run(ranks, &args, dir, &[], Duration::from_secs(600));
+    assert!(
+        out.status.is_some_and(|s| s.success()),
+        "{} ({ranks} ranks {extra:?}) failed:\n{}\n{}",
+        dir.display(),
+        out.stdout,
+        out.stderr
+    );
+}
+
 #[test]
 fn a_transient_killed_between_checkpoints_resumes_to_the_uninterrupted_run() {
     let whole = scratch("whole");
-    let out = launch::squeal_run(
-        2,
-        &["run", "scene.toml", "-o", "out"],
-        &whole,
-        &[],
-        Duration::from_secs(600),
-    );
-    assert!(out.status.is_some_and(|s| s.success()), "{}", out.stderr);
+    run_to_end(2, &whole, &[]);
 
     let killed = scratch("killed");
     let rows_at_kill = run_and_kill(&killed);
@@ -137,40 +131,14 @@ fn a_transient_killed_between_checkpoints_resumes_to_the_uninterrupted_run() {
         rows_at_kill < STEPS + 1,
         "the killed run had finished: {rows_at_kill} rows"
     );
-    let again = launch::squeal_run(
-        2,
-        &["run", "scene.toml", "-o", "out", "--restart"],
-        &killed,
-        &[],
-        Duration::from_secs(600),
-    );
-    assert!(
-        again.status.is_some_and(|s| s.success()),
-        "the restart failed:\n{}\n{}",
-        again.stdout,
-        again.stderr
-    );
+    run_to_end(2, &killed, &["--restart"]);
     let one = scratch("one-rank");
-    let out = launch::squeal_run(
-        1,
-        &["run", "scene.toml", "-o", "out"],
-        &one,
-        &[],
-        Duration::from_secs(600),
-    );
-    assert!(out.status.is_some_and(|s| s.success()), "{}", out.stderr);
+    run_to_end(1, &one, &[]);
     let tighter = scratch_with(
         "tighter",
         &scene().replace("[transient]\n", "[transient]\ntolerance = 1.0e-9\n"),
     );
-    let out = launch::squeal_run(
-        2,
-        &["run", "scene.toml", "-o", "out"],
-        &tighter,
-        &[],
-        Duration::from_secs(600),
-    );
-    assert!(out.status.is_some_and(|s| s.success()), "{}", out.stderr);
+    run_to_end(2, &tighter, &[]);
     let (a, b, c) = (whole.join("out"), killed.join("out"), one.join("out"));
     let t = tighter.join("out");
     for name in [

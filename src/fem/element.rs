@@ -216,11 +216,9 @@ impl ElementKernel {
             }
             p
         };
-        let point = at(&|a| n[a]);
-        let centroid = at(&|_| 1.0 / x.len() as f64);
         let axes = o
-            .axes_at(point)
-            .or_else(|| o.axes_at(centroid))
+            .axes_at(at(&|a| n[a]))
+            .or_else(|| o.axes_at(at(&|_| 1.0 / x.len() as f64)))
             .expect("a cylindrical orientation checked off its axis at the centroids");
         to_global(local, &axes)
     }

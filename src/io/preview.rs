@@ -2,6 +2,7 @@
 //! one colour per element block (component), Lambert shading, z-buffered, element edges
 //! drawn where faces are large enough on screen to show them.
 
+use crate::dense::{cross, dot, normalize, sub};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -19,27 +20,6 @@ const PALETTE: [[f64; 3]; 8] = [
     [0.75, 0.20, 0.18], // caliper: red
     [0.35, 0.60, 0.35], // anchor: green
 ];
-
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
 
 /// Boundary faces (corner nodes, outward order) with their block index.
 pub fn boundary_faces(mesh: &Mesh) -> Vec<(Vec<usize>, usize)> {

@@ -18,6 +18,8 @@ pub enum System {
     Cylindrical { a: [f64; 3], b: [f64; 3] },
 }
 
+use crate::dense::{cross, dot, scale, sub};
+
 /// An orientation: its system and an extra rotation (local axis 0..3, angle in degrees).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Orientation {
@@ -26,19 +28,6 @@ pub struct Orientation {
     pub extra_rotation: Option<(usize, f64)>,
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 fn unit(a: [f64; 3]) -> Option<[f64; 3]> {
     let n = dot(a, a).sqrt();
     (n > 0.0 && n.is_finite()).then(|| [a[0] / n, a[1] / n, a[2] / n])
@@ -78,10 +67,6 @@ impl Orientation {
         }
         Some(axes)
     }
-}
-
-fn scale(a: [f64; 3], s: f64) -> [f64; 3] {
-    [a[0] * s, a[1] * s, a[2] * s]
 }
 
 /// D in the global axes from D in the local `axes` (rows: local axes in global coordinates),
