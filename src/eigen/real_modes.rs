@@ -64,6 +64,8 @@ pub struct RealModes<'p> {
     /// SLEPc's backward error ||r|| / ((||K|| + |lambda| ||M||) ||phi||).
     pub backward_errors: Vec<f64>,
     pub rigid: Vec<bool>,
+    /// The frequency (Hz) below which a mode counts as rigid (`rigid_below_hz`).
+    pub rigid_below_hz: f64,
     pub iterations: usize,
     pub factorization: Option<FactorizationReport>,
     pub seconds: f64,
@@ -157,6 +159,7 @@ pub fn real_modes<'p>(
         residual_norms,
         backward_errors,
         rigid,
+        rigid_below_hz: request.rigid_below_hz,
         iterations: sol.iterations,
         factorization: sol.factorization,
         seconds: start.elapsed().as_secs_f64(),

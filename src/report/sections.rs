@@ -89,6 +89,13 @@ impl RunSummary {
                     if s.rigid[i] { "   rigid-body mode" } else { "" }
                 )?;
             }
+            let rigid = s.rigid.iter().filter(|&&r| r).count();
+            if rigid > 0 && s.statics.is_some() {
+                writeln!(
+                    f,
+                    "    {rigid} rigid-body mode(s) of the preloaded brake: contact leaves a part free along them, so the static state is not unique there (the preload balances at any position along them); hold the part: friction in its joints ([contact.sticking] friction) or clamps"
+                )?;
+            }
             if let (Some(entries), Some(ordering)) = (s.factor_entries, s.ordering) {
                 writeln!(
                     f,

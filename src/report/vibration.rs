@@ -23,7 +23,7 @@ pub struct Frames {
 impl Frames {
     /// The stored states (times `times`) of the last `periods` periods (`period`, s), every
     /// `stride`-th back from the last so that about `per_period` fall in a period. None when
-    /// no frame is asked for or fewer than two states fall in the window.
+    /// no frame is asked for or fewer than two frames would result.
     pub fn choose(times: &[f64], period: f64, periods: f64, per_period: usize) -> Option<Frames> {
         let last = *times.last()?;
         if periods <= 0.0 || !(period > 0.0 && period.is_finite()) || per_period == 0 {
@@ -39,6 +39,11 @@ impl Frames {
         let stride = ((stored_per_period / per_period as f64).floor() as usize).max(1);
         let mut states: Vec<usize> = window.iter().rev().step_by(stride).copied().collect();
         states.reverse();
+        // A period longer than the run (no vibration found: the period stands in as 1e300 s)
+        // leaves one frame: no film to show.
+        if states.len() < 2 {
+            return None;
+        }
         Some(Frames {
             times: states.iter().map(|&i| times[i]).collect(),
             states,
@@ -142,5 +147,7 @@ mod tests {
         assert_eq!(Frames::choose(&times, f64::NAN, 4.0, 24), None);
         assert_eq!(Frames::choose(&[], 1.0, 4.0, 24), None);
         assert_eq!(Frames::choose(&times, 1e-6, 4.0, 24), None);
+        // No vibration in the run: its stand-in period of 1e300 s gives no frames.
+        assert_eq!(Frames::choose(&times, 1e300, 4.0, 24), None);
     }
 }

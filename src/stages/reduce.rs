@@ -38,14 +38,19 @@ pub struct Reduced<'p> {
     pub static_error: f64,
     /// Real modes of the reduced tangent vs the full ones in the basis: (full Hz, reduced Hz).
     pub mode_check: Vec<(f64, f64)>,
+    /// Below this frequency (Hz) a mode is rigid (the real modes' `rigid_below_hz`).
+    pub rigid_below_hz: f64,
 }
 
 impl Reduced<'_> {
-    /// The largest relative gap between a reduced and a full real mode (NaN if any is NaN).
+    /// The largest gap between a reduced and a full real mode, relative to the full mode's
+    /// frequency or, for a rigid-body mode, to the rigid-body limit: a rigid mode's few mHz
+    /// are round-off of a zero, so they agree when both stay well below the limit (NaN if any
+    /// is NaN).
     pub fn mode_error(&self) -> f64 {
         self.mode_check
             .iter()
-            .map(|(f, g)| (g - f).abs() / f.abs().max(1e-300))
+            .map(|(f, g)| (g - f).abs() / f.abs().max(self.rigid_below_hz))
             .fold(0.0, nan_max)
     }
 }
@@ -126,5 +131,6 @@ pub fn reduce<'p>(
         static_state,
         static_error,
         mode_check,
+        rigid_below_hz: modes.rigid_below_hz,
     })
 }
