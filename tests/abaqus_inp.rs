@@ -9,6 +9,7 @@ use squeal::fem::assembly::{assemble, DenseSink};
 use squeal::fem::dofmap::DofMap;
 use squeal::mesh::abaqus_inp::{read, write};
 use squeal::mesh::material::{Elasticity, Material};
+use squeal::mesh::point::PointKind;
 use squeal::mesh::structured::{annulus, block};
 use squeal::mesh::ElementKind;
 use squeal::mesh::Mesh;
@@ -302,4 +303,68 @@ fn orientations_are_read_and_bad_ones_refused() {
     assert!(e.contains("'other'") && e.contains("*ORIENTATION"), "{e}");
     let e = error_of(&oriented.replace("0., 0., 0., 0., 1., 0.", "0., 0., 0., 0., 0., 0."));
     assert!(e.contains("do not define axes"), "{e}");
+}
+
+/// Point elements as pre-processors write them (one ELSET per kind, the value in *MASS /
+/// *SPRING; SPRINGA's stiffness after a blank line), and their faults refused by line or set.
+#[test]
+fn masses_and_springs_are_read_and_bad_ones_refused() {
+    let points = "*ELEMENT, TYPE=MASS, ELSET=WEIGHTS\n10, 7\n11, 8\n\
+                  *ELEMENT, TYPE=SPRINGA, ELSET=STRUT\n12, 1, 12\n\
+                  *ELEMENT, TYPE=SPRING1, ELSET=HOLD\n13, 9\n\
+                  *MASS, ELSET=WEIGHTS\n0.25\n*SPRING, ELSET=STRUT\n\n2.5e5\n\
+                  *SPRING, ELSET=HOLD\n3\n1.e6\n";
+    let text = TWO_HEXES.replace(
+        "*NSET, NSET=LEFT, GENERATE",
+        &format!("{points}*NSET, NSET=LEFT, GENERATE"),
+    );
+    let path = scratch("points.inp");
+    std::fs::write(&path, &text).unwrap();
+    let m = read(&path).unwrap();
+    let blocks: Vec<(&str, PointKind, f64, &[usize])> = m
+        .mesh
+        .point_blocks
+        .iter()
+        .map(|b| (b.name.as_str(), b.kind, b.value, b.connectivity.as_slice()))
+        .collect();
+    assert_eq!(
+        blocks,
+        [
+            ("WEIGHTS", PointKind::Mass, 0.25, &[6usize, 7][..]),
+            ("STRUT", PointKind::Axial, 2.5e5, &[0, 11][..]),
+            ("HOLD", PointKind::Grounded { dof: 2 }, 1e6, &[8][..]),
+        ]
+    );
+    // Written and read back: the same point blocks.
+    let again = scratch("points-again.inp");
+    write(&again, &m.mesh, &m.clamps).unwrap();
+    assert_eq!(read(&again).unwrap().mesh.point_blocks, m.mesh.point_blocks);
+
+    let with = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        error_of(&text.replace(from, to))
+    };
+    let e = with("*MASS, ELSET=WEIGHTS\n0.25\n", "");
+    assert!(
+        e.contains("MASS element 10") && e.contains("no *MASS"),
+        "{e}"
+    );
+    let e = with("*SPRING, ELSET=HOLD\n3\n", "*SPRING, ELSET=HOLD\n4\n");
+    assert!(e.contains("DOF '4'") && e.contains("no rotations"), "{e}");
+    let e = with("*SPRING, ELSET=STRUT", "*SPRING, ELSET=STRUT, NONLINEAR");
+    assert!(
+        e.contains("NONLINEAR") && e.contains("linear springs"),
+        "{e}"
+    );
+    let e = with("TYPE=MASS, ELSET=WEIGHTS", "TYPE=ROTARYI, ELSET=WEIGHTS");
+    assert!(
+        e.contains("ROTARYI") && e.contains("rotational DOFs"),
+        "{e}"
+    );
+    let e = with("12, 1, 12\n", "12, 1, 1\n");
+    assert!(e.contains("'STRUT'") && e.contains("same place"), "{e}");
+    let e = with("0.25\n", "-0.25\n");
+    assert!(e.contains("-0.25") && e.contains(">= 0"), "{e}");
+    let e = with("*MASS, ELSET=WEIGHTS", "*MASS, ELSET=WEIGHT");
+    assert!(e.contains("'WEIGHT'") && e.contains("not defined"), "{e}");
 }

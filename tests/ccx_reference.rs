@@ -405,3 +405,59 @@ fn cylindrical_orientation_of_a_lining_ring_equals_calculix() {
         assert!(d <= 1e-10, "1 vs 2 ranks: {a} vs {b}");
     }
 }
+
+/// The node of `mesh` nearest `x`.
+fn node_at(mesh: &Mesh, x: [f64; 3]) -> usize {
+    let d = |n: &[f64; 3]| (0..3).map(|i| (n[i] - x[i]).powi(2)).sum::<f64>();
+    (0..mesh.coords.len())
+        .min_by(|&a, &b| d(&mesh.coords[a]).total_cmp(&d(&mesh.coords[b])))
+        .unwrap()
+}
+
+/// Point elements: the C3D8 cantilever with a 0.3 kg MASS at a tip corner, a SPRING1 of
+/// 1e6 N/m (about half the beam's tip stiffness 3EI/L^3 = 2.1e6 N/m) holding the other tip
+/// corner in z, a SPRINGA of 5e5 N/m from a tip corner to a mid-span node across the section,
+/// and a SPRING2 of 3e5 N/m between x at one node and y at another. The same K and M terms in
+/// both codes (point masses and linear springs have no integration rule), so the bound is
+/// the module's 1e-6.
+#[test]
+fn masses_and_springs_equal_calculix() {
+    use squeal::mesh::point::{PointBlock, PointKind};
+    let mut mesh = block([0.2, 0.04, 0.02], [10, 2, 2], ElementKind::Hex8, steel());
+    let [tip_a, tip_b, tip_c] = [
+        node_at(&mesh, [0.2, 0.0, 0.02]),
+        node_at(&mesh, [0.2, 0.04, 0.02]),
+        node_at(&mesh, [0.2, 0.04, 0.0]),
+    ];
+    let middle = node_at(&mesh, [0.1, 0.0, 0.0]);
+    let quarter = node_at(&mesh, [0.06, 0.02, 0.02]);
+    let point = |name: &str, kind, value, connectivity| PointBlock {
+        name: name.into(),
+        kind,
+        value,
+        connectivity,
+    };
+    mesh.point_blocks = vec![
+        point("tip_mass", PointKind::Mass, 0.3, vec![tip_a]),
+        point("ground", PointKind::Grounded { dof: 2 }, 1e6, vec![tip_b]),
+        point("brace", PointKind::Axial, 5e5, vec![tip_c, middle]),
+        point(
+            "link",
+            PointKind::Between { dofs: [0, 1] },
+            3e5,
+            vec![quarter, tip_a],
+        ),
+    ];
+    let (worst, with) = compare_mesh("point-elements", mesh, "u0");
+    let (_, without) = compare_mesh(
+        "point-elements-none",
+        block([0.2, 0.04, 0.02], [10, 2, 2], ElementKind::Hex8, steel()),
+        "u0",
+    );
+    // The point elements matter: the first frequency moves by more than the bound 1e5-fold.
+    let moved = (with[0] - without[0]).abs() / without[0];
+    assert!(
+        worst <= 1e-6 && moved > 0.1,
+        "masses and springs: squeal vs ccx {worst:e} (bound 1e-6); first mode moved {moved:e}"
+    );
+}

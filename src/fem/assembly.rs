@@ -20,6 +20,12 @@ pub enum AssemblyError<E> {
         #[source]
         source: JacobianError,
     },
+    #[error("point element {element} of '{block}': {message}")]
+    Point {
+        block: String,
+        element: usize,
+        message: String,
+    },
     #[error(transparent)]
     Sink(E),
 }
@@ -79,14 +85,35 @@ pub struct AssemblyStats {
     pub elements: usize,
 }
 
-/// Assembles stiffness and mass of the elements this rank owns into the two sinks.
+/// Assembles stiffness and mass of the elements this rank owns into the two sinks: the
+/// solid blocks, then the point elements (masses, springs).
 pub fn assemble<S: MatrixSink>(
     mesh: &Mesh,
     dofs: &DofMap,
     stiffness: &mut S,
     mass: &mut S,
 ) -> Result<AssemblyStats, AssemblyError<S::Error>> {
-    assemble_blocks(mesh, dofs, &vec![true; mesh.blocks.len()], stiffness, mass)
+    let mut stats = assemble_blocks(mesh, dofs, &vec![true; mesh.blocks.len()], stiffness, mass)?;
+    let (mut x, mut edofs) = (Vec::new(), Vec::new());
+    for block in &mesh.point_blocks {
+        for e in 0..block.len() {
+            let nodes = block.element(e);
+            if dofs.element_owner(nodes) != dofs.rank {
+                continue;
+            }
+            mesh.element_coords(nodes, &mut x);
+            let (ke, me) = block.matrices(&x).map_err(|message| AssemblyError::Point {
+                block: block.name.clone(),
+                element: e + 1,
+                message,
+            })?;
+            dofs.element_dofs(nodes, &mut edofs);
+            stiffness.add(&edofs, &ke).map_err(AssemblyError::Sink)?;
+            mass.add(&edofs, &me).map_err(AssemblyError::Sink)?;
+            stats.elements += 1;
+        }
+    }
+    Ok(stats)
 }
 
 /// [`assemble`] over the blocks flagged in `include` only (one flag per mesh block).
@@ -136,24 +163,43 @@ pub fn assemble_blocks<S: MatrixSink, T: MatrixSink<Error = S::Error>>(
     Ok(stats)
 }
 
-/// Exact preallocation of this rank's rows (per block row in block mode, per row otherwise).
+/// Exact preallocation of this rank's rows (per block row in block mode, per row otherwise),
+/// the point elements included.
 pub fn preallocation(mesh: &Mesh, dofs: &DofMap) -> Preallocation {
-    preallocation_of_blocks(mesh, dofs, &vec![true; mesh.blocks.len()])
+    let points = mesh
+        .point_blocks
+        .iter()
+        .flat_map(|b| (0..b.len()).map(move |e| b.element(e)));
+    pattern(mesh, dofs, &vec![true; mesh.blocks.len()], points)
 }
 
-/// [`preallocation`] of the blocks flagged in `include` only.
+/// [`preallocation`] of the solid blocks flagged in `include` only.
 pub fn preallocation_of_blocks(mesh: &Mesh, dofs: &DofMap, include: &[bool]) -> Preallocation {
+    pattern(mesh, dofs, include, std::iter::empty())
+}
+
+/// The preallocation of the included blocks' elements and of `extra` node groups (each one
+/// couples all its nodes).
+fn pattern<'a>(
+    mesh: &'a Mesh,
+    dofs: &DofMap,
+    include: &[bool],
+    extra: impl Iterator<Item = &'a [usize]>,
+) -> Preallocation {
     let owned = dofs.owned_nodes();
     let start = owned.start;
     // Neighbour nodes of each owned node, through the elements it belongs to.
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); owned.len()];
-    for (block, _) in mesh.blocks.iter().zip(include).filter(|(_, &i)| i) {
-        for e in 0..block.len() {
-            let nodes = block.element(e);
-            for &n in nodes {
-                if owned.contains(&n) {
-                    neighbours[n - start].extend(nodes.iter().map(|&m| m as u32));
-                }
+    let solids = mesh
+        .blocks
+        .iter()
+        .zip(include)
+        .filter(|(_, &i)| i)
+        .flat_map(|(b, _)| (0..b.len()).map(move |e| b.element(e)));
+    for nodes in solids.chain(extra) {
+        for &n in nodes {
+            if owned.contains(&n) {
+                neighbours[n - start].extend(nodes.iter().map(|&m| m as u32));
             }
         }
     }
@@ -203,4 +249,59 @@ pub fn preallocation_of_blocks(mesh: &Mesh, dofs: &DofMap, include: &[bool]) -> 
         }
     }
     p
+}
+
+#[cfg(test)]
+#[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml)
+mod tests {
+    use super::*;
+    use crate::mesh::material::Material;
+    use crate::mesh::point::{PointBlock, PointKind};
+    use crate::mesh::structured::block;
+    use crate::mesh::ElementKind;
+
+    /// A rigid translation's kinetic energy counts the solid's mass and the point mass once
+    /// each; a spring to ground adds its stiffness to the translation along its DOF.
+    #[test]
+    fn point_masses_and_springs_add_once_to_m_and_k() {
+        let steel = Material::isotropic("steel", 2.1e11, 0.3, 7850.0);
+        let mut mesh = block([0.2, 0.04, 0.02], [2, 1, 1], ElementKind::Hex8, steel);
+        mesh.point_blocks = vec![
+            PointBlock {
+                name: "m".into(),
+                kind: PointKind::Mass,
+                value: 0.3,
+                connectivity: vec![3],
+            },
+            PointBlock {
+                name: "k".into(),
+                kind: PointKind::Grounded { dof: 1 },
+                value: 1e6,
+                connectivity: vec![5],
+            },
+        ];
+        let dofs = crate::fem::dofmap::dof_map(&mesh, &[], 1, 0).unwrap();
+        let n = dofs.global_dofs();
+        let (mut k, mut m) = (DenseSink::new(n), DenseSink::new(n));
+        assemble(&mesh, &dofs, &mut k, &mut m).unwrap();
+        let quadratic = |a: &DenseSink, dir: usize| -> f64 {
+            let u: Vec<f64> = (0..n)
+                .map(|i| if i % 3 == dir { 1.0 } else { 0.0 })
+                .collect();
+            (0..n)
+                .map(|i| u[i] * (0..n).map(|j| a.values[i * n + j] * u[j]).sum::<f64>())
+                .sum()
+        };
+        let solid = 0.2 * 0.04 * 0.02 * 7850.0;
+        for dir in 0..3 {
+            let mass = quadratic(&m, dir);
+            assert!((mass - solid - 0.3).abs() < 1e-12, "{dir}: {mass}");
+        }
+        assert!(
+            (quadratic(&k, 1) - 1e6).abs() < 1e-4,
+            "{}",
+            quadratic(&k, 1)
+        );
+        assert!(quadratic(&k, 0).abs() < 1e-3, "{}", quadratic(&k, 0));
+    }
 }

@@ -1,4 +1,4 @@
-//! Meshes: nodes, element blocks (one element type and material each), node sets and
+//! Meshes: nodes, element blocks (one element type and material each), point elements, node sets and
 //! element-face surfaces.
 
 pub mod abaqus_inp;
@@ -9,6 +9,7 @@ pub mod gmsh_msh;
 pub mod material;
 pub mod orientation;
 pub mod partition;
+pub mod point;
 pub mod structured;
 
 pub use clamp::Clamp;
@@ -77,6 +78,8 @@ pub struct Mesh {
     pub surfaces: BTreeMap<String, Vec<(usize, u8)>>,
     /// Material orientations the blocks refer to.
     pub orientations: Vec<orientation::Orientation>,
+    /// Lumped masses and springs (imported models): they join nodes of the blocks.
+    pub point_blocks: Vec<point::PointBlock>,
 }
 
 impl Mesh {
@@ -169,7 +172,8 @@ impl Mesh {
         Ok(nodes)
     }
 
-    /// Appends `other`: its nodes, blocks (materials merged by name), node sets and surfaces
+    /// Appends `other`: its nodes, blocks (materials merged by name), point elements, node sets
+    /// and surfaces
     /// (names must not clash; they get no prefix).
     pub fn append(&mut self, other: Mesh) {
         let node_offset = self.coords.len();
@@ -193,6 +197,13 @@ impl Mesh {
                 connectivity: block.connectivity.iter().map(|n| n + node_offset).collect(),
                 orientation: block.orientation.map(|o| o + orientation_offset),
             });
+        }
+        for mut points in other.point_blocks {
+            points
+                .connectivity
+                .iter_mut()
+                .for_each(|n| *n += node_offset);
+            self.point_blocks.push(points);
         }
         for (name, nodes) in other.node_sets {
             let shifted = nodes.iter().map(|n| n + node_offset).collect();

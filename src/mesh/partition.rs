@@ -57,6 +57,11 @@ pub fn renumber(mesh: &mut Mesh, order: &[usize]) {
             *n = new_of[*n];
         }
     }
+    for points in &mut mesh.point_blocks {
+        for n in &mut points.connectivity {
+            *n = new_of[*n];
+        }
+    }
     let sets: BTreeMap<String, Vec<usize>> = std::mem::take(&mut mesh.node_sets)
         .into_iter()
         .map(|(name, nodes)| {
@@ -89,15 +94,21 @@ pub fn connected_parts(mesh: &Mesh) -> (usize, Vec<usize>) {
         }
         a
     }
-    for block in &mesh.blocks {
-        for e in 0..block.len() {
-            let nodes = block.element(e);
-            let r0 = find(&mut parent, nodes[0]);
-            for &m in &nodes[1..] {
-                let r = find(&mut parent, m);
-                if r != r0 {
-                    parent[r] = r0;
-                }
+    // Springs between two nodes join parts too.
+    let solids = mesh
+        .blocks
+        .iter()
+        .flat_map(|b| (0..b.len()).map(move |e| b.element(e)));
+    let points = mesh
+        .point_blocks
+        .iter()
+        .flat_map(|b| (0..b.len()).map(move |e| b.element(e)));
+    for nodes in solids.chain(points) {
+        let r0 = find(&mut parent, nodes[0]);
+        for &m in &nodes[1..] {
+            let r = find(&mut parent, m);
+            if r != r0 {
+                parent[r] = r0;
             }
         }
     }

@@ -136,6 +136,7 @@ pub fn structured(
         node_sets: Default::default(),
         surfaces: Default::default(),
         orientations: Vec::new(),
+        point_blocks: Vec::new(),
     };
     if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);

@@ -1,6 +1,7 @@
 //! Stage 1: the model. Generates the parametric brake or a structured test geometry, or
 //! imports an Abaqus/Gmsh mesh; renumbers the nodes for the partition.
 
+use crate::mesh::point::PointKind;
 use std::path::Path;
 
 use super::RunError;
@@ -75,6 +76,34 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
                         "{block}: {count} {abaqus} as {}, {}{modified}",
                         kind.name(),
                         kind.rule_description()
+                    ));
+                } else if let Some(points) = inp.mesh.point_blocks.iter().find(|b| &b.name == block)
+                {
+                    let unit = if points.kind == PointKind::Mass {
+                        "kg"
+                    } else {
+                        "N/m"
+                    };
+                    let dofs = match points.kind {
+                        PointKind::Grounded { dof } => format!(", DOF {} to ground", dof + 1),
+                        PointKind::Between { dofs: [i, j] } => {
+                            format!(", DOF {} to DOF {}", i + 1, j + 1)
+                        }
+                        PointKind::Axial => ", along the line of its nodes".into(),
+                        PointKind::Mass => String::new(),
+                    };
+                    notes.push(format!(
+                        "{block}: {count} {abaqus} of {} {unit}{dofs}, into {}",
+                        if (1e-3..1e4).contains(&points.value) {
+                            points.value.to_string()
+                        } else {
+                            format!("{:e}", points.value)
+                        },
+                        if points.kind == PointKind::Mass {
+                            "M"
+                        } else {
+                            "K"
+                        }
                     ));
                 }
             }

@@ -2,13 +2,15 @@
 //! (C3D8, C3D8I, C3D20, C3D20R, C3D10 and C3D10M, C3D4, each integrated as CalculiX does:
 //! `fem::shape`), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE` (element-face based),
 //! `*MATERIAL` with `*ELASTIC` (isotropic, engineering constants, orthotropic, anisotropic)
-//! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values),
+//! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values), point
+//! masses and linear springs (MASS, SPRING1, SPRING2, SPRINGA with `*MASS` / `*SPRING`),
 //! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis
 //! steps and output requests are reported and skipped; anything else that could change the
 //! model is an error naming the line. A writer produces the same subset, so a generated model
 //! opens in other tools (CalculiX reads it: tests/ccx_reference.rs).
 
 mod elastic;
+mod point;
 mod raw;
 mod resolve;
 mod write;

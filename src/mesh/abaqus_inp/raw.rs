@@ -7,6 +7,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::PathBuf;
 
 use super::elastic::{elasticity, ElasticForm};
+use super::point::{point_nodes, refused_type, RawPointBlock, RawProperty};
 use super::{abbreviates, element_kind, parse_keyword, InpError, Keyword, SAFE_TO_SKIP};
 use crate::mesh::material::Elasticity;
 use crate::mesh::ElementKind;
@@ -79,6 +80,9 @@ pub(super) struct RawInp {
     pub nodes: Vec<(i64, [f64; 3])>,
     pub node_index: HashMap<i64, usize>,
     pub blocks: Vec<RawBlock>,
+    /// Masses and springs, and the *MASS / *SPRING lines that give their values.
+    pub point_blocks: Vec<RawPointBlock>,
+    pub properties: Vec<RawProperty>,
     pub elsets: BTreeMap<String, Vec<i64>>,
     pub nsets: BTreeMap<String, Vec<i64>>,
     pub materials: Vec<RawMaterial>,
@@ -101,6 +105,10 @@ enum Mode {
         block: usize,
         pending: Vec<i64>,
     },
+    /// A point-element block's element lines.
+    Point(usize),
+    /// A *MASS or *SPRING's data lines.
+    Property(usize),
     Set {
         elements: bool,
         name: String,
@@ -248,6 +256,24 @@ impl Parser {
                 Mode::None
             }
             "ELASTIC" | "DENSITY" => self.material_keyword(kw, at)?,
+            "MASS" | "SPRING" => {
+                let keyword = if kw.name == "MASS" { "MASS" } else { "SPRING" };
+                if let Some(p) = ["NONLINEAR", "ORIENTATION", "DEPENDENCIES"]
+                    .iter()
+                    .find(|p| kw.params.contains_key(**p))
+                {
+                    return Err(at.syntax(format!(
+                        "*{keyword}, {p}: only linear springs in global directions are read"
+                    )));
+                }
+                self.raw.properties.push(RawProperty {
+                    keyword,
+                    elset: need("ELSET")?,
+                    lines: Vec::new(),
+                    line: at.line,
+                });
+                Mode::Property(self.raw.properties.len() - 1)
+            }
             "SOLID SECTION" => {
                 self.raw.sections.push(RawSection {
                     elset: need("ELSET")?,
@@ -304,9 +330,22 @@ impl Parser {
         at: At,
     ) -> Result<Mode, InpError> {
         let ty = ty.to_uppercase();
+        if let Some(why) = refused_type(&ty) {
+            return Err(at.syntax(format!("element type {ty}: {why}")));
+        }
+        if point_nodes(&ty).is_some() {
+            self.raw.point_blocks.push(RawPointBlock {
+                abaqus: ty,
+                elset,
+                ids: Vec::new(),
+                nodes: Vec::new(),
+                line: at.line,
+            });
+            return Ok(Mode::Point(self.raw.point_blocks.len() - 1));
+        }
         let kind = element_kind(&ty).ok_or_else(|| {
             at.syntax(format!(
-                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D10M or C3D4)"
+                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D10M or C3D4; MASS, SPRING1, SPRING2 or SPRINGA)"
             ))
         })?;
         // Pre-processors often write one *ELEMENT keyword per few hundred elements of the same
@@ -450,6 +489,24 @@ impl Parser {
                 *read += 1;
             }
             Mode::Node(nset) => node(raw, nset.as_deref(), &fields, at)?,
+            Mode::Point(b) => {
+                let block = &mut raw.point_blocks[*b];
+                let n = point_nodes(&block.abaqus).unwrap_or(1);
+                if fields.len() != n + 1 {
+                    return Err(at.syntax(format!(
+                        "a {} element line is 'id, {}'",
+                        block.abaqus,
+                        if n == 1 { "node" } else { "node, node" }
+                    )));
+                }
+                block.ids.push(at.int(fields[0])?);
+                for f in &fields[1..] {
+                    block.nodes.push(at.int(f)?);
+                }
+            }
+            Mode::Property(p) => raw.properties[*p]
+                .lines
+                .push(fields.iter().map(|f| f.to_string()).collect()),
             Mode::Element { block, pending } => element(
                 &mut raw.blocks[*block],
                 pending,

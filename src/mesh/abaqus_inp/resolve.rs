@@ -35,6 +35,11 @@ impl RawInp {
                 self.elsets.entry(name.clone()).or_default().extend(&b.ids);
             }
         }
+        for b in &self.point_blocks {
+            if let Some(name) = &b.elset {
+                self.elsets.entry(name.clone()).or_default().extend(&b.ids);
+            }
+        }
         let material_ids = r.materials(&self)?;
         let orientation_ids = r.orientations(&self)?;
         let element_material = r.sections(&self, &material_ids, &orientation_ids)?;
@@ -51,6 +56,8 @@ impl RawInp {
                 ));
             }
         }
+        let points = super::point::resolve(&self, path, &mut r.model.mesh.point_blocks)?;
+        r.model.element_types.extend(points);
         r.check_orientations()?;
         r.node_sets(&self)?;
         r.boundaries(&self)?;

@@ -7,6 +7,7 @@ use std::path::Path;
 use super::abaqus_type;
 use crate::mesh::material::Elasticity;
 use crate::mesh::orientation::System;
+use crate::mesh::point::PointKind;
 use crate::mesh::Mesh;
 
 /// A number in at most 20 characters, the longest field CalculiX reads: the shorter of its
@@ -28,6 +29,19 @@ fn field(x: f64) -> String {
         .map(|digits| format!("{x:.digits$e}"))
         .find(|s| s.len() <= 20)
         .unwrap_or(exact)
+}
+
+/// [`field`] with a decimal point: CalculiX tells a *SPRING's stiffness line from its DOF
+/// line by one ("1e6" would read as DOFs).
+fn field_with_point(x: f64) -> String {
+    let f = field(x);
+    if f.contains('.') {
+        return f;
+    }
+    match f.find('e') {
+        Some(at) => format!("{}.0{}", &f[..at], &f[at..]),
+        None => format!("{f}.0"),
+    }
 }
 
 /// Writes a mesh (with clamps and surfaces) as an Abaqus input file; ids are 1-based
@@ -61,6 +75,23 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
             let lines: Vec<String> = numbers.chunks(16).map(|c| c.join(", ")).collect();
             s += &lines.join(",\n");
             s += "\n";
+            next += 1;
+        }
+    }
+    for points in &mesh.point_blocks {
+        let _ = writeln!(
+            s,
+            "*ELEMENT, TYPE={}, ELSET={}",
+            points.kind.abaqus(),
+            points.name
+        );
+        for e in 0..points.len() {
+            let nodes: Vec<String> = points
+                .element(e)
+                .iter()
+                .map(|n| (n + 1).to_string())
+                .collect();
+            let _ = writeln!(s, "{next}, {}", nodes.join(", "));
             next += 1;
         }
     }
@@ -144,6 +175,20 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
             block.name, mesh.materials[block.material].name
         );
     }
+    for points in &mesh.point_blocks {
+        let (keyword, dofs) = match points.kind {
+            PointKind::Mass => ("MASS", String::new()),
+            PointKind::Axial => ("SPRING", String::new()),
+            PointKind::Grounded { dof } => ("SPRING", format!("{}\n", dof + 1)),
+            PointKind::Between { dofs: [i, j] } => ("SPRING", format!("{}, {}\n", i + 1, j + 1)),
+        };
+        let _ = writeln!(
+            s,
+            "*{keyword}, ELSET={}\n{dofs}{}",
+            points.name,
+            field_with_point(points.value)
+        );
+    }
     if !clamps.is_empty() {
         s += "*BOUNDARY\n";
         for (set, comps) in clamps {
@@ -176,6 +221,8 @@ mod tests {
             let f = field(x);
             assert!(f.len() <= 20, "{f}");
             assert_eq!(f.parse::<f64>().unwrap(), x, "{f}");
+            let p = super::field_with_point(x);
+            assert!(p.contains('.') && p.parse::<f64>().unwrap() == x, "{p}");
         }
         // 17 digits do not fit: as many decimals as fit, within half a unit of the last.
         for (x, decimals) in [(-1.2345678901234567e-10, 13), (0.0012345678901234567, 15)] {
