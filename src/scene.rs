@@ -115,7 +115,13 @@ pub enum ModelSource {
         clamp: Vec<String>,
     },
     /// An Abaqus input file (the subset of `mesh::abaqus_inp`); its *BOUNDARY clamps apply.
-    Abaqus { file: PathBuf },
+    /// `constraint_penalty`: the penalty factor of its *EQUATION and *TIE constraints
+    /// (`mesh::constraint`, default 1e5).
+    Abaqus {
+        file: PathBuf,
+        #[serde(default = "default_constraint_penalty")]
+        constraint_penalty: f64,
+    },
     /// A Gmsh 4.1 ASCII mesh: physical volumes are components (each needs a material here,
     /// by name), physical surfaces are surfaces and node sets; `clamp` names node sets.
     Gmsh {
@@ -413,9 +419,20 @@ impl Scene {
                     })?;
                 }
             }
-            ModelSource::Abaqus { file } => {
+            ModelSource::Abaqus {
+                file,
+                constraint_penalty,
+            } => {
                 if file.as_os_str().is_empty() {
                     return Err(InvalidSetting::new("model.file", ": name the .inp file"));
+                }
+                if !(constraint_penalty.is_finite() && *constraint_penalty >= 1.0) {
+                    return Err(InvalidSetting::new(
+                        "model.constraint_penalty",
+                        format!(
+                            " = {constraint_penalty}: must be a finite factor >= 1 (default 1e5)"
+                        ),
+                    ));
                 }
             }
             ModelSource::Matrices {
@@ -764,4 +781,8 @@ mod tests {
             "{e}"
         );
     }
+}
+
+fn default_constraint_penalty() -> f64 {
+    crate::mesh::constraint::DEFAULT_PENALTY
 }

@@ -139,9 +139,9 @@ fn error_of(text: &str) -> String {
 fn malformed_files_name_file_and_line() {
     let e = error_of(&TWO_HEXES.replace(
         "*NSET, NSET=LEFT, GENERATE",
-        "*EQUATION\n*NSET, NSET=LEFT, GENERATE",
+        "*COUPLING, CONSTRAINT NAME=C, REF NODE=1, SURFACE=PAD_FACE\n*NSET, NSET=LEFT, GENERATE",
     ));
-    assert!(e.contains("bad.inp:21") && e.contains("EQUATION"), "{e}");
+    assert!(e.contains("bad.inp:21") && e.contains("COUPLING"), "{e}");
     let e = error_of(&TWO_HEXES.replace("3, 1., 1., 0.", "3, 1., one, 0."));
     assert!(e.contains("bad.inp:7") && e.contains("'one'"), "{e}");
     let e = error_of(&TWO_HEXES.replace("TYPE=C3D8I, ELSET=PAD", "TYPE=S4R, ELSET=PAD"));
@@ -367,4 +367,57 @@ fn masses_and_springs_are_read_and_bad_ones_refused() {
     assert!(e.contains("-0.25") && e.contains(">= 0"), "{e}");
     let e = with("*MASS, ELSET=WEIGHTS", "*MASS, ELSET=WEIGHT");
     assert!(e.contains("'WEIGHT'") && e.contains("not defined"), "{e}");
+}
+
+/// *EQUATION: node ids and node sets (one equation per node, paired in label order), several
+/// equations under one keyword, and the faults named by line.
+#[test]
+fn equations_are_read_and_bad_ones_refused() {
+    let equations = "*NSET, NSET=TOP\n6, 5\n*NSET, NSET=BOTTOM\n1, 2\n\
+                     *EQUATION\n2\nTOP, 3, 1.0, BOTTOM, 3, -1.0\n3\n7, 1, 2., 8, 1, -1., 12, 2, -1.\n";
+    let text = TWO_HEXES.replace(
+        "*NSET, NSET=LEFT, GENERATE",
+        &format!("{equations}*NSET, NSET=LEFT, GENERATE"),
+    );
+    let path = scratch("equations.inp");
+    std::fs::write(&path, &text).unwrap();
+    let m = read(&path).unwrap();
+    let terms: Vec<Vec<(usize, usize, f64)>> = m
+        .mesh
+        .constraints
+        .equations
+        .iter()
+        .map(|c| c.terms.clone())
+        .collect();
+    assert_eq!(
+        terms,
+        [
+            vec![(4, 2, 1.0), (0, 2, -1.0)],
+            vec![(5, 2, 1.0), (1, 2, -1.0)],
+            vec![(6, 0, 2.0), (7, 0, -1.0), (11, 1, -1.0)],
+        ]
+    );
+    let again = scratch("equations-again.inp");
+    write(&again, &m.mesh, &m.clamps).unwrap();
+    let back = read(&again).unwrap().mesh.constraints.equations;
+    let back_terms: Vec<_> = back.iter().map(|c| c.terms.clone()).collect();
+    assert_eq!(back_terms, terms);
+
+    let with = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        error_of(&text.replace(from, to))
+    };
+    let e = with("7, 1, 2.,", "7, 4, 2.,");
+    assert!(e.contains("DOF 4") && e.contains("no rotations"), "{e}");
+    let e = with("\n3\n7, 1, 2.", "\n4\n7, 1, 2.");
+    assert!(e.contains("4 terms announced, 3 given"), "{e}");
+    let e = with(
+        "*NSET, NSET=BOTTOM\n1, 2\n",
+        "*NSET, NSET=BOTTOM\n1, 2, 3\n",
+    );
+    assert!(e.contains("differ in size"), "{e}");
+    let e = with("7, 1, 2.,", "7, 1, 0.,");
+    assert!(e.contains("first term's coefficient is 0"), "{e}");
+    let e = with("BOTTOM, 3, -1.0", "BASE, 3, -1.0");
+    assert!(e.contains("'BASE'") && e.contains("not defined"), "{e}");
 }

@@ -166,11 +166,40 @@ pub fn assemble_blocks<S: MatrixSink, T: MatrixSink<Error = S::Error>>(
 /// Exact preallocation of this rank's rows (per block row in block mode, per row otherwise),
 /// the point elements included.
 pub fn preallocation(mesh: &Mesh, dofs: &DofMap) -> Preallocation {
-    let points = mesh
+    let mut groups: Vec<Vec<usize>> = mesh
         .point_blocks
         .iter()
-        .flat_map(|b| (0..b.len()).map(move |e| b.element(e)));
-    pattern(mesh, dofs, &vec![true; mesh.blocks.len()], points)
+        .flat_map(|b| (0..b.len()).map(move |e| b.element(e).to_vec()))
+        .collect();
+    groups.extend(mesh.constraints.equations.iter().map(|c| c.nodes()));
+    pattern(
+        mesh,
+        dofs,
+        &vec![true; mesh.blocks.len()],
+        groups.iter().map(Vec::as_slice),
+    )
+}
+
+/// Adds the penalty k_p a a^T of every constraint this rank owns (the owner of its nodes, as
+/// for an element) into `stiffness`; `k_p` from the assembled K (`mesh::constraint`).
+pub fn assemble_constraints<S: MatrixSink>(
+    mesh: &Mesh,
+    dofs: &DofMap,
+    k_p: f64,
+    stiffness: &mut S,
+) -> Result<usize, S::Error> {
+    let mut edofs = Vec::new();
+    let mut added = 0;
+    for c in &mesh.constraints.equations {
+        let nodes = c.nodes();
+        if dofs.element_owner(&nodes) != dofs.rank {
+            continue;
+        }
+        dofs.element_dofs(&nodes, &mut edofs);
+        stiffness.add(&edofs, &c.penalty_matrix(&nodes, k_p))?;
+        added += 1;
+    }
+    Ok(added)
 }
 
 /// [`preallocation`] of the solid blocks flagged in `include` only.

@@ -85,8 +85,16 @@ pub fn assemble_system_as<'p>(
         Ok(_) => return Err(SystemError::OtherRank),
         Err(e) => return Err(e.into()),
     };
+    // The constraints' entries as zeros first: the final assembly squeezes out preallocated
+    // entries nothing was added to, and their values need K's diagonal.
+    if !mesh.constraints.equations.is_empty() {
+        super::assembly::assemble_constraints(mesh, &dofs, 0.0, &mut k)?;
+    }
     k.assemble()?;
     m.assemble()?;
+    if !mesh.constraints.equations.is_empty() {
+        add_constraints(petsc, mesh, &dofs, &mut k)?;
+    }
     k.set_symmetric(true)?;
     m.set_symmetric(true)?;
     Ok(AssembledSystem {
@@ -96,6 +104,30 @@ pub fn assemble_system_as<'p>(
         seconds: start.elapsed().as_secs_f64(),
         elements_on_rank: stats.elements,
     })
+}
+
+/// The constraints' penalty into the assembled K: k_p = penalty x the largest diagonal entry
+/// of K (`mesh::constraint`).
+///
+/// # Collective
+fn add_constraints(
+    petsc: &Petsc,
+    mesh: &Mesh,
+    dofs: &DofMap,
+    k: &mut SparseMatrix,
+) -> Result<(), SystemError> {
+    let mut diagonal = k.new_vector()?;
+    k.diagonal(&mut diagonal)?;
+    let k_p = mesh.constraints.penalty * diagonal.norm_inf()?;
+    let local = super::assembly::assemble_constraints(mesh, dofs, k_p, k);
+    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
+    match local {
+        Ok(_) if !failed => {}
+        Ok(_) => return Err(SystemError::OtherRank),
+        Err(e) => return Err(e.into()),
+    }
+    k.assemble()?;
+    Ok(())
 }
 
 /// The stiffness of the blocks flagged in `include` alone, on the DOF map and in the storage

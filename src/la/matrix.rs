@@ -218,6 +218,13 @@ impl<'p> SparseMatrix<'p> {
         call!(MatMult(self.raw, x.raw, y.raw))
     }
 
+    /// The diagonal into `d`.
+    ///
+    /// # Collective
+    pub fn diagonal(&self, d: &mut Vector) -> Result<()> {
+        call!(MatGetDiagonal(self.raw, d.raw))
+    }
+
     /// `y = A^T x`
     ///
     /// # Collective

@@ -4,6 +4,7 @@
 pub mod abaqus_inp;
 pub mod brake;
 pub mod clamp;
+pub mod constraint;
 pub mod element;
 pub mod gmsh_msh;
 pub mod material;
@@ -80,6 +81,8 @@ pub struct Mesh {
     pub orientations: Vec<orientation::Orientation>,
     /// Lumped masses and springs (imported models): they join nodes of the blocks.
     pub point_blocks: Vec<point::PointBlock>,
+    /// Linear multi-point constraints (imported models: *EQUATION, *TIE), by penalty.
+    pub constraints: constraint::Constraints,
 }
 
 impl Mesh {
@@ -204,6 +207,10 @@ impl Mesh {
                 .iter_mut()
                 .for_each(|n| *n += node_offset);
             self.point_blocks.push(points);
+        }
+        for mut c in other.constraints.equations {
+            c.terms.iter_mut().for_each(|t| t.0 += node_offset);
+            self.constraints.equations.push(c);
         }
         for (name, nodes) in other.node_sets {
             let shifted = nodes.iter().map(|n| n + node_offset).collect();

@@ -62,6 +62,11 @@ pub fn renumber(mesh: &mut Mesh, order: &[usize]) {
             *n = new_of[*n];
         }
     }
+    for c in &mut mesh.constraints.equations {
+        for t in &mut c.terms {
+            t.0 = new_of[t.0];
+        }
+    }
     let sets: BTreeMap<String, Vec<usize>> = std::mem::take(&mut mesh.node_sets)
         .into_iter()
         .map(|(name, nodes)| {
@@ -94,7 +99,7 @@ pub fn connected_parts(mesh: &Mesh) -> (usize, Vec<usize>) {
         }
         a
     }
-    // Springs between two nodes join parts too.
+    // Springs between two nodes and constraints join parts too.
     let solids = mesh
         .blocks
         .iter()
@@ -103,7 +108,13 @@ pub fn connected_parts(mesh: &Mesh) -> (usize, Vec<usize>) {
         .point_blocks
         .iter()
         .flat_map(|b| (0..b.len()).map(move |e| b.element(e)));
-    for nodes in solids.chain(points) {
+    let tied: Vec<Vec<usize>> = mesh
+        .constraints
+        .equations
+        .iter()
+        .map(|c| c.nodes())
+        .collect();
+    for nodes in solids.chain(points).chain(tied.iter().map(Vec::as_slice)) {
         let r0 = find(&mut parent, nodes[0]);
         for &m in &nodes[1..] {
             let r = find(&mut parent, m);

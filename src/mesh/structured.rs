@@ -137,6 +137,7 @@ pub fn structured(
         surfaces: Default::default(),
         orientations: Vec::new(),
         point_blocks: Vec::new(),
+        constraints: Default::default(),
     };
     if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);

@@ -126,7 +126,7 @@ pub fn check(scene: &Scene, scene_dir: &Path, ranks: usize) -> Result<CheckRepor
         .ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
     let mesh = &model.mesh;
     let quality = crate::fem::quality::check(mesh).map_err(|source| match &scene.model {
-        ModelSource::Abaqus { file } | ModelSource::Gmsh { file, .. } => {
+        ModelSource::Abaqus { file, .. } | ModelSource::Gmsh { file, .. } => {
             RunError::ImportedQuality {
                 file: scene_dir.join(file),
                 source,

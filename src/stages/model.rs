@@ -47,8 +47,12 @@ impl Model {
 /// (`mesh::partition`), and every element passes the quality check.
 pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model>, RunError> {
     let mut built = match model {
-        ModelSource::Abaqus { file } => {
-            let inp = crate::mesh::abaqus_inp::read(&scene_dir.join(file))?;
+        ModelSource::Abaqus {
+            file,
+            constraint_penalty,
+        } => {
+            let mut inp = crate::mesh::abaqus_inp::read(&scene_dir.join(file))?;
+            inp.mesh.constraints.penalty = *constraint_penalty;
             let clamps = inp
                 .clamps
                 .iter()
@@ -106,6 +110,12 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
                         }
                     ));
                 }
+            }
+            let constraints = inp.mesh.constraints.equations.len();
+            if constraints > 0 {
+                notes.push(format!(
+                    "{constraints} linear constraint(s) (*EQUATION, *TIE) by penalty: k_p = {constraint_penalty:e} x the largest diagonal entry of K, so each holds to about 1/{constraint_penalty:e} of the deformation it resists ([model] constraint_penalty)"
+                ));
             }
             let mut m = Model::plain(inp.mesh, clamps);
             m.notes = notes;

@@ -170,7 +170,9 @@ pub fn from_scene<'p>(
     })?;
     let model = model.ok_or_else(|| RunError::scene("model", "needs a mesh"))?;
     let imported_from = match &scene.model {
-        ModelSource::Abaqus { file } | ModelSource::Gmsh { file, .. } => Some(scene_dir.join(file)),
+        ModelSource::Abaqus { file, .. } | ModelSource::Gmsh { file, .. } => {
+            Some(scene_dir.join(file))
+        }
         _ => None,
     };
     let quality = timings.stage("mesh quality", || {

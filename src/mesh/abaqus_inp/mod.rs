@@ -4,12 +4,14 @@
 //! `*MATERIAL` with `*ELASTIC` (isotropic, engineering constants, orthotropic, anisotropic)
 //! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values), point
 //! masses and linear springs (MASS, SPRING1, SPRING2, SPRINGA with `*MASS` / `*SPRING`),
+//! `*EQUATION` (by penalty: `mesh::constraint`),
 //! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis
 //! steps and output requests are reported and skipped; anything else that could change the
 //! model is an error naming the line. A writer produces the same subset, so a generated model
 //! opens in other tools (CalculiX reads it: tests/ccx_reference.rs).
 
 mod elastic;
+mod equation;
 mod point;
 mod raw;
 mod resolve;

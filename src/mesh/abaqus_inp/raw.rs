@@ -83,6 +83,7 @@ pub(super) struct RawInp {
     /// Masses and springs, and the *MASS / *SPRING lines that give their values.
     pub point_blocks: Vec<RawPointBlock>,
     pub properties: Vec<RawProperty>,
+    pub equations: Vec<super::equation::RawEquation>,
     pub elsets: BTreeMap<String, Vec<i64>>,
     pub nsets: BTreeMap<String, Vec<i64>>,
     pub materials: Vec<RawMaterial>,
@@ -109,6 +110,8 @@ enum Mode {
     Point(usize),
     /// A *MASS or *SPRING's data lines.
     Property(usize),
+    /// *EQUATION, with the terms of the open equation still to come.
+    Equation(usize),
     Set {
         elements: bool,
         name: String,
@@ -134,7 +137,7 @@ enum Mode {
 #[derive(Clone, Copy)]
 pub(super) struct At<'a> {
     file: &'a PathBuf,
-    line: usize,
+    pub(super) line: usize,
 }
 
 impl At<'_> {
@@ -146,12 +149,12 @@ impl At<'_> {
         }
     }
 
-    fn int(&self, s: &str) -> Result<i64, InpError> {
+    pub(super) fn int(&self, s: &str) -> Result<i64, InpError> {
         s.parse()
             .map_err(|_| self.syntax(format!("'{s}' is not an integer")))
     }
 
-    fn num(&self, s: &str) -> Result<f64, InpError> {
+    pub(super) fn num(&self, s: &str) -> Result<f64, InpError> {
         let v: f64 = s
             .replace(['d', 'D'], "e")
             .parse()
@@ -285,6 +288,7 @@ impl Parser {
             }
             "ORIENTATION" => self.orientation_keyword(kw, need("NAME")?, at)?,
             "BOUNDARY" => Mode::Boundary,
+            "EQUATION" => Mode::Equation(0),
             "SURFACE INTERACTION" => {
                 let name = need("NAME")?;
                 self.raw.interactions.insert(name.clone(), None);
@@ -503,6 +507,9 @@ impl Parser {
                 for f in &fields[1..] {
                     block.nodes.push(at.int(f)?);
                 }
+            }
+            Mode::Equation(remaining) => {
+                *remaining = super::equation::data(raw, *remaining, &fields, at)?
             }
             Mode::Property(p) => raw.properties[*p]
                 .lines

@@ -58,6 +58,7 @@ impl RawInp {
         }
         let points = super::point::resolve(&self, path, &mut r.model.mesh.point_blocks)?;
         r.model.element_types.extend(points);
+        r.model.mesh.constraints.equations = super::equation::resolve(&self, path)?;
         r.check_orientations()?;
         r.node_sets(&self)?;
         r.boundaries(&self)?;

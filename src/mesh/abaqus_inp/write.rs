@@ -189,6 +189,15 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
             field_with_point(points.value)
         );
     }
+    for c in &mesh.constraints.equations {
+        let terms: Vec<String> = c
+            .terms
+            .iter()
+            .map(|&(n, d, a)| format!("{}, {}, {}", n + 1, d + 1, field(a)))
+            .collect();
+        let lines: Vec<String> = terms.chunks(4).map(|t| t.join(", ")).collect();
+        let _ = writeln!(s, "*EQUATION\n{}\n{}", c.terms.len(), lines.join("\n"));
+    }
     if !clamps.is_empty() {
         s += "*BOUNDARY\n";
         for (set, comps) in clamps {
