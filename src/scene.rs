@@ -625,6 +625,10 @@ impl Scene {
     }
 }
 
+fn default_constraint_penalty() -> f64 {
+    crate::mesh::constraint::DEFAULT_PENALTY
+}
+
 #[cfg(test)]
 #[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
@@ -781,8 +785,4 @@ mod tests {
             "{e}"
         );
     }
-}
-
-fn default_constraint_penalty() -> f64 {
-    crate::mesh::constraint::DEFAULT_PENALTY
 }

@@ -38,7 +38,7 @@ pub(super) fn data(
         });
         return Ok(count as usize);
     }
-    if fields.len() % 3 != 0 || fields.len() / 3 > remaining {
+    if !fields.len().is_multiple_of(3) || fields.len() / 3 > remaining {
         return Err(at.syntax(format!(
             "expected 'node, DOF, coefficient' triples ({remaining} term(s) to go)"
         )));
