@@ -421,3 +421,41 @@ fn equations_are_read_and_bad_ones_refused() {
     let e = with("BOTTOM, 3, -1.0", "BASE, 3, -1.0");
     assert!(e.contains("'BASE'") && e.contains("not defined"), "{e}");
 }
+
+/// *TIE: a node-based slave surface (node ids and sets) and an element-face master read into
+/// a tie; its faults named by line.
+#[test]
+fn ties_are_read_and_bad_ones_refused() {
+    let tie = "*SURFACE, TYPE=NODE, NAME=GLUED\nLEFT\n9\n\
+               *TIE, NAME=T1, POSITION TOLERANCE=0.01, ADJUST=NO\nGLUED, DISC_FACE\n";
+    let text = format!("{TWO_HEXES}{tie}");
+    let path = scratch("tie.inp");
+    std::fs::write(&path, &text).unwrap();
+    let m = read(&path).unwrap();
+    assert_eq!(m.ties.len(), 1);
+    let t = &m.ties[0];
+    assert_eq!(
+        (t.name.as_str(), t.master.as_str(), t.tolerance, t.adjust),
+        ("T1", "DISC_FACE", Some(0.01), false)
+    );
+    assert_eq!(t.slave_nodes, [0, 3, 4, 7, 8]);
+    let with = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        error_of(&text.replace(from, to))
+    };
+    let e = with("GLUED, DISC_FACE", "GLUED, ROTOR");
+    assert!(e.contains("master surface 'ROTOR' is not defined"), "{e}");
+    let e = with("GLUED, DISC_FACE", "DISC_FACE, GLUED");
+    assert!(
+        e.contains("node-based") && e.contains("TYPE=ELEMENT"),
+        "{e}"
+    );
+    let e = with("ADJUST=NO", "ADJUST=MAYBE");
+    assert!(e.contains("ADJUST=MAYBE"), "{e}");
+    let e = with("*TIE, NAME=T1", "*TIE, NAME=T1, TYPE=SURFACE TO SURFACE");
+    assert!(e.contains("TYPE") && e.contains("translations"), "{e}");
+    let e = with("LEFT\n9\n*TIE", "RIGHT\n9\n*TIE");
+    assert!(e.contains("'RIGHT'") && e.contains("not defined"), "{e}");
+    let e = with("GLUED, DISC_FACE\n", "");
+    assert!(e.contains("no 'slave surface, master surface' line"), "{e}");
+}

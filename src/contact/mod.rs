@@ -13,6 +13,7 @@ mod settings;
 mod state;
 mod summary;
 pub mod surface;
+pub mod tie;
 pub mod vary;
 
 pub use model::{point_rows, ContactModel};

@@ -51,8 +51,21 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
             file,
             constraint_penalty,
         } => {
-            let mut inp = crate::mesh::abaqus_inp::read(&scene_dir.join(file))?;
+            let path = scene_dir.join(file);
+            let mut inp = crate::mesh::abaqus_inp::read(&path)?;
             inp.mesh.constraints.penalty = *constraint_penalty;
+            let mut tie_notes = Vec::new();
+            for tie in &inp.ties {
+                let (constraints, report) = crate::contact::tie::constrain(&mut inp.mesh, tie)
+                    .map_err(|message| {
+                        RunError::from(crate::mesh::abaqus_inp::InpError::Model {
+                            file: path.clone(),
+                            message,
+                        })
+                    })?;
+                inp.mesh.constraints.equations.extend(constraints);
+                tie_notes.push(report.describe(tie));
+            }
             let clamps = inp
                 .clamps
                 .iter()
@@ -111,6 +124,7 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
                     ));
                 }
             }
+            notes.extend(tie_notes);
             let constraints = inp.mesh.constraints.equations.len();
             if constraints > 0 {
                 notes.push(format!(

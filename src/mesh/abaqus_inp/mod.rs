@@ -4,7 +4,8 @@
 //! `*MATERIAL` with `*ELASTIC` (isotropic, engineering constants, orthotropic, anisotropic)
 //! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values), point
 //! masses and linear springs (MASS, SPRING1, SPRING2, SPRINGA with `*MASS` / `*SPRING`),
-//! `*EQUATION` (by penalty: `mesh::constraint`),
+//! `*EQUATION` and `*TIE` (node or element-face slave surfaces; by penalty:
+//! `mesh::constraint`),
 //! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis
 //! steps and output requests are reported and skipped; anything else that could change the
 //! model is an error naming the line. A writer produces the same subset, so a generated model
@@ -15,6 +16,7 @@ mod equation;
 mod point;
 mod raw;
 mod resolve;
+mod tie;
 mod write;
 
 use std::collections::HashMap;
@@ -22,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 use super::Mesh;
 use crate::mesh::ElementKind;
+pub use tie::Tie;
 pub use write::write;
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -61,6 +64,8 @@ pub struct InpModel {
     /// Node sets clamped (components 0..3) by `*BOUNDARY`.
     pub clamps: Vec<(String, [bool; 3])>,
     pub contact_pairs: Vec<ContactPair>,
+    /// *TIE constraints, for the model stage to resolve on the geometry.
+    pub ties: Vec<Tie>,
     /// Keywords skipped (line, keyword), for the log.
     pub skipped: Vec<(usize, String)>,
     /// Per mesh block: its name, the Abaqus element type read into it and its element count.

@@ -66,6 +66,15 @@ pub(super) struct RawFace {
     pub line: usize,
 }
 
+/// A *TIE: name, position tolerance, adjust, its (slave, master) surfaces and line.
+pub(super) struct RawTie {
+    pub name: String,
+    pub tolerance: Option<f64>,
+    pub adjust: bool,
+    pub surfaces: Option<(String, String)>,
+    pub line: usize,
+}
+
 /// A *CONTACT PAIR: slave surface, master surface, interaction.
 pub(super) struct RawPair {
     pub slave: String,
@@ -84,6 +93,9 @@ pub(super) struct RawInp {
     pub point_blocks: Vec<RawPointBlock>,
     pub properties: Vec<RawProperty>,
     pub equations: Vec<super::equation::RawEquation>,
+    /// Node-based surfaces: name -> (node ids or node sets, line).
+    pub node_surfaces: BTreeMap<String, Vec<(String, usize)>>,
+    pub ties: Vec<RawTie>,
     pub elsets: BTreeMap<String, Vec<i64>>,
     pub nsets: BTreeMap<String, Vec<i64>>,
     pub materials: Vec<RawMaterial>,
@@ -118,6 +130,8 @@ enum Mode {
         generate: bool,
     },
     Surface(String),
+    NodeSurface(String),
+    Tie(usize),
     Elastic {
         material: usize,
         form: ElasticForm,
@@ -241,13 +255,15 @@ impl Parser {
             }
             "SURFACE" => {
                 let ty = param("TYPE").unwrap_or_else(|| "ELEMENT".into());
-                let ty = abbreviates(&ty, &["ELEMENT", "NODE"]).unwrap_or(&ty);
-                if ty != "ELEMENT" {
-                    return Err(at.syntax(format!(
-                        "*SURFACE TYPE={ty} is not supported: use element-face surfaces (TYPE=ELEMENT)"
-                    )));
+                match abbreviates(&ty, &["ELEMENT", "NODE"]) {
+                    Some("ELEMENT") => Mode::Surface(need("NAME")?),
+                    Some(_) => Mode::NodeSurface(need("NAME")?),
+                    None => {
+                        return Err(at.syntax(format!(
+                            "*SURFACE TYPE={ty} is not supported: use TYPE=ELEMENT (element faces) or TYPE=NODE"
+                        )))
+                    }
                 }
-                Mode::Surface(need("NAME")?)
             }
             "MATERIAL" => {
                 self.raw.materials.push(RawMaterial {
@@ -289,6 +305,34 @@ impl Parser {
             "ORIENTATION" => self.orientation_keyword(kw, need("NAME")?, at)?,
             "BOUNDARY" => Mode::Boundary,
             "EQUATION" => Mode::Equation(0),
+            "TIE" => {
+                let tolerance = match param("POSITION TOLERANCE") {
+                    Some(t) => Some(at.num(&t)?),
+                    None => None,
+                };
+                let adjust = match param("ADJUST").map(|a| a.to_uppercase()) {
+                    None => true,
+                    Some(a) if a == "YES" => true,
+                    Some(a) if a == "NO" => false,
+                    Some(a) => return Err(at.syntax(format!("*TIE, ADJUST={a}: use YES or NO"))),
+                };
+                if let Some(p) = ["TYPE", "ROTATION", "CONSTRAINT RATIO"]
+                    .iter()
+                    .find(|p| kw.params.contains_key(**p))
+                {
+                    return Err(at.syntax(format!(
+                        "*TIE, {p}: only the default surface-to-surface tie of translations is read"
+                    )));
+                }
+                self.raw.ties.push(RawTie {
+                    name: need("NAME")?,
+                    tolerance,
+                    adjust,
+                    surfaces: None,
+                    line: at.line,
+                });
+                Mode::Tie(self.raw.ties.len() - 1)
+            }
             "SURFACE INTERACTION" => {
                 let name = need("NAME")?;
                 self.raw.interactions.insert(name.clone(), None);
@@ -319,8 +363,8 @@ impl Parser {
                     file: at.file.clone(),
                     line: at.line,
                     keyword: other.to_string(),
-                    hint: "remove it or flatten the model (parts/instances, ties, equations, \
-                           couplings, shells and beams are not read)"
+                    hint: "remove it or flatten the model (parts/instances, couplings, MPCs, \
+                           shells and beams are not read)"
                         .into(),
                 })
             }
@@ -542,6 +586,24 @@ impl Parser {
                     face: fields[1].to_uppercase(),
                     line: at.line,
                 });
+            }
+            Mode::NodeSurface(name) => {
+                if fields.is_empty() || fields.len() > 2 {
+                    return Err(at.syntax("expected 'node set or id[, weight]'".into()));
+                }
+                raw.node_surfaces
+                    .entry(name.clone())
+                    .or_default()
+                    .push((fields[0].to_string(), at.line));
+            }
+            Mode::Tie(t) => {
+                let tie = &mut raw.ties[*t];
+                if fields.len() != 2 || tie.surfaces.is_some() {
+                    return Err(at.syntax(
+                        "*TIE takes one data line: 'slave surface, master surface'".into(),
+                    ));
+                }
+                tie.surfaces = Some((fields[0].to_string(), fields[1].to_string()));
             }
             Mode::Elastic {
                 material,

@@ -64,6 +64,7 @@ impl RawInp {
         r.boundaries(&self)?;
         r.surfaces(&self)?;
         r.contact_pairs(&self)?;
+        r.model.ties = super::tie::resolve(&self, path, &r.model.mesh)?;
         if r.model.mesh.blocks.is_empty() {
             return Err(r.error("no elements".into()));
         }
