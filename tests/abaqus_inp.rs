@@ -459,3 +459,59 @@ fn ties_are_read_and_bad_ones_refused() {
     let e = with("GLUED, DISC_FACE\n", "");
     assert!(e.contains("no 'slave surface, master surface' line"), "{e}");
 }
+
+/// Parts and instances: ids offset per instance, names scoped (`Instance.Set`), coordinates
+/// translated then rotated; the faults named by line.
+#[test]
+fn instances_of_parts_are_flattened_and_bad_ones_refused() {
+    let (head, rest) = TWO_HEXES.split_at(TWO_HEXES.find("*NODE").unwrap());
+    let (part, model) = rest.split_at(rest.find("*MATERIAL").unwrap());
+    let sections =
+        "*SOLID SECTION, ELSET=DISC, MATERIAL=IRON\n*SOLID SECTION, ELSET=PAD, MATERIAL=LINING\n";
+    let model = model
+        .lines()
+        .filter(|l| {
+            !l.starts_with("*SOLID SECTION")
+                && !l.starts_with("*CONTACT PAIR")
+                && !l.starts_with("PAD_FACE")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        .replace("\nLEFT, 1, 3", "\nBOTH_LEFT, 1, 3");
+    let text = format!(
+        "{head}*PART, NAME=P\n{part}{sections}*END PART\n*ASSEMBLY, NAME=A\n\
+         *INSTANCE, NAME=I1, PART=P\n*END INSTANCE\n\
+         *INSTANCE, NAME=I2, PART=P\n10., 0., 0.\n10., 0., 0., 10., 0., 1., 90.\n*END INSTANCE\n\
+         *NSET, NSET=BOTH_LEFT, INSTANCE=I2\nLEFT\n*END ASSEMBLY\n{model}\n"
+    );
+    let path = scratch("instances.inp");
+    std::fs::write(&path, &text).unwrap();
+    let m = read(&path).unwrap();
+    assert_eq!(m.mesh.node_count(), 24);
+    let names: Vec<&str> = m.mesh.blocks.iter().map(|b| b.name.as_str()).collect();
+    assert_eq!(names, ["I1.DISC", "I1.PAD", "I2.DISC", "I2.PAD"]);
+    assert!(m.mesh.surfaces.contains_key("I2.PAD_FACE"));
+    // I2's node 2 (1, 0, 0): translated to (11, 0, 0), turned 90 degrees about the vertical
+    // axis through (10, 0): (10, 1, 0).
+    let x = m.mesh.coords[13];
+    assert!(
+        (x[0] - 10.0).abs() < 1e-12 && (x[1] - 1.0).abs() < 1e-12 && x[2].abs() < 1e-12,
+        "{x:?}"
+    );
+    // The assembly-level set takes I2's LEFT (its nodes 1, 4, 5, 8: 13, 16, 17, 20 overall).
+    assert_eq!(m.mesh.node_sets["BOTH_LEFT"], [12, 15, 16, 19]);
+    assert_eq!(m.mesh.node_sets["I1.LEFT"], [0, 3, 4, 7]);
+
+    let with = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        error_of(&text.replace(from, to))
+    };
+    let e = with("*END PART\n", "");
+    assert!(e.contains("*PART P has no *END PART"), "{e}");
+    let e = with("NAME=I2, PART=P", "NAME=I2, PART=Q");
+    assert!(e.contains("part 'Q' is not defined"), "{e}");
+    let e = with("10., 0., 0.\n10.,", "10., 0.\n10.,");
+    assert!(e.contains("translation line"), "{e}");
+    let e = with("INSTANCE=I2\n", "INSTANCE=I3\n");
+    assert!(e.contains("INSTANCE=I3"), "{e}");
+}

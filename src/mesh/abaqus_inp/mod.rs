@@ -6,13 +6,15 @@
 //! masses and linear springs (MASS, SPRING1, SPRING2, SPRINGA with `*MASS` / `*SPRING`),
 //! `*EQUATION` and `*TIE` (node or element-face slave surfaces; by penalty:
 //! `mesh::constraint`),
-//! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`. Keywords of analysis
+//! `*INCLUDE`, `*CONTACT PAIR` with `*SURFACE INTERACTION` / `*FRICTION`; `*PART`s instanced
+//! in an `*ASSEMBLY` are flattened first (`instance.rs`). Keywords of analysis
 //! steps and output requests are reported and skipped; anything else that could change the
 //! model is an error naming the line. A writer produces the same subset, so a generated model
 //! opens in other tools (CalculiX reads it: tests/ccx_reference.rs).
 
 mod elastic;
 mod equation;
+mod instance;
 mod point;
 mod raw;
 mod resolve;
@@ -187,9 +189,9 @@ fn abaqus_type(kind: ElementKind) -> &'static str {
 }
 
 /// A keyword line: upper-case keyword and its parameters (keys upper-case, values as given).
-struct Keyword {
-    name: String,
-    params: HashMap<String, String>,
+pub(super) struct Keyword {
+    pub name: String,
+    pub params: HashMap<String, String>,
 }
 
 fn parse_keyword(line: &str) -> Keyword {
@@ -245,10 +247,12 @@ fn read_lines(
     Ok(())
 }
 
-/// Reads an Abaqus input file: its lines with `*INCLUDE` expanded, their tables in file order
+/// Reads an Abaqus input file: its lines with `*INCLUDE` expanded and parts and instances
+/// flattened (`instance.rs`), their tables in file order
 /// (`raw.rs`, one method per keyword), then the model those tables describe (`resolve.rs`).
 pub fn read(path: &Path) -> Result<InpModel, InpError> {
     let mut lines = Vec::new();
     read_lines(path, 0, &mut lines)?;
+    let lines = instance::flatten(lines)?;
     raw::RawInp::parse(&lines, path)?.resolve(path)
 }

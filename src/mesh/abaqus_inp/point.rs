@@ -6,8 +6,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::raw::RawInp;
-use super::InpError;
+use super::raw::{At, RawInp};
+use super::{InpError, Keyword};
 use crate::mesh::point::{PointBlock, PointKind};
 
 /// Nodes per element of the point element types read; None for any other type.
@@ -44,6 +44,29 @@ pub(super) struct RawProperty {
     pub elset: String,
     pub lines: Vec<Vec<String>>,
     pub line: usize,
+}
+
+/// A *MASS or *SPRING keyword line (ELSET needed; nonlinear or oriented springs refused).
+pub(super) fn property_keyword(kw: &Keyword, at: At) -> Result<RawProperty, InpError> {
+    let keyword = if kw.name == "MASS" { "MASS" } else { "SPRING" };
+    if let Some(p) = ["NONLINEAR", "ORIENTATION", "DEPENDENCIES"]
+        .iter()
+        .find(|p| kw.params.contains_key(**p))
+    {
+        return Err(at.syntax(format!(
+            "*{keyword}, {p}: only linear springs in global directions are read"
+        )));
+    }
+    Ok(RawProperty {
+        keyword,
+        elset: kw
+            .params
+            .get("ELSET")
+            .cloned()
+            .ok_or_else(|| at.syntax(format!("*{keyword} needs ELSET=")))?,
+        lines: Vec::new(),
+        line: at.line,
+    })
 }
 
 /// What a property gives an element: its kind (with the DOFs) and value.

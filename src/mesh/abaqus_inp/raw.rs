@@ -66,15 +66,6 @@ pub(super) struct RawFace {
     pub line: usize,
 }
 
-/// A *TIE: name, position tolerance, adjust, its (slave, master) surfaces and line.
-pub(super) struct RawTie {
-    pub name: String,
-    pub tolerance: Option<f64>,
-    pub adjust: bool,
-    pub surfaces: Option<(String, String)>,
-    pub line: usize,
-}
-
 /// A *CONTACT PAIR: slave surface, master surface, interaction.
 pub(super) struct RawPair {
     pub slave: String,
@@ -95,7 +86,7 @@ pub(super) struct RawInp {
     pub equations: Vec<super::equation::RawEquation>,
     /// Node-based surfaces: name -> (node ids or node sets, line).
     pub node_surfaces: BTreeMap<String, Vec<(String, usize)>>,
-    pub ties: Vec<RawTie>,
+    pub ties: Vec<super::tie::RawTie>,
     pub elsets: BTreeMap<String, Vec<i64>>,
     pub nsets: BTreeMap<String, Vec<i64>>,
     pub materials: Vec<RawMaterial>,
@@ -276,21 +267,8 @@ impl Parser {
             }
             "ELASTIC" | "DENSITY" => self.material_keyword(kw, at)?,
             "MASS" | "SPRING" => {
-                let keyword = if kw.name == "MASS" { "MASS" } else { "SPRING" };
-                if let Some(p) = ["NONLINEAR", "ORIENTATION", "DEPENDENCIES"]
-                    .iter()
-                    .find(|p| kw.params.contains_key(**p))
-                {
-                    return Err(at.syntax(format!(
-                        "*{keyword}, {p}: only linear springs in global directions are read"
-                    )));
-                }
-                self.raw.properties.push(RawProperty {
-                    keyword,
-                    elset: need("ELSET")?,
-                    lines: Vec::new(),
-                    line: at.line,
-                });
+                let property = super::point::property_keyword(kw, at)?;
+                self.raw.properties.push(property);
                 Mode::Property(self.raw.properties.len() - 1)
             }
             "SOLID SECTION" => {
@@ -306,31 +284,8 @@ impl Parser {
             "BOUNDARY" => Mode::Boundary,
             "EQUATION" => Mode::Equation(0),
             "TIE" => {
-                let tolerance = match param("POSITION TOLERANCE") {
-                    Some(t) => Some(at.num(&t)?),
-                    None => None,
-                };
-                let adjust = match param("ADJUST").map(|a| a.to_uppercase()) {
-                    None => true,
-                    Some(a) if a == "YES" => true,
-                    Some(a) if a == "NO" => false,
-                    Some(a) => return Err(at.syntax(format!("*TIE, ADJUST={a}: use YES or NO"))),
-                };
-                if let Some(p) = ["TYPE", "ROTATION", "CONSTRAINT RATIO"]
-                    .iter()
-                    .find(|p| kw.params.contains_key(**p))
-                {
-                    return Err(at.syntax(format!(
-                        "*TIE, {p}: only the default surface-to-surface tie of translations is read"
-                    )));
-                }
-                self.raw.ties.push(RawTie {
-                    name: need("NAME")?,
-                    tolerance,
-                    adjust,
-                    surfaces: None,
-                    line: at.line,
-                });
+                let tie = super::tie::keyword(kw, at)?;
+                self.raw.ties.push(tie);
                 Mode::Tie(self.raw.ties.len() - 1)
             }
             "SURFACE INTERACTION" => {
@@ -363,8 +318,8 @@ impl Parser {
                     file: at.file.clone(),
                     line: at.line,
                     keyword: other.to_string(),
-                    hint: "remove it or flatten the model (parts/instances, couplings, MPCs, \
-                           shells and beams are not read)"
+                    hint: "remove it or replace it (couplings, MPCs, shells and beams are \
+                           not read)"
                         .into(),
                 })
             }
@@ -587,24 +542,8 @@ impl Parser {
                     line: at.line,
                 });
             }
-            Mode::NodeSurface(name) => {
-                if fields.is_empty() || fields.len() > 2 {
-                    return Err(at.syntax("expected 'node set or id[, weight]'".into()));
-                }
-                raw.node_surfaces
-                    .entry(name.clone())
-                    .or_default()
-                    .push((fields[0].to_string(), at.line));
-            }
-            Mode::Tie(t) => {
-                let tie = &mut raw.ties[*t];
-                if fields.len() != 2 || tie.surfaces.is_some() {
-                    return Err(at.syntax(
-                        "*TIE takes one data line: 'slave surface, master surface'".into(),
-                    ));
-                }
-                tie.surfaces = Some((fields[0].to_string(), fields[1].to_string()));
-            }
+            Mode::NodeSurface(name) => super::tie::node_surface_line(raw, name, &fields, at)?,
+            Mode::Tie(t) => super::tie::surfaces_line(&mut raw.ties[*t], &fields, at)?,
             Mode::Elastic {
                 material,
                 form,

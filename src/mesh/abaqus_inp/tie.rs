@@ -5,9 +5,74 @@
 
 use std::path::Path;
 
-use super::raw::RawInp;
-use super::InpError;
+use super::raw::{At, RawInp};
+use super::{InpError, Keyword};
 use crate::mesh::Mesh;
+
+/// A *TIE as read: name, position tolerance, adjust, its (slave, master) surfaces and line.
+pub(super) struct RawTie {
+    pub name: String,
+    pub tolerance: Option<f64>,
+    pub adjust: bool,
+    pub surfaces: Option<(String, String)>,
+    pub line: usize,
+}
+
+/// The *TIE keyword line: NAME, POSITION TOLERANCE, ADJUST (YES by default).
+pub(super) fn keyword(kw: &Keyword, at: At) -> Result<RawTie, InpError> {
+    let param = |k: &str| kw.params.get(k).cloned();
+    let tolerance = match param("POSITION TOLERANCE") {
+        Some(t) => Some(at.num(&t)?),
+        None => None,
+    };
+    let adjust = match param("ADJUST").map(|a| a.to_uppercase()) {
+        None => true,
+        Some(a) if a == "YES" => true,
+        Some(a) if a == "NO" => false,
+        Some(a) => return Err(at.syntax(format!("*TIE, ADJUST={a}: use YES or NO"))),
+    };
+    if let Some(p) = ["TYPE", "ROTATION", "CONSTRAINT RATIO"]
+        .iter()
+        .find(|p| kw.params.contains_key(**p))
+    {
+        return Err(at.syntax(format!(
+            "*TIE, {p}: only the default surface-to-surface tie of translations is read"
+        )));
+    }
+    Ok(RawTie {
+        name: param("NAME").ok_or_else(|| at.syntax("*TIE needs NAME=".into()))?,
+        tolerance,
+        adjust,
+        surfaces: None,
+        line: at.line,
+    })
+}
+
+/// The *TIE's data line: slave surface, master surface.
+pub(super) fn surfaces_line(tie: &mut RawTie, fields: &[&str], at: At) -> Result<(), InpError> {
+    if fields.len() != 2 || tie.surfaces.is_some() {
+        return Err(at.syntax("*TIE takes one data line: 'slave surface, master surface'".into()));
+    }
+    tie.surfaces = Some((fields[0].to_string(), fields[1].to_string()));
+    Ok(())
+}
+
+/// A data line of *SURFACE, TYPE=NODE: a node set or id (a weight after it is not used).
+pub(super) fn node_surface_line(
+    raw: &mut RawInp,
+    name: &str,
+    fields: &[&str],
+    at: At,
+) -> Result<(), InpError> {
+    if fields.is_empty() || fields.len() > 2 {
+        return Err(at.syntax("expected 'node set or id[, weight]'".into()));
+    }
+    raw.node_surfaces
+        .entry(name.to_string())
+        .or_default()
+        .push((fields[0].to_string(), at.line));
+    Ok(())
+}
 
 /// A tie of an imported model.
 #[derive(Debug, Clone, PartialEq)]
