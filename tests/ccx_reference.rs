@@ -664,3 +664,12 @@ fn an_assembly_of_instances_equals_the_flat_model_in_calculix() {
         "assembly vs flat ccx: {worst:e} (bound 1e-6)"
     );
 }
+
+/// C3D6 and C3D15: the cantilever's cells split into two wedges each. C3D6 on 2 points (the
+/// triangle's centroid x 2 Gauss), C3D15 on 9 (the triangle's 3 interior points x 3 Gauss),
+/// for K and M, as CalculiX integrates them; bound: the module's 1e-6.
+#[test]
+fn c3d6_and_c3d15_cantilever_frequencies_equal_calculix() {
+    assert_same_discretisation("c3d6", ElementKind::Wedge6, [10, 2, 2]);
+    assert_same_discretisation("c3d15", ElementKind::Wedge15, [5, 1, 1]);
+}

@@ -92,6 +92,33 @@ pub fn tet_rule(n: usize) -> Rule {
     rule
 }
 
+/// Product rule on the reference wedge (triangle 0 <= xi, eta, xi + eta <= 1 times zeta in
+/// [-1, 1]): the triangle's centroid (1 point) or its interior 3-point rule (points at
+/// (1/6, 1/6), (2/3, 1/6), (1/6, 2/3); exact to degree 2) times `line` Gauss points.
+pub fn wedge_rule(triangle: usize, line: usize) -> Rule {
+    let tri: Vec<([f64; 2], f64)> = match triangle {
+        1 => vec![([1.0 / 3.0, 1.0 / 3.0], 0.5)],
+        3 => vec![
+            ([1.0 / 6.0, 1.0 / 6.0], 1.0 / 6.0),
+            ([2.0 / 3.0, 1.0 / 6.0], 1.0 / 6.0),
+            ([1.0 / 6.0, 2.0 / 3.0], 1.0 / 6.0),
+        ],
+        _ => panic!("wedge rule with {triangle} triangle points is not tabulated (1 or 3)"),
+    };
+    let (zp, zw) = gauss_legendre(line);
+    let mut rule = Rule {
+        points: Vec::new(),
+        weights: Vec::new(),
+    };
+    for (z, wz) in zp.iter().zip(zw) {
+        for (t, wt) in &tri {
+            rule.points.push([t[0], t[1], *z]);
+            rule.weights.push(wt * wz);
+        }
+    }
+    rule
+}
+
 #[cfg(test)]
 #[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {

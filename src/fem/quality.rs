@@ -5,7 +5,9 @@
 //! diagonals), reported per element block.
 
 use crate::fem::element::jacobian;
-use crate::mesh::element::{ElementKind, HEX_EDGES, HEX_FACES, TET_EDGES};
+use crate::mesh::element::{
+    ElementKind, HEX_EDGES, HEX_FACES, TET_EDGES, WEDGE_EDGES, WEDGE_FACES,
+};
 use crate::mesh::Mesh;
 
 /// Quality statistics of one element block.
@@ -85,6 +87,7 @@ pub fn check(mesh: &Mesh) -> Result<Vec<BlockQuality>, QualityError> {
             .collect();
         let edges: &[[usize; 2]] = match kind {
             ElementKind::Tet4 | ElementKind::Tet10 => &TET_EDGES,
+            ElementKind::Wedge6 | ElementKind::Wedge15 => &WEDGE_EDGES,
             _ => &HEX_EDGES,
         };
         let mut q = BlockQuality {
@@ -129,9 +132,19 @@ pub fn check(mesh: &Mesh) -> Result<Vec<BlockQuality>, QualityError> {
             let aspect = hi / lo;
             q.max_aspect_ratio = q.max_aspect_ratio.max(aspect);
             q.mean_aspect_ratio += aspect;
-            if !matches!(kind, ElementKind::Tet4 | ElementKind::Tet10) {
-                for f in HEX_FACES {
-                    q.max_warping_deg = q.max_warping_deg.max(warping(f.map(|c| x[c])));
+            match kind {
+                ElementKind::Tet4 | ElementKind::Tet10 => {}
+                // The wedge's three quadrilateral faces.
+                ElementKind::Wedge6 | ElementKind::Wedge15 => {
+                    for f in &WEDGE_FACES[2..] {
+                        let corners = [x[f[0]], x[f[1]], x[f[2]], x[f[3]]];
+                        q.max_warping_deg = q.max_warping_deg.max(warping(corners));
+                    }
+                }
+                _ => {
+                    for f in HEX_FACES {
+                        q.max_warping_deg = q.max_warping_deg.max(warping(f.map(|c| x[c])));
+                    }
                 }
             }
         }

@@ -1,8 +1,8 @@
 //! Shape functions and quadrature rules on the reference element of each element kind
 //! (`mesh::element`: the kinds, their nodes and faces).
 
-use super::quadrature::{hex_rule, tet_rule, Rule};
-use crate::mesh::element::{ElementKind, HEX_CORNERS, HEX_EDGES, TET_EDGES};
+use super::quadrature::{hex_rule, tet_rule, wedge_rule, Rule};
+use crate::mesh::element::{ElementKind, HEX_CORNERS, HEX_EDGES, TET_EDGES, WEDGE_EDGES};
 
 impl ElementKind {
     /// Rule for the stiffness: the rule Abaqus and CalculiX integrate the same element with
@@ -15,6 +15,8 @@ impl ElementKind {
             ElementKind::Hex20R => hex_rule(2),
             ElementKind::Tet10 => super::quadrature::tet_rule_4_points(),
             ElementKind::Tet4 => tet_rule(2),
+            ElementKind::Wedge6 => wedge_rule(1, 2),
+            ElementKind::Wedge15 => wedge_rule(3, 3),
         }
     }
 
@@ -28,6 +30,8 @@ impl ElementKind {
             ElementKind::Hex20R => hex_rule(2),
             ElementKind::Tet10 => super::quadrature::tet_rule_4_points(),
             ElementKind::Tet4 => tet_rule(3),
+            ElementKind::Wedge6 => wedge_rule(1, 2),
+            ElementKind::Wedge15 => wedge_rule(3, 3),
         }
     }
 
@@ -40,6 +44,8 @@ impl ElementKind {
             ElementKind::Hex20R => "reduced: 2x2x2 Gauss points for K and M",
             ElementKind::Tet10 => "4 points for K and M",
             ElementKind::Tet4 => "K exact (constant strain), M exact",
+            ElementKind::Wedge6 => "2 points (triangle centroid x 2 Gauss) for K and M",
+            ElementKind::Wedge15 => "9 points (3 in the triangle x 3 Gauss) for K and M",
         }
     }
 
@@ -98,6 +104,17 @@ impl ElementKind {
                     [0.0, 0.0, 1.0],
                 ]);
             }
+            ElementKind::Wedge6 => {
+                let l = [1.0 - x - y, x, y];
+                let dl = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+                for a in 0..6 {
+                    let (i, c) = (a % 3, if a < 3 { -1.0 } else { 1.0 });
+                    let f = 0.5 * (1.0 + c * z);
+                    n[a] = l[i] * f;
+                    dn[a] = [dl[i][0] * f, dl[i][1] * f, 0.5 * c * l[i]];
+                }
+            }
+            ElementKind::Wedge15 => wedge15(xi, n, dn),
             ElementKind::Tet10 => {
                 let l = [1.0 - x - y - z, x, y, z];
                 let dl = [
@@ -124,16 +141,56 @@ impl ElementKind {
     }
 }
 
+/// The 15-node wedge's serendipity functions: corners
+/// L (2L - 1)(1 + c zeta)/2 - L (1 - zeta^2)/2, triangle mid-edges 2 L_p L_q (1 + c zeta),
+/// vertical mid-edges L (1 - zeta^2) (c = -1 on the bottom, +1 on the top).
+fn wedge15(xi: [f64; 3], n: &mut [f64], dn: &mut [[f64; 3]]) {
+    let [x, y, z] = xi;
+    let l = [1.0 - x - y, x, y];
+    let dl = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+    let bubble = 1.0 - z * z;
+    for a in 0..6 {
+        let (i, c) = (a % 3, if a < 3 { -1.0 } else { 1.0 });
+        let f = 1.0 + c * z;
+        n[a] = 0.5 * l[i] * (2.0 * l[i] - 1.0) * f - 0.5 * l[i] * bubble;
+        let g = 0.5 * (4.0 * l[i] - 1.0) * f - 0.5 * bubble;
+        dn[a] = [
+            g * dl[i][0],
+            g * dl[i][1],
+            0.5 * l[i] * (2.0 * l[i] - 1.0) * c + l[i] * z,
+        ];
+    }
+    for (e, [p, q]) in WEDGE_EDGES.iter().enumerate() {
+        let a = 6 + e;
+        let (i, j) = (p % 3, q % 3);
+        if e < 6 {
+            let c = if e < 3 { -1.0 } else { 1.0 };
+            let f = 1.0 + c * z;
+            n[a] = 2.0 * l[i] * l[j] * f;
+            dn[a] = [
+                2.0 * (dl[i][0] * l[j] + l[i] * dl[j][0]) * f,
+                2.0 * (dl[i][1] * l[j] + l[i] * dl[j][1]) * f,
+                2.0 * l[i] * l[j] * c,
+            ];
+        } else {
+            n[a] = l[i] * bubble;
+            dn[a] = [dl[i][0] * bubble, dl[i][1] * bubble, -2.0 * l[i] * z];
+        }
+    }
+}
+
 #[cfg(test)]
 #[deny(clippy::disallowed_methods)] // f64 max/min banned in tests: NaN-blind (clippy.toml) (clippy.toml)
 mod tests {
     use super::*;
 
-    const KINDS: [ElementKind; 4] = [
+    const KINDS: [ElementKind; 6] = [
         ElementKind::Hex8,
         ElementKind::Hex20,
         ElementKind::Tet10,
         ElementKind::Tet4,
+        ElementKind::Wedge6,
+        ElementKind::Wedge15,
     ];
 
     #[test]

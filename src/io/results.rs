@@ -202,10 +202,14 @@ impl ResultsFile {
             .flat_map(|block| {
                 let code = crate::io::xdmf::mixed_code(block.kind);
                 let nn = block.kind.nodes();
-                block
-                    .connectivity
-                    .chunks(nn)
-                    .flat_map(move |e| std::iter::once(code).chain(e.iter().map(|&v| v as u64)))
+                let order = crate::io::xdmf::xdmf_order(block.kind);
+                block.connectivity.chunks(nn).flat_map(move |e| {
+                    let nodes: Vec<u64> = match order {
+                        Some(o) => o.iter().map(|&i| e[i] as u64).collect(),
+                        None => e.iter().map(|&v| v as u64).collect(),
+                    };
+                    std::iter::once(code).chain(nodes)
+                })
             })
             .collect();
         let ds = self.dataset::<u64>("model/topology", &[topology.len()], "1")?;

@@ -16,14 +16,27 @@ use std::path::Path;
 use crate::mesh::ElementKind;
 use crate::mesh::Mesh;
 
-/// The element's type code in an XDMF mixed topology (XdmfTopologyType's ids; the node
-/// orders of Abaqus and XDMF agree for these elements).
+/// The element's type code in an XDMF mixed topology (XdmfTopologyType's ids).
 pub fn mixed_code(kind: ElementKind) -> u64 {
     match kind {
         ElementKind::Hex8 | ElementKind::Hex8I => 0x9,
         ElementKind::Hex20 | ElementKind::Hex20R => 0x30,
         ElementKind::Tet10 => 0x26,
         ElementKind::Tet4 => 0x6,
+        ElementKind::Wedge6 => 0x8,
+        ElementKind::Wedge15 => 0x28,
+    }
+}
+
+/// The element's nodes in XDMF's (VTK's) order, as positions in its Abaqus order: the same
+/// for hexahedra and tetrahedra; a wedge's base triangle runs the other way round in VTK
+/// (its normal points away from the top), so corners 2 and 3, 5 and 6 and their mid-edge
+/// nodes swap.
+pub fn xdmf_order(kind: ElementKind) -> Option<&'static [usize]> {
+    match kind {
+        ElementKind::Wedge6 => Some(&[0, 2, 1, 3, 5, 4]),
+        ElementKind::Wedge15 => Some(&[0, 2, 1, 3, 5, 4, 8, 7, 6, 11, 10, 9, 12, 14, 13]),
+        _ => None,
     }
 }
 

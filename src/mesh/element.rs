@@ -1,5 +1,5 @@
 //! Element kinds and their topology: nodes, faces and edges in the Abaqus node order (C3D8,
-//! C3D20, C3D10, C3D4, also VTK's/XDMF's), and the nodes' reference coordinates. The shape
+//! C3D20, C3D10, C3D4, C3D6, C3D15; the hexahedra's and tetrahedra's also VTK's/XDMF's), and the nodes' reference coordinates. The shape
 //! functions and quadrature rules on them are the finite elements' (`fem::shape`).
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -22,6 +22,10 @@ pub enum ElementKind {
     Tet10,
     /// Linear tetrahedron (constant strain; stiff in bending: for imported meshes, C3D4).
     Tet4,
+    /// Linear wedge (triangular prism, Abaqus C3D6; for imported meshes).
+    Wedge6,
+    /// Quadratic wedge (Abaqus C3D15; for imported meshes).
+    Wedge15,
 }
 
 /// Corner positions of the reference cube, in C3D8 order.
@@ -55,6 +59,40 @@ pub const HEX_EDGES: [[usize; 2]; 12] = [
 /// Edges of a tetrahedron as corner pairs, in the order of the C3D10 mid-edge nodes 4..9.
 pub const TET_EDGES: [[usize; 2]; 6] = [[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]];
 
+/// Corner positions of the reference wedge (triangle in xi, eta; zeta in [-1, 1]).
+pub const WEDGE_CORNERS: [[f64; 3]; 6] = [
+    [0.0, 0.0, -1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, -1.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+];
+
+/// Edges of a wedge as corner pairs, in the order of the C3D15 mid-edge nodes 6..14: the
+/// bottom triangle, the top triangle, the three vertical edges.
+pub const WEDGE_EDGES: [[usize; 2]; 9] = [
+    [0, 1],
+    [1, 2],
+    [2, 0],
+    [3, 4],
+    [4, 5],
+    [5, 3],
+    [0, 3],
+    [1, 4],
+    [2, 5],
+];
+
+/// Corners of the five faces of a wedge (Abaqus faces S1..S5: the triangles 1-2-3 and 4-5-6,
+/// then the quadrilaterals 1-2-5-4, 2-3-6-5, 3-1-4-6), counter-clockwise seen from outside.
+pub const WEDGE_FACES: [&[usize]; 5] = [
+    &[0, 2, 1],
+    &[3, 4, 5],
+    &[0, 1, 4, 3],
+    &[1, 2, 5, 4],
+    &[2, 0, 3, 5],
+];
+
 /// Corners of the six faces of a hexahedron (Abaqus faces S1..S6), counter-clockwise seen
 /// from outside.
 pub const HEX_FACES: [[usize; 4]; 6] = [
@@ -81,13 +119,15 @@ impl ElementKind {
             ElementKind::Hex20 | ElementKind::Hex20R => (HEX_FACES[f].to_vec(), &HEX_EDGES),
             ElementKind::Tet4 => (TET_FACES[f].to_vec(), &[]),
             ElementKind::Tet10 => (TET_FACES[f].to_vec(), &TET_EDGES),
+            ElementKind::Wedge6 => (WEDGE_FACES[f].to_vec(), &[]),
+            ElementKind::Wedge15 => (WEDGE_FACES[f].to_vec(), &WEDGE_EDGES),
         };
         let mut out = corners.clone();
         if !edges.is_empty() {
-            let first_mid = if matches!(self, ElementKind::Hex20 | ElementKind::Hex20R) {
-                8
-            } else {
-                4
+            let first_mid = match self {
+                ElementKind::Hex20 | ElementKind::Hex20R => 8,
+                ElementKind::Wedge15 => 6,
+                _ => 4,
             };
             for i in 0..corners.len() {
                 let (a, b) = (corners[i], corners[(i + 1) % corners.len()]);
@@ -101,10 +141,11 @@ impl ElementKind {
         out
     }
 
-    /// Number of faces (6 for hexahedra, 4 for tetrahedra).
+    /// Number of faces (6 for hexahedra, 5 for wedges, 4 for tetrahedra).
     pub fn faces(self) -> u8 {
         match self {
             ElementKind::Tet4 | ElementKind::Tet10 => 4,
+            ElementKind::Wedge6 | ElementKind::Wedge15 => 5,
             _ => 6,
         }
     }
@@ -115,6 +156,8 @@ impl ElementKind {
             ElementKind::Hex20 | ElementKind::Hex20R => 20,
             ElementKind::Tet10 => 10,
             ElementKind::Tet4 => 4,
+            ElementKind::Wedge6 => 6,
+            ElementKind::Wedge15 => 15,
         }
     }
 
@@ -126,6 +169,8 @@ impl ElementKind {
             ElementKind::Hex20R => "hex20r",
             ElementKind::Tet10 => "tet10",
             ElementKind::Tet4 => "tet4",
+            ElementKind::Wedge6 => "wedge6",
+            ElementKind::Wedge15 => "wedge15",
         }
     }
 
@@ -160,6 +205,19 @@ impl ElementKind {
                 ];
                 let mut v = c.to_vec();
                 for [a, b] in TET_EDGES {
+                    v.push([
+                        0.5 * (c[a][0] + c[b][0]),
+                        0.5 * (c[a][1] + c[b][1]),
+                        0.5 * (c[a][2] + c[b][2]),
+                    ]);
+                }
+                v
+            }
+            ElementKind::Wedge6 => WEDGE_CORNERS.to_vec(),
+            ElementKind::Wedge15 => {
+                let c = WEDGE_CORNERS;
+                let mut v = c.to_vec();
+                for [a, b] in WEDGE_EDGES {
                     v.push([
                         0.5 * (c[a][0] + c[b][0]),
                         0.5 * (c[a][1] + c[b][1]),

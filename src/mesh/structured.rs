@@ -5,11 +5,15 @@
 use std::collections::HashMap;
 
 use super::{ElementBlock, Mesh};
-use crate::mesh::element::{ElementKind, HEX_EDGES, TET_EDGES};
+use crate::mesh::element::{ElementKind, HEX_EDGES, TET_EDGES, WEDGE_EDGES};
 use crate::mesh::material::Material;
 
 /// Six tetrahedra of a hexahedron around its diagonal 0-6; conforming between translated
 /// hexahedra (each face is cut along the same diagonal from both sides).
+/// A hexahedral cell as two wedges, its bottom and top quadrilaterals split along the
+/// diagonal from corner 0 (both counter-clockwise seen from the top, as the cell's).
+const HEX_TO_WEDGES: [[usize; 6]; 2] = [[0, 1, 2, 4, 5, 6], [0, 2, 3, 4, 6, 7]];
+
 const HEX_TO_TETS: [[usize; 4]; 6] = [
     [0, 1, 2, 6],
     [0, 2, 3, 6],
@@ -106,6 +110,19 @@ pub fn structured(
             ElementKind::Tet4 => {
                 for t in HEX_TO_TETS {
                     connectivity.extend(t.map(|c| nodes[c]));
+                }
+            }
+            ElementKind::Wedge6 | ElementKind::Wedge15 => {
+                for w in HEX_TO_WEDGES {
+                    let wn = w.map(|c| nodes[c]);
+                    let wp = w.map(|c| local[c]);
+                    connectivity.extend_from_slice(&wn);
+                    if kind == ElementKind::Wedge15 {
+                        for [a, b] in WEDGE_EDGES {
+                            let m = add_mid(wn[a], wn[b], wp[a], wp[b], &mut params);
+                            connectivity.push(m);
+                        }
+                    }
                 }
             }
             ElementKind::Tet10 => {

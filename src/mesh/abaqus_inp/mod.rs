@@ -1,5 +1,6 @@
 //! Abaqus input files (`.inp`), the subset that describes a solid model: `*NODE`, `*ELEMENT`
-//! (C3D8, C3D8I, C3D20, C3D20R, C3D10 and C3D10M, C3D4, each integrated as CalculiX does:
+//! (C3D8, C3D8I, C3D20, C3D20R, C3D10 and C3D10M, C3D4, C3D6, C3D15, each integrated as
+//! CalculiX does:
 //! `fem::shape`), `*NSET`/`*ELSET` (with GENERATE), `*SURFACE` (element-face based),
 //! `*MATERIAL` with `*ELASTIC` (isotropic, engineering constants, orthotropic, anisotropic)
 //! and `*DENSITY`, `*SOLID SECTION` with `*ORIENTATION`, `*BOUNDARY` (zero values), point
@@ -173,6 +174,8 @@ fn element_kind(abaqus: &str) -> Option<ElementKind> {
         // C3D10M (modified, for contact) is read as C3D10, which the log says.
         "C3D10" | "C3D10M" => Some(ElementKind::Tet10),
         "C3D4" => Some(ElementKind::Tet4),
+        "C3D6" => Some(ElementKind::Wedge6),
+        "C3D15" => Some(ElementKind::Wedge15),
         _ => None,
     }
 }
@@ -185,6 +188,8 @@ fn abaqus_type(kind: ElementKind) -> &'static str {
         ElementKind::Hex20R => "C3D20R",
         ElementKind::Tet10 => "C3D10",
         ElementKind::Tet4 => "C3D4",
+        ElementKind::Wedge6 => "C3D6",
+        ElementKind::Wedge15 => "C3D15",
     }
 }
 

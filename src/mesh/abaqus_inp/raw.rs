@@ -348,7 +348,7 @@ impl Parser {
         }
         let kind = element_kind(&ty).ok_or_else(|| {
             at.syntax(format!(
-                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D10M or C3D4; MASS, SPRING1, SPRING2 or SPRINGA)"
+                "element type {ty} is not supported (use C3D8, C3D8I, C3D20, C3D20R, C3D10, C3D10M, C3D4, C3D6 or C3D15; MASS, SPRING1, SPRING2 or SPRINGA)"
             ))
         })?;
         // Pre-processors often write one *ELEMENT keyword per few hundred elements of the same
