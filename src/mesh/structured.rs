@@ -159,6 +159,13 @@ pub fn structured(
     if matches!(kind, ElementKind::Tet10 | ElementKind::Tet4) {
         orient_tets_positively(&mut mesh);
     }
+    add_face_sets(&mut mesh, &params, periodic_v);
+    mesh
+}
+
+/// The node sets of the parameter box's faces (u0 .. w1, v0/v1 absent when periodic) from the
+/// nodes' parameter coordinates, and `all`.
+fn add_face_sets(mesh: &mut Mesh, params: &[[f64; 3]], periodic_v: bool) {
     let on = |d: usize, v: f64| -> Vec<usize> {
         params
             .iter()
@@ -182,7 +189,6 @@ pub fn structured(
     }
     mesh.node_sets
         .insert("all".into(), (0..mesh.node_count()).collect());
-    mesh
 }
 
 /// Swaps nodes 1 and 2 (and the matching mid-edge nodes) of every negatively oriented tet.

@@ -50,101 +50,7 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
         ModelSource::Abaqus {
             file,
             constraint_penalty,
-        } => {
-            let path = scene_dir.join(file);
-            let mut inp = crate::mesh::abaqus_inp::read(&path)?;
-            inp.mesh.constraints.penalty = *constraint_penalty;
-            let mut tie_notes = Vec::new();
-            for tie in &inp.ties {
-                let (constraints, report) = crate::contact::tie::constrain(&mut inp.mesh, tie)
-                    .map_err(|message| {
-                        RunError::from(crate::mesh::abaqus_inp::InpError::Model {
-                            file: path.clone(),
-                            message,
-                        })
-                    })?;
-                inp.mesh.constraints.equations.extend(constraints);
-                tie_notes.push(report.describe(tie));
-            }
-            let clamps = inp
-                .clamps
-                .iter()
-                .map(|(set, components)| Clamp {
-                    node_set: set.clone(),
-                    components: *components,
-                })
-                .collect();
-            let mut notes = inp.skipped_notes();
-            notes.extend(inp.notes.iter().cloned());
-            for (block, abaqus, count) in &inp.element_types {
-                let kind = inp
-                    .mesh
-                    .blocks
-                    .iter()
-                    .find(|b| &b.name == block)
-                    .map(|b| b.kind);
-                if let Some(kind) = kind {
-                    let modified = if abaqus == "C3D10M" {
-                        " (C3D10M read as C3D10: its own mass and contact treatment are not reproduced)"
-                    } else {
-                        ""
-                    };
-                    notes.push(format!(
-                        "{block}: {count} {abaqus} as {}, {}{modified}",
-                        kind.name(),
-                        kind.rule_description()
-                    ));
-                } else if let Some(points) = inp.mesh.point_blocks.iter().find(|b| &b.name == block)
-                {
-                    let unit = if points.kind == PointKind::Mass {
-                        "kg"
-                    } else {
-                        "N/m"
-                    };
-                    let dofs = match points.kind {
-                        PointKind::Grounded { dof } => format!(", DOF {} to ground", dof + 1),
-                        PointKind::Between { dofs: [i, j] } => {
-                            format!(", DOF {} to DOF {}", i + 1, j + 1)
-                        }
-                        PointKind::Axial => ", along the line of its nodes".into(),
-                        PointKind::Mass => String::new(),
-                    };
-                    notes.push(format!(
-                        "{block}: {count} {abaqus} of {} {unit}{dofs}, into {}",
-                        if (1e-3..1e4).contains(&points.value) {
-                            points.value.to_string()
-                        } else {
-                            format!("{:e}", points.value)
-                        },
-                        if points.kind == PointKind::Mass {
-                            "M"
-                        } else {
-                            "K"
-                        }
-                    ));
-                }
-            }
-            notes.extend(tie_notes);
-            let constraints = inp.mesh.constraints.equations.len();
-            if constraints > 0 {
-                notes.push(format!(
-                    "{constraints} linear constraint(s) (*EQUATION, *TIE) by penalty: k_p = {constraint_penalty:e} x the largest diagonal entry of K, so each holds to about 1/{constraint_penalty:e} of the deformation it resists ([model] constraint_penalty)"
-                ));
-            }
-            let mut m = Model::plain(inp.mesh, clamps);
-            m.notes = notes;
-            m.interfaces = inp
-                .contact_pairs
-                .iter()
-                .map(|p| Interface {
-                    name: format!("{}-{}", p.slave, p.master),
-                    master: p.slave.clone(),
-                    slave: p.master.clone(),
-                    kind: InterfaceKind::Sliding,
-                })
-                .collect();
-            m
-        }
+        } => abaqus_model(&scene_dir.join(file), *constraint_penalty)?,
         ModelSource::Gmsh {
             file,
             materials,
@@ -208,4 +114,91 @@ pub fn build_model(model: &ModelSource, scene_dir: &Path) -> Result<Option<Model
     let order = partition::bisection_order(&built.mesh.coords);
     partition::renumber(&mut built.mesh, &order);
     Ok(Some(built))
+}
+
+/// An Abaqus deck as a model: its ties resolved into constraints on the mesh, its clamps,
+/// contact pairs as sliding interfaces, and the log's notes on what was read.
+fn abaqus_model(path: &Path, constraint_penalty: f64) -> Result<Model, RunError> {
+    let mut inp = crate::mesh::abaqus_inp::read(path)?;
+    inp.mesh.constraints.penalty = constraint_penalty;
+    let mut tie_notes = Vec::new();
+    for tie in &inp.ties {
+        let (constraints, report) =
+            crate::contact::tie::constrain(&mut inp.mesh, tie).map_err(|message| {
+                RunError::from(crate::mesh::abaqus_inp::InpError::Model {
+                    file: path.to_path_buf(),
+                    message,
+                })
+            })?;
+        inp.mesh.constraints.equations.extend(constraints);
+        tie_notes.push(report.describe(tie));
+    }
+    let clamps = inp
+        .clamps
+        .iter()
+        .map(|(set, components)| Clamp {
+            node_set: set.clone(),
+            components: *components,
+        })
+        .collect();
+    let mut notes = inp.skipped_notes();
+    notes.extend(inp.notes.iter().cloned());
+    for (block, abaqus, count) in &inp.element_types {
+        notes.extend(block_note(&inp.mesh, block, abaqus, *count));
+    }
+    notes.extend(tie_notes);
+    let constraints = inp.mesh.constraints.equations.len();
+    if constraints > 0 {
+        notes.push(format!(
+            "{constraints} linear constraint(s) (*EQUATION, *TIE) by penalty: k_p = {constraint_penalty:e} x the largest diagonal entry of K, so each holds to about 1/{constraint_penalty:e} of the deformation it resists ([model] constraint_penalty)"
+        ));
+    }
+    let mut m = Model::plain(inp.mesh, clamps);
+    m.notes = notes;
+    m.interfaces = inp
+        .contact_pairs
+        .iter()
+        .map(|p| Interface {
+            name: format!("{}-{}", p.slave, p.master),
+            master: p.slave.clone(),
+            slave: p.master.clone(),
+            kind: InterfaceKind::Sliding,
+        })
+        .collect();
+    Ok(m)
+}
+
+/// The log's line on a block read from a deck: a solid block's element and rule, or a point
+/// block's value and where it acts.
+fn block_note(mesh: &crate::mesh::Mesh, block: &str, abaqus: &str, count: usize) -> Option<String> {
+    if let Some(kind) = mesh.blocks.iter().find(|b| b.name == block).map(|b| b.kind) {
+        let modified = if abaqus == "C3D10M" {
+            " (C3D10M read as C3D10: its own mass and contact treatment are not reproduced)"
+        } else {
+            ""
+        };
+        return Some(format!(
+            "{block}: {count} {abaqus} as {}, {}{modified}",
+            kind.name(),
+            kind.rule_description()
+        ));
+    }
+    let points = mesh.point_blocks.iter().find(|b| b.name == block)?;
+    let mass = points.kind == PointKind::Mass;
+    let dofs = match points.kind {
+        PointKind::Grounded { dof } => format!(", DOF {} to ground", dof + 1),
+        PointKind::Between { dofs: [i, j] } => format!(", DOF {} to DOF {}", i + 1, j + 1),
+        PointKind::Axial => ", along the line of its nodes".into(),
+        PointKind::Mass => String::new(),
+    };
+    let value = if (1e-3..1e4).contains(&points.value) {
+        points.value.to_string()
+    } else {
+        format!("{:e}", points.value)
+    };
+    Some(format!(
+        "{block}: {count} {abaqus} of {value} {}{dofs}, into {}",
+        if mass { "kg" } else { "N/m" },
+        if mass { "M" } else { "K" }
+    ))
 }

@@ -108,6 +108,49 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
             let _ = writeln!(s, "{}, S{f}", e + 1);
         }
     }
+    write_materials(&mut s, mesh);
+    for o in &mesh.orientations {
+        let (system, points) = match o.system {
+            System::Rectangular { a, b, origin } => ("RECTANGULAR", vec![a, b, origin]),
+            System::Cylindrical { a, b } => ("CYLINDRICAL", vec![a, b]),
+        };
+        let numbers: Vec<String> = points.iter().flatten().map(|&v| field(v)).collect();
+        let _ = writeln!(
+            s,
+            "*ORIENTATION, NAME={}, SYSTEM={system}\n{}",
+            o.name,
+            numbers.join(", ")
+        );
+        if let Some((axis, degrees)) = o.extra_rotation {
+            let _ = writeln!(s, "{}, {}", axis + 1, field(degrees));
+        }
+    }
+    for block in &mesh.blocks {
+        let orientation = block.orientation.map_or(String::new(), |o| {
+            format!(", ORIENTATION={}", mesh.orientations[o].name)
+        });
+        let _ = writeln!(
+            s,
+            "*SOLID SECTION, ELSET={}, MATERIAL={}{orientation}",
+            block.name, mesh.materials[block.material].name
+        );
+    }
+    write_properties_and_constraints(&mut s, mesh);
+    if !clamps.is_empty() {
+        s += "*BOUNDARY\n";
+        for (set, comps) in clamps {
+            for (c, on) in comps.iter().enumerate() {
+                if *on {
+                    let _ = writeln!(s, "{set}, {}, {}", c + 1, c + 1);
+                }
+            }
+        }
+    }
+    std::fs::write(path, s)
+}
+
+/// The materials: *MATERIAL with *ELASTIC in its form and *DENSITY.
+fn write_materials(s: &mut String, mesh: &Mesh) {
     for m in &mesh.materials {
         let _ = writeln!(s, "*MATERIAL, NAME={}", m.name);
         match m.elasticity {
@@ -149,32 +192,10 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         }
         let _ = writeln!(s, "*DENSITY\n{}", field(m.density));
     }
-    for o in &mesh.orientations {
-        let (system, points) = match o.system {
-            System::Rectangular { a, b, origin } => ("RECTANGULAR", vec![a, b, origin]),
-            System::Cylindrical { a, b } => ("CYLINDRICAL", vec![a, b]),
-        };
-        let numbers: Vec<String> = points.iter().flatten().map(|&v| field(v)).collect();
-        let _ = writeln!(
-            s,
-            "*ORIENTATION, NAME={}, SYSTEM={system}\n{}",
-            o.name,
-            numbers.join(", ")
-        );
-        if let Some((axis, degrees)) = o.extra_rotation {
-            let _ = writeln!(s, "{}, {}", axis + 1, field(degrees));
-        }
-    }
-    for block in &mesh.blocks {
-        let orientation = block.orientation.map_or(String::new(), |o| {
-            format!(", ORIENTATION={}", mesh.orientations[o].name)
-        });
-        let _ = writeln!(
-            s,
-            "*SOLID SECTION, ELSET={}, MATERIAL={}{orientation}",
-            block.name, mesh.materials[block.material].name
-        );
-    }
+}
+
+/// The point elements' *MASS / *SPRING values, then the constraints as *EQUATION.
+fn write_properties_and_constraints(s: &mut String, mesh: &Mesh) {
     for points in &mesh.point_blocks {
         let (keyword, dofs) = match points.kind {
             PointKind::Mass => ("MASS", String::new()),
@@ -198,17 +219,6 @@ pub fn write(path: &Path, mesh: &Mesh, clamps: &[(String, [bool; 3])]) -> std::i
         let lines: Vec<String> = terms.chunks(4).map(|t| t.join(", ")).collect();
         let _ = writeln!(s, "*EQUATION\n{}\n{}", c.terms.len(), lines.join("\n"));
     }
-    if !clamps.is_empty() {
-        s += "*BOUNDARY\n";
-        for (set, comps) in clamps {
-            for (c, on) in comps.iter().enumerate() {
-                if *on {
-                    let _ = writeln!(s, "{set}, {}, {}", c + 1, c + 1);
-                }
-            }
-        }
-    }
-    std::fs::write(path, s)
 }
 
 #[cfg(test)]
