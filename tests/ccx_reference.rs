@@ -132,6 +132,23 @@ fn squeal_frequencies_with(deck: &Path, model_lines: &str) -> Vec<f64> {
         .unwrap()
 }
 
+/// The largest relative difference of squeal's lowest MODES frequencies from ccx's, each
+/// printed; NaN-safe (a NaN is the result).
+fn largest_difference(name: &str, ours: &[f64], ccx: &[f64]) -> f64 {
+    let mut worst = 0.0f64;
+    for k in 0..MODES.min(ccx.len()).min(ours.len()) {
+        let d = (ours[k] - ccx[k]).abs() / ccx[k];
+        worst = if d.is_nan() || d > worst { d } else { worst };
+        println!(
+            "  {name} mode {}: {:.4} Hz, ccx {:.4} Hz",
+            k + 1,
+            ours[k],
+            ccx[k]
+        );
+    }
+    worst
+}
+
 /// The largest relative difference of the lowest MODES frequencies; NaN-safe (NaN fails).
 fn compare(name: &str, kind: ElementKind, cells: [usize; 3]) -> f64 {
     compare_with(name, kind, cells, steel())
@@ -156,17 +173,7 @@ fn compare_mesh(name: &str, mesh: Mesh, clamp: &str) -> (f64, Vec<f64>) {
         ccx.len(),
         ours.len()
     );
-    let mut worst = 0.0f64;
-    for k in 0..MODES.min(ccx.len()).min(ours.len()) {
-        let d = (ours[k] - ccx[k]).abs() / ccx[k];
-        worst = if d.is_nan() || d > worst { d } else { worst };
-        println!(
-            "  {name} mode {}: {:.4} Hz, ccx {:.4} Hz",
-            k + 1,
-            ours[k],
-            ccx[k]
-        );
-    }
+    let worst = largest_difference(name, &ours, &ccx);
     println!(
         "{name}: {} DOF-deck, f1 {:.6} Hz (ccx {:.6}), f{MODES} {:.3} Hz (ccx {:.3}); largest relative difference {worst:.2e}",
         kind.name(),
@@ -506,11 +513,7 @@ fn equations_by_penalty_converge_to_calculix_at_first_order() {
     let worst_at = |penalty: Option<f64>| -> f64 {
         let line = penalty.map_or(String::new(), |p| format!("constraint_penalty = {p:e}\n"));
         let ours = squeal_frequencies_with(&deck, &line);
-        let mut worst = 0.0f64;
-        for k in 0..MODES {
-            let d = (ours[k] - ccx[k]).abs() / ccx[k];
-            worst = if d.is_nan() || d > worst { d } else { worst };
-        }
+        let worst = largest_difference("equations", &ours, &ccx);
         println!("penalty {penalty:?} (None: the default): largest relative difference from ccx {worst:.3e}");
         worst
     };
@@ -563,17 +566,7 @@ fn a_layer_tied_to_a_cantilever_equals_calculix() {
     std::fs::write(&path, text).unwrap();
     let ccx = ccx_frequencies(&path);
     let ours = squeal_frequencies(&path);
-    let mut worst = 0.0f64;
-    for k in 0..MODES {
-        let d = (ours[k] - ccx[k]).abs() / ccx[k];
-        worst = if d.is_nan() || d > worst { d } else { worst };
-        println!(
-            "  tie mode {}: {:.4} Hz, ccx {:.4} Hz",
-            k + 1,
-            ours[k],
-            ccx[k]
-        );
-    }
+    let worst = largest_difference("tie", &ours, &ccx);
     println!("tied layer: largest relative difference {worst:.2e}");
     assert!(
         worst <= 1e-6 && ours[0] > 504.43,
@@ -647,17 +640,7 @@ fn an_assembly_of_instances_equals_the_flat_model_in_calculix() {
     let deck = dir.join("assembly.inp");
     std::fs::write(&deck, assembly).unwrap();
     let ours = squeal_frequencies(&deck);
-    let mut worst = 0.0f64;
-    for k in 0..MODES {
-        let d = (ours[k] - ccx[k]).abs() / ccx[k];
-        worst = if d.is_nan() || d > worst { d } else { worst };
-        println!(
-            "  assembly mode {}: {:.4} Hz, ccx (flat) {:.4} Hz",
-            k + 1,
-            ours[k],
-            ccx[k]
-        );
-    }
+    let worst = largest_difference("assembly", &ours, &ccx);
     println!("assembly of instances vs the flat model in ccx: {worst:.2e}");
     assert!(
         worst <= 1e-6,

@@ -79,16 +79,12 @@ pub fn assemble_system_as<'p>(
     let mut m = SparseMatrix::new(petsc, format, bs, dofs.local_dofs(), &prealloc)?;
     // A rank-local element failure must not leave the other ranks waiting in assembly.
     let local = assemble(mesh, &dofs, &mut k, &mut m);
-    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
-    let stats = match local {
-        Ok(s) if !failed => s,
-        Ok(_) => return Err(SystemError::OtherRank),
-        Err(e) => return Err(e.into()),
-    };
+    let stats = agreed(petsc, local)?;
     // The constraints' entries as zeros first: the final assembly squeezes out preallocated
     // entries nothing was added to, and their values need K's diagonal.
     if !mesh.constraints.equations.is_empty() {
-        super::assembly::assemble_constraints(mesh, &dofs, 0.0, &mut k)?;
+        let local = super::assembly::assemble_constraints(mesh, &dofs, 0.0, &mut k);
+        agreed(petsc, local)?;
     }
     k.assemble()?;
     m.assemble()?;
@@ -106,6 +102,22 @@ pub fn assemble_system_as<'p>(
     })
 }
 
+/// A rank-local assembly result agreed on by every rank (a failure on one is an error on all),
+/// so that no rank is left waiting in the final assembly.
+///
+/// # Collective
+fn agreed<T, E>(petsc: &Petsc, local: Result<T, E>) -> Result<T, SystemError>
+where
+    SystemError: From<E>,
+{
+    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
+    match local {
+        Ok(v) if !failed => Ok(v),
+        Ok(_) => Err(SystemError::OtherRank),
+        Err(e) => Err(e.into()),
+    }
+}
+
 /// The constraints' penalty into the assembled K: k_p = penalty x the largest diagonal entry
 /// of K (`mesh::constraint`).
 ///
@@ -120,12 +132,7 @@ fn add_constraints(
     k.diagonal(&mut diagonal)?;
     let k_p = mesh.constraints.penalty * diagonal.norm_inf()?;
     let local = super::assembly::assemble_constraints(mesh, dofs, k_p, k);
-    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
-    match local {
-        Ok(_) if !failed => {}
-        Ok(_) => return Err(SystemError::OtherRank),
-        Err(e) => return Err(e.into()),
-    }
+    agreed(petsc, local)?;
     k.assemble()?;
     Ok(())
 }
@@ -147,12 +154,7 @@ pub fn assemble_block_stiffness<'p>(
     let bs = if dofs.block_mode { 3 } else { 1 };
     let mut k = SparseMatrix::new(petsc, format, bs, dofs.local_dofs(), &prealloc)?;
     let local = assemble_blocks(mesh, dofs, include, &mut k, &mut Discard::default());
-    let failed = crate::parallel::any_rank(petsc.world(), local.is_err());
-    match local {
-        Ok(_) if !failed => {}
-        Ok(_) => return Err(SystemError::OtherRank),
-        Err(e) => return Err(e.into()),
-    }
+    agreed(petsc, local)?;
     k.assemble()?;
     k.set_symmetric(true)?;
     Ok(k)
